@@ -1,0 +1,104 @@
+// Helpers for the CT I/O tests: a per-test temporary directory, whole-file byte I/O, and an
+// assertion that a statement throws a given palp error whose one-line message has a fragment.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace palp::testing {
+
+// A fresh directory for the running test, removed afterwards.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    path_ = std::filesystem::temp_directory_path() /
+            ("palp-io-" + name + "-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline void write_bytes(const std::string& path, const void* data, std::size_t size) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+  ASSERT_TRUE(out.good()) << path;
+}
+
+inline void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+  write_bytes(path, bytes.data(), bytes.size());
+}
+
+inline void write_text(const std::string& path, const std::string& text) {
+  write_bytes(path, text.data(), text.size());
+}
+
+inline std::vector<std::uint8_t> read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Writes the bytes of a trivially copyable value at `offset` (host byte order, or swapped).
+template <class T>
+void put(std::vector<std::uint8_t>& out, std::size_t offset, T value, bool swap = false) {
+  std::uint8_t bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  if (swap) std::reverse(bytes, bytes + sizeof(T));
+  if (out.size() < offset + sizeof(T)) out.resize(offset + sizeof(T));
+  std::memcpy(out.data() + offset, bytes, sizeof(T));
+}
+
+template <class T>
+T get(const std::vector<std::uint8_t>& in, std::size_t offset) {
+  T value;
+  std::memcpy(&value, in.data() + offset, sizeof(T));
+  return value;
+}
+
+// Appends the bytes of a trivially copyable value (host byte order, or swapped).
+template <class T>
+void append(std::vector<std::uint8_t>& out, T value, bool swap = false) {
+  std::uint8_t bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  if (swap) std::reverse(bytes, bytes + sizeof(T));
+  out.insert(out.end(), bytes, bytes + sizeof(T));
+}
+
+}  // namespace palp::testing
+
+// Expects `statement` to throw `ErrorType` with a single-line message containing `fragment`.
+#define EXPECT_PALP_ERROR(statement, ErrorType, fragment)                               \
+  do {                                                                                  \
+    try {                                                                               \
+      statement;                                                                        \
+      ADD_FAILURE() << "expected " #ErrorType " containing \"" << (fragment) << "\"";   \
+    } catch (const ErrorType& error_) {                                                 \
+      const std::string message_ = error_.what();                                       \
+      EXPECT_NE(message_.find(fragment), std::string::npos) << "message: " << message_; \
+      EXPECT_EQ(message_.find('\n'), std::string::npos) << "multi-line: " << message_;  \
+    }                                                                                   \
+  } while (false)
