@@ -310,6 +310,12 @@ void pass_k(LineBlock& block, std::int64_t width, double sx2, double sy2, double
 }  // namespace
 
 DistanceMap signed_distance(const Mask& mask, const DistanceParams& params) {
+  DistanceMap out;
+  signed_distance(mask, params, out);
+  return out;
+}
+
+void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap& out) {
   if (!(params.band_mm > 0.0) || std::isnan(params.band_mm)) {
     throw UsageError("distance band must be a positive number of mm");
   }
@@ -321,9 +327,21 @@ DistanceMap signed_distance(const Mask& mask, const DistanceParams& params) {
   const Index3 n = grid.dims;
   const double h = grid.min_spacing();
 
-  DistanceMap out(grid, -band, "distance map");
+  if (out.data.size() == grid.voxel_count()) {
+    out.grid = grid;
+    parallel_for_chunks(
+        n[2], 8,
+        [&](std::int64_t k0, std::int64_t k1) {
+          std::fill(out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k0)),
+                    out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k1)), -band);
+        },
+        threads);
+  } else {
+    out = DistanceMap();  // release the old memory before taking the new
+    out = DistanceMap(grid, -band, "distance map");
+  }
   const Box inside = inside_bounds(mask, threads);
-  if (inside.size(0) <= 0) return out;  // no inside voxel: everything is outside, beyond the band
+  if (inside.size(0) <= 0) return;  // no inside voxel: everything is outside, beyond the band
 
   // Crop: voxels farther than the band (+ h/2 offset, + one voxel) from the inside box are
   // outside and clamped, so the transform only runs inside this box. The nearest site of every
@@ -388,7 +406,6 @@ DistanceMap signed_distance(const Mask& mask, const DistanceParams& params) {
         }
       },
       threads);
-  return out;
 }
 
 }  // namespace palp

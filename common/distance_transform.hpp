@@ -19,4 +19,8 @@ struct DistanceParams {
 // Signed distance map of `mask` on its own grid, voxel for voxel.
 DistanceMap signed_distance(const Mask& mask, const DistanceParams& params = {});
 
+// The same, written into `out`, whose memory is reused when it already holds a volume of the
+// same voxel count (computing several maps of one grid then touches fresh memory only once).
+void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap& out);
+
 }  // namespace palp

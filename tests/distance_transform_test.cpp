@@ -185,6 +185,22 @@ TEST(SignedDistance, EmptyAndFullMasksAreClampedToTheBand) {
   for (float v : signed_distance(full, {12.5, 1}).data) ASSERT_EQ(v, 12.5f);
 }
 
+TEST(SignedDistance, ReusedOutputEqualsAFreshOne) {
+  std::mt19937 rng(7);
+  std::bernoulli_distribution inside(0.4);
+  Mask first = make_mask({23, 17, 11}, {0.9, 1.1, 2.0});
+  Mask second = first;
+  for (auto& v : first.data) v = inside(rng);
+  for (auto& v : second.data) v = inside(rng);
+  second.grid.world.origin = {1.0, 2.0, 3.0};
+  DistanceMap reused;
+  signed_distance(first, {4.0, 2}, reused);
+  signed_distance(second, {4.0, 2}, reused);
+  const DistanceMap fresh = signed_distance(second, {4.0, 2});
+  EXPECT_EQ(reused.grid, fresh.grid);
+  EXPECT_EQ(reused.data, fresh.data);
+}
+
 TEST(SignedDistance, RejectsANonPositiveBand) {
   Mask mask = make_mask({2, 2, 2}, {1.0, 1.0, 1.0});
   EXPECT_THROW(signed_distance(mask, {0.0, 1}), UsageError);
