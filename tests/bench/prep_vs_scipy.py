@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Side-by-side timing of `palp prep` against scipy's distance_transform_edt.
 
 Case A (the issue's speed target): a 384x384x160 torso phantom at 0.8x0.8x1.5 mm.
