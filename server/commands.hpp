@@ -1,0 +1,15 @@
+// The palp subcommands. Each takes the arguments after its name and returns the exit code;
+// errors are thrown as palp::Error (exit 1) or palp::UsageError (exit 2) and printed by main.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace palp::cli {
+
+using Arguments = std::vector<std::string>;
+
+int cmd_phantom(const Arguments& args);  // cmd_phantom.cpp
+int cmd_prep(const Arguments& args);     // cmd_prep.cpp
+
+}  // namespace palp::cli
