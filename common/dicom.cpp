@@ -8,6 +8,7 @@
 #include <gdcmAttribute.h>
 #include <gdcmImage.h>
 #include <gdcmImageReader.h>
+#include <gdcmMediaStorage.h>
 #include <gdcmReader.h>
 #include <gdcmTrace.h>
 
@@ -142,8 +143,14 @@ bool has_dicom_magic(const std::string& file) {
 void check_not_truncated(const std::string& file) {
   std::ifstream in(file, std::ios::binary);
   std::vector<char> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (DicomLayoutCheck(std::move(bytes)).run() == DicomLayoutCheck::Result::truncated)
+  DicomLayoutCheck layout(std::move(bytes));
+  const DicomLayoutCheck::Result result = layout.run();
+  if (result == DicomLayoutCheck::Result::truncated)
     throw InputError(file + ": corrupt or truncated DICOM file (an element runs past its end)");
+  const auto storage = gdcm::MediaStorage::GetMSType(layout.media_storage_sop_class().c_str());
+  if (result == DicomLayoutCheck::Result::complete && !layout.has_pixel_data() &&
+      gdcm::MediaStorage::IsImage(storage))
+    throw InputError(file + ": corrupt or truncated DICOM file (an image without pixel data)");
 }
 
 // nullopt for DICOM files that hold no image (DICOMDIR, reports, ...).
@@ -331,7 +338,8 @@ void pixels_to_hu(const char* buffer, std::size_t count, const gdcm::PixelFormat
 void decode_slice(const SliceHeader& s, std::int16_t* out) {
   gdcm::ImageReader reader;
   reader.SetFileName(s.file.c_str());
-  if (!reader.Read()) throw InputError(s.file + ": cannot read the DICOM image");
+  if (!reader.Read())
+    throw InputError(s.file + ": corrupt or truncated DICOM file (its image cannot be read)");
   const gdcm::Image& image = reader.GetImage();
   const gdcm::PixelFormat& format = image.GetPixelFormat();
   if (image.GetDimension(0) != s.columns || image.GetDimension(1) != s.rows)

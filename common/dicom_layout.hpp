@@ -26,6 +26,12 @@ class DicomLayoutCheck {
     return walk_dataset(false);
   }
 
+  // After run(): the SOP class the file meta names, and whether the top-level data set holds a
+  // whole Pixel Data element. A file cut exactly at an element boundary walks as complete; only
+  // an image class without its pixels then shows the cut.
+  const std::string& media_storage_sop_class() const { return sop_class_; }
+  bool has_pixel_data() const { return has_pixel_data_; }
+
  private:
   static constexpr std::uint32_t kUndefined = 0xffffffffu;
   struct Header {
@@ -90,9 +96,12 @@ class DicomLayoutCheck {
       if (!header(h)) return Result::truncated;
       if (h.length == kUndefined) return Result::unsure;
       if (h.element == 0x0010 && fits(h.length)) syntax.assign(&bytes_[pos_], h.length);
+      if (h.element == 0x0002 && fits(h.length)) sop_class_.assign(&bytes_[pos_], h.length);
       if (!skip(h.length)) return Result::truncated;
     }
     while (!syntax.empty() && (syntax.back() == '\0' || syntax.back() == ' ')) syntax.pop_back();
+    while (!sop_class_.empty() && (sop_class_.back() == '\0' || sop_class_.back() == ' '))
+      sop_class_.pop_back();
     if (syntax == "1.2.840.10008.1.2.1.99") return Result::unsure;  // deflated data set
     explicit_vr_ = syntax != "1.2.840.10008.1.2";
     big_endian_ = syntax == "1.2.840.10008.1.2.2";
@@ -105,12 +114,15 @@ class DicomLayoutCheck {
     while (pos_ < bytes_.size()) {
       if (!header(h)) return Result::truncated;
       if (h.group == 0xfffe && h.element == 0xe00d) return Result::complete;  // end of item
+      const bool pixel_data = !in_item && h.group == 0x7fe0 && h.element == 0x0010;
       if (h.length != kUndefined) {
         if (!skip(h.length)) return Result::truncated;
+        has_pixel_data_ = has_pixel_data_ || pixel_data;
         continue;
       }
       const Result r = walk_undefined_sequence(h);
       if (r != Result::complete) return r;
+      has_pixel_data_ = has_pixel_data_ || pixel_data;
     }
     return in_item ? Result::truncated : Result::complete;
   }
@@ -143,6 +155,8 @@ class DicomLayoutCheck {
   }
 
   std::vector<char> bytes_;
+  std::string sop_class_;
+  bool has_pixel_data_ = false;
   std::size_t pos_ = 0;
   bool explicit_vr_ = true;
   bool big_endian_ = false;

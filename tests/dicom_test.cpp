@@ -292,11 +292,16 @@ TEST(DicomErrors, TruncatedSliceIsNamed) {
   TempDir dir;
   write_series(dir.path() / "cut", SeriesSpec{});
   const std::string victim = dir.file("cut/" + slice_name(6, 8));
-  for (const std::size_t keep : {std::size_t{300}, std::size_t{700}, std::size_t{1000}}) {
+  // Every cut length from just past the magic to just before the end, so some cuts land exactly
+  // on element boundaries (where only the missing image attributes give the truncation away).
+  const std::size_t full = std::filesystem::file_size(dir.file("cut/" + slice_name(5, 8)));
+  for (std::size_t keep = 140; keep < full; keep += 3) {
     std::filesystem::copy_file(dir.file("cut/" + slice_name(5, 8)), victim,
                                std::filesystem::copy_options::overwrite_existing);
     write_slice(victim, SeriesSpec{}, 6);
+    ASSERT_LT(keep, std::filesystem::file_size(victim));  // a cut, never an extension
     std::filesystem::resize_file(victim, keep);
+    SCOPED_TRACE("cut at " + std::to_string(keep) + " bytes");
     EXPECT_PALP_ERROR(read_ct(dir.file("cut")), InputError,
                       slice_name(6, 8) + ": corrupt or truncated DICOM file");
   }
