@@ -128,12 +128,20 @@ nlohmann::json grid_json(const Grid& grid) {
           {"direction_lps", grid.world.direction}};
 }
 
+// Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params) {
   const SegmentationParams& s = params.segmentation;
   return {{"body_threshold_hu", s.body_threshold_hu},
           {"min_body_part_ml", s.min_body_part_ml},
+          {"body_core_radius_mm", s.body_core_radius_mm},
+          {"max_table_thickness_mm", s.max_table_thickness_mm},
+          {"min_table_width_mm", s.min_table_width_mm},
           {"bone_seed_hu", s.bone_seed_hu},
           {"bone_grow_hu", s.bone_grow_hu},
+          {"bone_leak_contact_fraction", s.bone_leak_contact_fraction},
+          {"marrow_min_hu", s.marrow_min_hu},
+          {"bone_small_hole_mm2", s.bone_small_hole_mm2},
+          {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},
           {"distance_band_mm", params.distance.band_mm}};
 }
@@ -166,8 +174,8 @@ bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::j
 }
 
 std::uint64_t count_nonzero(const Mask& mask) {
-  return static_cast<std::uint64_t>(std::count_if(mask.data.begin(), mask.data.end(),
-                                                  [](std::uint8_t v) { return v != 0; }));
+  return static_cast<std::uint64_t>(
+      std::count_if(mask.data.begin(), mask.data.end(), [](std::uint8_t v) { return v != 0; }));
 }
 
 }  // namespace
@@ -256,7 +264,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   json["voxels"] = {{"total", result.grid.voxel_count()},
                     {"body", result.stats.body_voxels},
                     {"bone", result.stats.bone_voxels},
-                    {"removed_non_patient", result.stats.removed_non_patient_voxels}};
+                    {"removed_non_patient", result.stats.removed_non_patient_voxels},
+                    {"table", result.stats.table_voxels}};
   json["distance_range_mm"] = {{"d_surf", {surf_range[0], surf_range[1]}},
                                {"d_bone", {bone_range[0], bone_range[1]}}};
   nlohmann::json timings = nlohmann::json::object();

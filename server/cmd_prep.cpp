@@ -10,7 +10,12 @@
 namespace palp::cli {
 namespace {
 
-constexpr const char* kPrepUsage = R"(usage: palp prep INPUT --out DIR [options]
+// The help text, with the defaults read from the parameter structs so it cannot go stale.
+std::string prep_usage() {
+  const SegmentationParams seg;
+  const DistanceParams dist;
+  char text[2048];
+  std::snprintf(text, sizeof text, R"(usage: palp prep INPUT --out DIR [options]
 
 Segments body and bone and computes the signed distance maps the force model samples.
 INPUT: a .nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr file, a DICOM series directory, or phantom:NAME.
@@ -18,25 +23,31 @@ Writes body.nii.gz, bone.nii.gz, d_surf.nii.gz, d_bone.nii.gz and prep.json into
 Options:
   --out DIR               output directory (required; created if missing)
   --no-cache              recompute even if DIR already holds the result for this input
-  --band MM               clamp |distance| beyond this many mm (default 60)
-  --threads N             worker threads (default: all cores)
-  --body-threshold HU     voxels above this are not air (default -500)
-  --min-body-part ML      drop separate parts smaller than this (default 50)
-  --bone-seed HU          bone region-growing seeds at or above (default 300)
-  --bone-grow HU          bone grows into voxels at or above (default 180)
-  --min-bone-island ML    drop bone islands smaller than this (default 0.5)
+  --band MM               clamp |distance| beyond this many mm (default %g)
+  --threads N             worker threads (default: all cores, here %u)
+  --body-threshold HU     voxels above this are not air (default %g)
+  --min-body-part ML      drop separate parts smaller than this, except the patient (default %g)
+  --max-table-thickness MM  thicker horizontal bands below the patient are kept (default %g)
+  --bone-seed HU          bone region-growing seeds at or above (default %g)
+  --bone-grow HU          bone grows into voxels at or above (default %g)
+  --min-bone-island ML    drop bone islands smaller than this (default %g)
   -q, --quiet             print only errors
   -h, --help              show this help
-)";
+)",
+                dist.band_mm, default_thread_count(), seg.body_threshold_hu, seg.min_body_part_ml,
+                seg.max_table_thickness_mm, seg.bone_seed_hu, seg.bone_grow_hu,
+                seg.min_bone_island_ml);
+  return text;
+}
 
 }  // namespace
 
 int cmd_prep(const Arguments& argv) {
   const Args args(argv, {"help", "no-cache", "quiet"},
                   {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
-                   "bone-grow", "min-bone-island"});
+                   "bone-grow", "min-bone-island", "max-table-thickness"});
   if (args.has("help")) {
-    std::cout << kPrepUsage;
+    std::cout << prep_usage();
     return 0;
   }
   if (args.positional().size() != 1) throw UsageError("prep needs one INPUT");
@@ -49,6 +60,7 @@ int cmd_prep(const Arguments& argv) {
   seg.min_body_part_ml = args.number("min-body-part", seg.min_body_part_ml);
   seg.bone_seed_hu = args.number("bone-seed", seg.bone_seed_hu);
   seg.bone_grow_hu = args.number("bone-grow", seg.bone_grow_hu);
+  seg.max_table_thickness_mm = args.number("max-table-thickness", seg.max_table_thickness_mm);
   seg.min_bone_island_ml = args.number("min-bone-island", seg.min_bone_island_ml);
   params.distance.band_mm = args.number("band", params.distance.band_mm);
   const double threads = args.number("threads", default_thread_count());
