@@ -222,7 +222,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     const auto t0 = Clock::now();
     work();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    result.stages.push_back({name, seconds});
+    result.stages.push_back({name, seconds, peak_rss_bytes()});
     if (progress) progress(name, true, seconds);
   };
 
@@ -273,6 +273,9 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   timings["total"] = result.total_seconds;
   json["timings_s"] = timings;
   json["peak_memory_bytes"] = result.peak_rss_bytes;
+  nlohmann::json stage_peaks = nlohmann::json::object();
+  for (const auto& s : result.stages) stage_peaks[s.name] = s.peak_rss_bytes;
+  json["peak_memory_bytes_after_stage"] = stage_peaks;
   json["threads"] = params.distance.threads;
   nlohmann::json sizes = nlohmann::json::object();
   for (const char* name : {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile}) {

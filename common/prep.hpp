@@ -24,6 +24,7 @@ struct PrepParams {
 struct StageTiming {
   std::string name;
   double seconds = 0.0;
+  std::size_t peak_rss_bytes = 0;  // the process's peak resident memory when the stage ended
 };
 
 struct PrepResult {
