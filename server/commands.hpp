@@ -11,5 +11,8 @@ using Arguments = std::vector<std::string>;
 
 int cmd_phantom(const Arguments& args);  // cmd_phantom.cpp
 int cmd_prep(const Arguments& args);     // cmd_prep.cpp
+int cmd_run(const Arguments& args);      // cmd_run.cpp
+int cmd_traj(const Arguments& args);     // cmd_traj.cpp
+int cmd_bench(const Arguments& args);    // cmd_bench.cpp
 
 }  // namespace palp::cli

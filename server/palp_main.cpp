@@ -27,6 +27,12 @@ constexpr const char* kMainUsage = R"(usage: palp <command> [options]
 Commands:
   phantom NAME --out FILE   write a synthetic CT in HU (cube, sphere, torso)
   prep INPUT --out DIR      CT -> body and bone masks and signed distance maps
+  run --scene S --tool T --trajectory F --out F
+                            offline force model run, one tick per trajectory row
+  traj KIND --scene S --out FILE
+                            the paper's trajectories (slide-ramp, slide-speed, press-hold, ribs)
+  bench --scene S --tool T --ticks N
+                            time the tick in-process; last line JSON
   version                   print the version
 
 Run `palp <command> --help` for the options of a command.
@@ -50,6 +56,9 @@ int dispatch(int argc, char** argv) {
   const std::map<std::string, std::function<int(const cli::Arguments&)>> commands = {
       {"phantom", cli::cmd_phantom},
       {"prep", cli::cmd_prep},
+      {"run", cli::cmd_run},
+      {"traj", cli::cmd_traj},
+      {"bench", cli::cmd_bench},
   };
   const auto it = commands.find(command);
   if (it == commands.end()) throw UsageError("unknown command '" + command + "' (try palp --help)");
