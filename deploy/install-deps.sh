@@ -7,6 +7,8 @@ packages=(
   cmake ninja-build g++ pkg-config
   zlib1g-dev libdeflate-dev libgdcm-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
+  libprotobuf-dev protobuf-compiler libasio-dev libtomlplusplus-dev
+  libvtk9-dev xvfb xauth
 )
 
 missing=()
