@@ -31,12 +31,42 @@ inline void clear_contact(State& st, std::size_t i, const Vec3d& x) {
   st.p[i] = x;
   st.f[i] = Vec3d{};
   st.f_friction[i] = Vec3d{};
+  st.f_bone[i] = Vec3d{};
   st.depth[i] = 0.0;
+  st.bone_latch[i] = kBoneFree;
+}
+
+// Robust mode: whether bone lies on the straight segment a -> b, sampled every `step` mm (at most
+// kMaxBoneSamples samples; a longer segment is sampled more coarsely). The end points are not
+// sampled (the caller has them).
+constexpr int kMaxBoneSamples = 64;
+
+template <class Access>
+bool segment_hits_bone(const Access& fields, const Vec3d& a, const Vec3d& b, double step) {
+  const double len = norm(b - a);
+  if (!(len > step)) return false;
+  const int n = static_cast<int>(std::min(std::ceil(len / step), double{kMaxBoneSamples}));
+  for (int k = 1; k < n; ++k) {
+    const double t = static_cast<double>(k) / n;
+    if (fields.bone_at(a + t * (b - a)).value > 0.0) return true;
+  }
+  return false;
+}
+
+// Eqs. 4-5 as printed: f_b(-D_bone) d_bone / |d_bone| (zero inside bone or without direction).
+inline Vec3d printed_bone_force(const ForceParams& prm, const FieldSample& bone, const Vec3d& v_b,
+                                bool has_vb, const Vec3d& v_s) {
+  const double fb = bone_force(-bone.value, prm.bone_fmax);
+  if (!(fb > 0.0) || !has_vb) return Vec3d{};
+  const double vbvs = dot(v_b, v_s);
+  const Vec3d d_bone = vbvs > 0.0 ? v_b : v_b - (prm.bone_flip * vbvs) * v_s;
+  const double d_norm = norm(d_bone);
+  return d_norm >= prm.direction_epsilon ? (fb / d_norm) * d_bone : Vec3d{};
 }
 
 template <class Access>
 void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<Vec3d>& points,
-               State& st, const Pose& pose) {
+               State& st, const Pose& pose, double bone_step) {
   const bool pose_ok = pose_usable(pose);
   const Quat q = pose_ok ? normalized(pose.orientation) : Quat{};
   const Vec3d xd = pose_ok ? pose.position : Vec3d{};
@@ -73,14 +103,54 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
     Vec3d f_struct{};
     if (bone_on) {
       const FieldSample bone = fields.bone_at(x);
-      const double fb = bone_force(-bone.value, prm.bone_fmax);
       const double bone_grad_norm = norm(bone.grad);
-      if (fb > 0.0 && bone_grad_norm >= prm.grad_epsilon) {
-        const Vec3d v_b = bone.grad * (-1.0 / bone_grad_norm);
-        const double vbvs = dot(v_b, v_s);
-        const Vec3d d_bone = vbvs > 0.0 ? v_b : v_b - (prm.bone_flip * vbvs) * v_s;
-        const double d_norm = norm(d_bone);
-        if (d_norm >= prm.direction_epsilon) f_struct = (fb / d_norm) * d_bone;
+      const bool has_vb = bone_grad_norm >= prm.grad_epsilon;
+      const Vec3d v_b = has_vb ? bone.grad * (-1.0 / bone_grad_norm) : Vec3d{};
+      const bool inside_bone = bone.value > 0.0;
+      if (inside_bone) status |= kTickInsideBone;
+      if (prm.bone_mode == BoneMode::Printed) {
+        f_struct = printed_bone_force(prm, bone, v_b, has_vb, v_s);
+      } else {
+        // Robust: the bone proxy (see force_model.hpp).
+        std::uint8_t latch = entering ? std::uint8_t{kBoneFree} : st.bone_latch[i];
+        Vec3d& anchor = st.bone_anchor[i];
+        Vec3d& normal = st.bone_normal[i];
+        if (latch != kBoneLatched) {
+          const bool crossed = inside_bone || (latch == kBoneAnchor &&
+                                               segment_hits_bone(fields, st.x[i], x, bone_step));
+          if (crossed && latch == kBoneAnchor) {
+            latch = kBoneLatched;
+          } else if (crossed && (has_dir || has_vb)) {
+            // No remembered surface: push out of the skin (or, without a skin direction, toward
+            // the nearest bone surface).
+            normal = has_dir ? v_s : v_b;
+            anchor = x + bone.value * normal;
+            latch = kBoneLatched;
+          }
+        }
+        if (latch == kBoneLatched) {
+          const double pen = dot(anchor - x, normal);
+          // Let go above the entry plane, or outside bone with no bone back to that plane.
+          if (!(pen > 0.0) ||
+              (!inside_bone && !segment_hits_bone(fields, x, x + pen * normal, bone_step))) {
+            latch = kBoneFree;
+          } else {
+            f_struct = (prm.bone_fmax + prm.bone_k * pen) * normal;
+            status |= kTickBoneLatched;
+          }
+        }
+        if (latch != kBoneLatched) {
+          f_struct = printed_bone_force(prm, bone, v_b, has_vb, v_s);
+          // Remember the nearest bone surface point while on the skin side of the bone.
+          if (!inside_bone && has_vb && dot(v_b, v_s) > 0.0) {
+            anchor = x + bone.value * v_b;
+            normal = v_b;
+            latch = kBoneAnchor;
+          } else {
+            latch = kBoneFree;
+          }
+        }
+        st.bone_latch[i] = latch;
       }
     }
 
@@ -126,6 +196,7 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
     st.p[i] = p;
     st.f[i] = f;
     st.f_friction[i] = f_friction;
+    st.f_bone[i] = f_struct;
     st.depth[i] = depth;
 
     // (11) tau = (x - x_device) x f; sums for the means of (12) and (13).
@@ -151,6 +222,16 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
 
 }  // namespace
 
+BoneMode parse_bone_mode(std::string_view name) {
+  if (name == "printed") return BoneMode::Printed;
+  if (name == "robust") return BoneMode::Robust;
+  throw UsageError("bone mode '" + std::string(name) + "' is not printed or robust");
+}
+
+const char* to_string(BoneMode mode) {
+  return mode == BoneMode::Robust ? "robust" : "printed";
+}
+
 ForceParams default_params(ToolKind kind) {
   ForceParams p;
   if (kind == ToolKind::Probe) {
@@ -172,6 +253,9 @@ void validate(const ForceParams& p) {
   check(std::isfinite(p.bone_fmax) && p.bone_fmax >= 0.0,
         "bone_fmax must be a finite number >= 0 (N)");
   check(std::isfinite(p.bone_flip), "bone_flip must be finite");
+  check(std::isfinite(p.bone_k) && p.bone_k >= 0.0, "bone_k must be a finite number >= 0 (N/mm)");
+  check(p.bone_mode == BoneMode::Printed || p.bone_mode == BoneMode::Robust,
+        "bone_mode must be printed (0) or robust (1)");
   check(std::isfinite(p.grad_epsilon) && p.grad_epsilon > 0.0, "grad_epsilon must be > 0");
   check(std::isfinite(p.direction_epsilon) && p.direction_epsilon > 0.0,
         "direction_epsilon must be > 0");
@@ -191,14 +275,20 @@ void set_param(ForceParams& params, std::string_view name, double value) {
     p.grad_epsilon = value;
   else if (name == "direction_epsilon")
     p.direction_epsilon = value;
-  else if (name == "bone_enabled") {
+  else if (name == "bone_k")
+    p.bone_k = value;
+  else if (name == "bone_mode") {
+    if (value != 0.0 && value != 1.0)
+      throw UsageError("force parameter bone_mode must be 0 (printed) or 1 (robust)");
+    p.bone_mode = value != 0.0 ? BoneMode::Robust : BoneMode::Printed;
+  } else if (name == "bone_enabled") {
     if (value != 0.0 && value != 1.0)
       throw UsageError("force parameter bone_enabled must be 0 or 1");
     p.bone_enabled = value != 0.0;
   } else {
     throw UsageError("unknown force parameter '" + std::string(name) +
                      "' (known: c, k, bone_fmax, bone_flip, bone_enabled, grad_epsilon, "
-                     "direction_epsilon)");
+                     "direction_epsilon, bone_mode, bone_k)");
   }
   validate(p);
   params = p;
@@ -224,8 +314,12 @@ State make_state(const Model& model) {
   st.p.assign(n, Vec3d{});
   st.f.assign(n, Vec3d{});
   st.f_friction.assign(n, Vec3d{});
+  st.f_bone.assign(n, Vec3d{});
   st.depth.assign(n, 0.0);
   st.in_contact.assign(n, 0);
+  st.bone_anchor.assign(n, Vec3d{});
+  st.bone_normal.assign(n, Vec3d{});
+  st.bone_latch.assign(n, kBoneFree);
   return st;
 }
 
@@ -236,8 +330,12 @@ void reset(State& st) {
   std::fill(st.p.begin(), st.p.end(), Vec3d{});
   std::fill(st.f.begin(), st.f.end(), Vec3d{});
   std::fill(st.f_friction.begin(), st.f_friction.end(), Vec3d{});
+  std::fill(st.f_bone.begin(), st.f_bone.end(), Vec3d{});
   std::fill(st.depth.begin(), st.depth.end(), 0.0);
   std::fill(st.in_contact.begin(), st.in_contact.end(), std::uint8_t{0});
+  std::fill(st.bone_anchor.begin(), st.bone_anchor.end(), Vec3d{});
+  std::fill(st.bone_normal.begin(), st.bone_normal.end(), Vec3d{});
+  std::fill(st.bone_latch.begin(), st.bone_latch.end(), std::uint8_t{kBoneFree});
   st.f_device = st.tau_device = st.u = Vec3d{};
   st.n_contact = 0;
   st.status = kTickOk;
@@ -248,7 +346,9 @@ void tick(const Model& model, State& state, const Pose& device_pose) {
   const std::size_t n = model.contact_count();
   if (state.x.size() != n || state.s.size() != n || state.s_prev.size() != n ||
       state.p.size() != n || state.f.size() != n || state.f_friction.size() != n ||
-      state.depth.size() != n || state.in_contact.size() != n) {
+      state.depth.size() != n || state.in_contact.size() != n || state.f_bone.size() != n ||
+      state.bone_anchor.size() != n || state.bone_normal.size() != n ||
+      state.bone_latch.size() != n) {
     // Not a State of this model: touch nothing per contact, report nothing.
     state.f_device = state.tau_device = state.u = Vec3d{};
     state.n_contact = 0;
@@ -256,8 +356,9 @@ void tick(const Model& model, State& state, const Pose& device_pose) {
     return;
   }
   // Scheme and storage are chosen here, once per tick; the loop inside is monomorphic.
+  const double bone_step = 0.5 * model.fields().grid().min_spacing();
   model.fields().dispatch([&](const auto& access) {
-    tick_impl(access, model.params(), model.tool().points, state, device_pose);
+    tick_impl(access, model.params(), model.tool().points, state, device_pose, bone_step);
   });
 }
 

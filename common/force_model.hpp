@@ -22,6 +22,22 @@
 //   - A contact point whose force or proxy came out non-finite (not expected with finite maps)
 //     is dropped from contact for that tick and kTickNonFinite is set.
 //   - Points not in contact report s = p = x, zero force and zero depth.
+//
+// Bone modes (ForceParams::bone_mode):
+//   Printed (default; offline runs follow the spec)  eqs. 4-5 as printed: inside bone
+//          (D_bone > 0) the law gives no force, so a user pushing harder than the cap plus the
+//          skin law ends up inside a rib, and past a thin rib the force may vanish or flip.
+//   Robust  a bone proxy (god-object) per contact point. While a point is outside bone on the
+//          skin side (v_b . v_s > 0) its nearest bone surface point e = x + D_bone v_b and the
+//          outward normal n = v_b are remembered. When the point enters bone - found inside, or
+//          its straight path since the previous tick crosses bone (sampled every half voxel) -
+//          the proxy latches on e: the bone force becomes (bone_fmax + bone_k * pen) n with
+//          pen = (e - x) . n, continuous with the capped law at the surface and growing without
+//          bound, so no finite push tunnels through. The latch lets go when the point is back
+//          above the entry plane (pen <= 0), when it is outside bone with no bone between it and
+//          that plane along n (it slid off the bone sideways), or when contact is lost. A point
+//          that enters bone with no remembered surface (it entered contact inside bone, or
+//          approached from beneath) latches with n = v_s and e = x + D_bone v_s.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +51,8 @@
 
 namespace palp {
 
+enum class BoneMode { Printed, Robust };
+
 struct ForceParams {
   double c = 2.0;                   // mm/N: friction stick length per newton of pressing force
   double k = 0.4;                   // N/mm: proxy spring stiffness
@@ -43,17 +61,24 @@ struct ForceParams {
   bool bone_enabled = true;         // false skips the bone terms
   double grad_epsilon = 1e-6;       // |grad D| below this (mm/mm): no direction
   double direction_epsilon = 1e-9;  // |d_bone| below this: no bone force
+  BoneMode bone_mode = BoneMode::Printed;  // Robust: bone proxy, no tunnelling (see above)
+  double bone_k = 10.0;                    // N/mm: Robust mode's spring past the bone surface
 };
+
+// "printed" | "robust"; UsageError otherwise.
+BoneMode parse_bone_mode(std::string_view name);
+const char* to_string(BoneMode mode);
 
 // Parameter sets of the spec: fingertip c = 2.0, k = 0.4 (finger, twofinger); ultrasound probe
 // c = 0.4, k = 0.3.
 ForceParams default_params(ToolKind kind);
 
 // Overrides one parameter by name: c, k, bone_fmax, bone_flip, bone_enabled (0/1),
-// grad_epsilon, direction_epsilon. UsageError for unknown names or unusable values.
+// grad_epsilon, direction_epsilon, bone_mode (0 = printed, 1 = robust), bone_k.
+// UsageError for unknown names or unusable values.
 void set_param(ForceParams& params, std::string_view name, double value);
 
-// UsageError unless c, k, bone_fmax >= 0, bone_flip, epsilons finite (epsilons > 0).
+// UsageError unless c, k, bone_fmax, bone_k >= 0, bone_flip, epsilons finite (epsilons > 0).
 void validate(const ForceParams& params);
 
 // f_s(x) = 1.78e-2 x^3 + 3.82e-3 x^2 + 2.28e-4 x for x > 0, else 0 (mm -> N).
@@ -100,6 +125,15 @@ enum TickStatus : std::uint32_t {
   kTickNoSkinDirection = 1u << 2,  // some point in contact had |grad D_surf| < epsilon
   kTickNonFinite = 1u << 3,        // a non-finite value was caught and zeroed (should not happen)
   kTickBadState = 1u << 4,         // the State was not made for this Model: nothing computed
+  kTickInsideBone = 1u << 5,       // some point in contact was inside bone (D_bone > 0)
+  kTickBoneLatched = 1u << 6,      // Robust mode: some point was held by its bone proxy
+};
+
+// State::bone_latch values (Robust mode).
+enum BoneLatch : std::uint8_t {
+  kBoneFree = 0,     // no bone surface remembered
+  kBoneAnchor = 1,   // outside bone on the skin side: bone_anchor / bone_normal are current
+  kBoneLatched = 2,  // entered bone: held on bone_anchor, pushed out along bone_normal
 };
 
 struct State {
@@ -110,8 +144,13 @@ struct State {
   std::vector<Vec3d> p;           // friction proxy
   std::vector<Vec3d> f;           // total force f_surf + f_friction + f_structures (N)
   std::vector<Vec3d> f_friction;  // k (p - s), N
+  std::vector<Vec3d> f_bone;      // f_structures (N), zero when none
   std::vector<double> depth;      // D_surf(x) when in contact, else 0 (mm)
   std::vector<std::uint8_t> in_contact;
+  // Robust bone mode, per contact point (unused, kBoneFree, in Printed mode).
+  std::vector<Vec3d> bone_anchor;        // remembered / latched bone surface point e
+  std::vector<Vec3d> bone_normal;        // outward bone normal n at e
+  std::vector<std::uint8_t> bone_latch;  // BoneLatch
 
   // Device outputs: means over the points in contact (zero when none).
   Vec3d f_device{};    // N

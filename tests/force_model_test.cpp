@@ -16,6 +16,7 @@
 #include <random>
 #include <string>
 
+#include "distance_transform.hpp"
 #include "errors.hpp"
 
 // Counts heap allocations made while g_count_allocations is set.
@@ -631,6 +632,223 @@ TEST(ForceModel, NoHeapAllocationPerTick) {
       }
       g_count_allocations = false;
       EXPECT_EQ(g_allocations.load(), 0) << to_string(storage) << "/" << to_string(scheme);
+      expect_all_finite(st);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bone modes: Printed (the default, eqs. 4-5 as printed) and Robust (a bone proxy per point).
+
+// A plate of bone: voxel centres with z in [z_lo, z_hi] (whole voxels), infinite in x and y,
+// optionally cut to x in [x_lo, x_hi]; its exact signed distance map on the test grid.
+DistanceMap bone_plate(int z_lo, int z_hi, int x_lo = 0, int x_hi = 100) {
+  Grid g;
+  g.dims = kDims;
+  Mask m(g, 0);
+  for (std::int64_t k = z_lo; k <= z_hi; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = x_lo; i <= x_hi; ++i) m.at(i, j, k) = 1;
+  return signed_distance(m);
+}
+
+ForceParams robust_params(double flip = 4.0) {
+  ForceParams p = default_params(ToolKind::Finger);
+  set_param(p, "bone_mode", 1.0);
+  set_param(p, "bone_flip", flip);
+  return p;
+}
+
+// Bone force of a single point pressed straight down to each depth in turn.
+std::vector<double> bone_force_z_along(const Model& model, double from, double to, double step) {
+  State st = make_state(model);
+  std::vector<double> out;
+  for (double d = from; d <= to + 1e-9; d += step) {
+    tick(model, st, press(d));
+    out.push_back(st.f_bone[0].z);
+  }
+  return out;
+}
+
+TEST(BoneMode, DefaultIsPrintedAndParametersValidate) {
+  const ForceParams p = default_params(ToolKind::Finger);
+  EXPECT_EQ(p.bone_mode, BoneMode::Printed);
+  EXPECT_EQ(p.bone_k, 10.0);
+  EXPECT_EQ(default_params(ToolKind::Probe).bone_mode, BoneMode::Printed);
+  ForceParams q = p;
+  set_param(q, "bone_mode", 1.0);
+  EXPECT_EQ(q.bone_mode, BoneMode::Robust);
+  set_param(q, "bone_k", 25.0);
+  EXPECT_EQ(q.bone_k, 25.0);
+  set_param(q, "bone_mode", 0.0);
+  EXPECT_EQ(q.bone_mode, BoneMode::Printed);
+  EXPECT_THROW(set_param(q, "bone_mode", 0.5), UsageError);
+  EXPECT_THROW(set_param(q, "bone_k", -1.0), UsageError);
+  EXPECT_EQ(parse_bone_mode("robust"), BoneMode::Robust);
+  EXPECT_EQ(parse_bone_mode("printed"), BoneMode::Printed);
+  EXPECT_THROW(parse_bone_mode("rigid"), UsageError);
+  EXPECT_STREQ(to_string(BoneMode::Robust), "robust");
+}
+
+TEST(BoneMode, PrintedGivesNoForceInsideBoneRobustPushesBack) {
+  // Thick bone below z = 10.25 (D_bone = 10.25 - z): the pad's point reaches it at depth 10.
+  const auto fields = skin_and_bone({0, 0, -1}, 10.25);
+  const Model printed(fields, parse_tool("finger:1"));
+  State sp = make_state(printed);
+  tick(printed, sp, press(12.0));  // 2 mm inside bone
+  expect_vec_near(sp.f_bone[0], Vec3d{}, 1e-12);
+  expect_vec_near(sp.f_device, surface_force(12.0) * kUp, 1e-9);
+  EXPECT_TRUE(sp.status & kTickInsideBone);
+  EXPECT_FALSE(sp.status & kTickBoneLatched);
+
+  const Model robust(fields, parse_tool("finger:1"), robust_params());
+  State sr = make_state(robust);
+  for (double d = 4.0; d <= 12.0 + 1e-9; d += 0.1) tick(robust, sr, press(d));
+  EXPECT_EQ(sr.bone_latch[0], kBoneLatched);
+  EXPECT_TRUE(sr.status & kTickBoneLatched);
+  EXPECT_TRUE(sr.status & kTickInsideBone);
+  // pen = 2 mm past the surface: bone_fmax + bone_k pen, out along the bone normal.
+  expect_vec_near(sr.f_bone[0], (40.0 + 10.0 * 2.0) * kUp, 1e-6);
+  expect_vec_near(sr.f_device, (surface_force(12.0) + 60.0) * kUp, 1e-6);
+
+  // Outside bone the two modes agree (the capped law), and the force is continuous at the
+  // surface: 40 N just above it, 40 N plus a little just below.
+  const std::vector<double> fr = bone_force_z_along(robust, 4.0, 10.05, 0.05);
+  const std::vector<double> fp = bone_force_z_along(printed, 4.0, 10.05, 0.05);
+  ASSERT_EQ(fr.size(), 122u);  // depths 4.00, 4.05, ..., 10.05
+  for (std::size_t i = 0; i < 119; ++i) EXPECT_NEAR(fr[i], fp[i], 1e-9) << i;
+  EXPECT_NEAR(fr[119], 40.0, 1e-6);                // 0.05 mm above the surface
+  EXPECT_NEAR(fr[121], 40.0 + 10.0 * 0.05, 1e-6);  // 0.05 mm inside
+}
+
+TEST(BoneMode, RobustDoesNotTunnelThroughAThinRib) {
+  // A 4-voxel plate (centres z = 10..13, surfaces at 9.5 and 13.5): its top is 6.75 mm under
+  // the skin and its bottom 10.75 mm.
+  const auto fields = std::make_shared<const FieldSampler>(flat_skin(), bone_plate(10, 13));
+  const double top = kZ0 - 13.5;
+  ForceParams flip0 = default_params(ToolKind::Finger);
+  set_param(flip0, "bone_flip", 0.0);
+  const Model printed(fields, parse_tool("finger:1"));
+  const Model no_flip(fields, parse_tool("finger:1"), flip0);
+  const Model robust(fields, parse_tool("finger:1"), robust_params());
+  const double step = 0.05;
+  const std::vector<double> fp = bone_force_z_along(printed, 2.0, 16.0, step);
+  const std::vector<double> f0 = bone_force_z_along(no_flip, 2.0, 16.0, step);
+  const std::vector<double> fr = bone_force_z_along(robust, 2.0, 16.0, step);
+  int printed_zero = 0, no_flip_inward = 0;
+  for (std::size_t i = 0; i < fp.size(); ++i) {
+    const double d = 2.0 + step * static_cast<double>(i);
+    if (d > top + 0.1 && d < top + 3.9) printed_zero += fp[i] == 0.0;  // inside: nothing
+    if (d > top + 4.1) {
+      EXPECT_GT(fp[i], 0.0) << d;      // eq. 4: below the rib still pushing out
+      no_flip_inward += f0[i] < -1.0;  // without it: pulled further in
+    }
+    if (d > top + 0.01) {
+      // Robust: the proxy stays on the top surface; the force grows with depth past it.
+      EXPECT_NEAR(fr[i], 40.0 + 10.0 * (d - top), 1e-6) << d;
+    }
+  }
+  EXPECT_GT(printed_zero, 70);
+  EXPECT_GT(no_flip_inward, 20);
+}
+
+TEST(BoneMode, RobustCatchesAJumpAcrossTheRibInOneTick) {
+  const auto fields = std::make_shared<const FieldSampler>(flat_skin(), bone_plate(10, 13));
+  const double top = kZ0 - 13.5;
+  const Model robust(fields, parse_tool("finger:1"), robust_params());
+  State st = make_state(robust);
+  tick(robust, st, press(5.0));  // above the rib: its surface is remembered
+  EXPECT_EQ(st.bone_latch[0], kBoneAnchor);
+  expect_vec_near(st.bone_anchor[0], Vec3d{kCx, kCy, 13.5}, 1e-9);
+  tick(robust, st, press(13.0));  // 2.25 mm below the rib, never sampled inside it
+  EXPECT_EQ(st.bone_latch[0], kBoneLatched);
+  expect_vec_near(st.f_bone[0], (40.0 + 10.0 * (13.0 - top)) * kUp, 1e-6);
+  EXPECT_FALSE(st.status & kTickInsideBone);
+
+  // The printed law sees only the point below the rib: eq. 4 pushes it up at the cap, without
+  // eq. 4 it is pulled down.
+  const Model printed(fields, parse_tool("finger:1"));
+  State sp = make_state(printed);
+  tick(printed, sp, press(5.0));
+  tick(printed, sp, press(13.0));
+  expect_vec_near(sp.f_bone[0], 40.0 * kUp, 1e-6);
+}
+
+TEST(BoneMode, RobustLetsGoWhenLiftedSlidOffOrOutOfContact) {
+  // Bone below z = 10.5 only for x in [40, 60] (a wide rib).
+  Grid g;
+  g.dims = kDims;
+  Mask m(g, 0);
+  for (std::int64_t k = 0; k <= 10; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 40; i <= 60; ++i) m.at(i, j, k) = 1;
+  const auto fields = std::make_shared<const FieldSampler>(flat_skin(), signed_distance(m));
+  const Model robust(fields, parse_tool("finger:1"), robust_params());
+  const Model printed(fields, parse_tool("finger:1"));
+
+  // Press 1.5 mm into the bone, then lift: back above the surface the printed law returns.
+  State st = make_state(robust);
+  for (double d = 5.0; d <= 11.25 + 1e-9; d += 0.25) tick(robust, st, press(d));
+  EXPECT_EQ(st.bone_latch[0], kBoneLatched);
+  EXPECT_NEAR(st.f_bone[0].z, 40.0 + 10.0 * 1.5, 1e-6);
+  tick(robust, st, press(9.0));
+  EXPECT_NE(st.bone_latch[0], kBoneLatched);
+  State sp = make_state(printed);
+  tick(printed, sp, press(9.0));
+  expect_vec_near(st.f_bone[0], sp.f_bone[0], 1e-9);
+
+  // Press in again, then slide sideways off the rib at that depth: once no bone lies between
+  // the point and the entry plane the proxy lets go and the printed law applies again.
+  for (double d = 9.0; d <= 11.25 + 1e-9; d += 0.25) tick(robust, st, press(d));
+  ASSERT_EQ(st.bone_latch[0], kBoneLatched);
+  for (double x = kCx; x <= 66.0; x += 0.25) tick(robust, st, press(11.25, x));
+  EXPECT_NE(st.bone_latch[0], kBoneLatched);
+  State sp2 = make_state(printed);
+  tick(printed, sp2, press(11.25, 66.0));
+  expect_vec_near(st.f_bone[0], sp2.f_bone[0], 1e-9);
+
+  // Latched again, then out of contact: everything is forgotten.
+  for (double d = 9.0; d <= 11.25 + 1e-9; d += 0.25) tick(robust, st, press(d));
+  ASSERT_EQ(st.bone_latch[0], kBoneLatched);
+  tick(robust, st, press(-1.0));
+  EXPECT_EQ(st.bone_latch[0], kBoneFree);
+  EXPECT_EQ(st.n_contact, 0);
+}
+
+TEST(BoneMode, RobustEnteringContactInsideBonePushesOutOfTheSkin) {
+  // No remembered surface: the proxy latches with n = v_s and pen = D_bone(x).
+  const auto fields = skin_and_bone({0, 0, -1}, 10.25);
+  const Model robust(fields, parse_tool("finger:1"), robust_params());
+  State st = make_state(robust);
+  tick(robust, st, press(11.5));  // first tick, 1.5 mm inside bone
+  EXPECT_EQ(st.bone_latch[0], kBoneLatched);
+  expect_vec_near(st.f_bone[0], (40.0 + 10.0 * 1.5) * kUp, 1e-6);
+  tick(robust, st, press(12.5));  // 1 mm further: pen grows by 1 mm
+  expect_vec_near(st.f_bone[0], (40.0 + 10.0 * 2.5) * kUp, 1e-6);
+  expect_all_finite(st);
+}
+
+TEST(BoneMode, RobustFingerPadOverAThinRibAndNoHeapAllocation) {
+  for (Storage storage : kStorages)
+    for (GradientScheme scheme : kSchemes) {
+      const auto fields = std::make_shared<const FieldSampler>(
+          flat_skin(), bone_plate(10, 13, 45, 48), SamplerConfig{scheme, storage});
+      const Model model(fields, parse_tool("finger:37"), robust_params());
+      State st = make_state(model);
+      g_allocations = 0;
+      g_count_allocations = true;
+      double min_fz = 1e300;
+      for (int t = 0; t < 3000; ++t) {
+        // Press hard over the rib, slide across it and back, jump, lift.
+        const double depth = t < 500 ? 0.03 * t : (t < 2500 ? 15.0 : -1.0);
+        const double x = 30.0 + 0.02 * std::max(0, t - 500);
+        Pose pose = press(depth, x);
+        if (t == 2400) pose = press(15.0, 80.0);
+        tick(model, st, pose);
+        if (st.n_contact > 0) min_fz = std::min(min_fz, st.f_device.z);
+      }
+      g_count_allocations = false;
+      EXPECT_EQ(g_allocations.load(), 0) << to_string(storage) << "/" << to_string(scheme);
+      EXPECT_GT(min_fz, 0.0);  // never pulled into the body
       expect_all_finite(st);
     }
 }
