@@ -1,0 +1,121 @@
+#!/usr/bin/env bash
+# Runs the force-model studies (speed against accuracy, pop-through, passivity), writes their
+# CSVs and logs into $PALP_BUILD_DIR/studies and renders the charts into docs/figures with
+# palpchart (under xvfb-run when there is no display). Prints the figures it measured.
+#
+#   tests/bench/run_studies.sh [--quick] [--charts-only]
+#
+# Environment: PALP_BUILD_DIR (default build), PALP_FIGURES_DIR (default docs/figures),
+# PALP_STUDIES_DIR (CSVs and logs, default $PALP_BUILD_DIR/studies), PALP_JOBS (build
+# parallelism, default 1). The studies measure; nothing here gates CI.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+build=${PALP_BUILD_DIR:-build}
+figures=${PALP_FIGURES_DIR:-docs/figures}
+data=${PALP_STUDIES_DIR:-$build/studies}
+jobs=${PALP_JOBS:-1}
+quick=()
+charts_only=0
+for arg in "$@"; do
+  case $arg in
+    --quick) quick=(--quick) ;;
+    --charts-only) charts_only=1 ;;
+    *) echo "usage: $0 [--quick] [--charts-only]" >&2; exit 2 ;;
+  esac
+done
+chart=$build/client/palpchart
+
+charts() {
+  mkdir -p "$figures"
+  local c=(--size 1000x640)
+  local sa_y=(--y err_rel_pct --ylabel "force error (% of the reference force)" --logy)
+  local sa_x=(--x tick_ns --xlabel "median tick time (ns, finger:37, this 2-core VM)")
+  for phantom in sphere torso; do
+    grep -q "^$phantom," "$data/speed_accuracy.csv" || continue
+    local ref="exact distances at 0.25 mm"
+    [[ $phantom == torso ]] && ref="0.25 mm maps of a 24 mm slab"
+    "$chart" "${c[@]}" --csv "$data/speed_accuracy.csv" --where phantom=$phantom \
+      "${sa_x[@]}" "${sa_y[@]}" --group gradient,storage --style points \
+      --mark pareto --mark-label "Pareto front" \
+      --title "Speed vs accuracy, $phantom: 0.5 / 1 / 2 / 3 mm maps from the bottom (ref.: $ref)" \
+      --out "$figures/speed_accuracy_$phantom.png"
+  done
+
+  for tool in 1 37; do
+    "$chart" "${c[@]}" --csv "$data/pop_through_chart.csv" --where tool=finger:$tool \
+      --x indentation_mm --y pct --group series --legend tl --yrange 0,140 \
+      --xlabel "nominal indentation (mm; hand push = skin law force there)" \
+      --ylabel "% of ticks over the rib" \
+      --title "finger:$tool slid across a thin rib at 100 mm/s: bone force flips or vanishes" \
+      --out "$figures/pop_through_slide_finger$tool.png"
+    "$chart" "${c[@]}" --csv "$data/pop_through_push.csv" --where tool=finger:$tool \
+      --where "rate_hz=0|2000|10000" --x push_N --y depth_mm --group series --style line \
+      --legend tl --xlabel "hand push (N), ramped 0 to 100 N in 3 s" \
+      --ylabel "pad centre depth under the skin (mm)" \
+      --title "finger:$tool pushed onto a thin rib: printed bone law vs robust mode" \
+      --out "$figures/pop_through_push_finger$tool.png"
+  done
+  "$chart" "${c[@]}" --csv "$data/pop_through_speed.csv" --where tool=finger:37 \
+    --x speed_mm_s --y pct --group series --logx --legend bl --yrange 0,105 \
+    --xlabel "slide speed (mm/s)" --ylabel "% of ticks over the rib" \
+    --title "finger:37 across a thin rib at 12 mm indentation, against speed" \
+    --out "$figures/pop_through_speed.png"
+
+  for profile in falcon phantom-premium omega; do
+    "$chart" "${c[@]}" --csv "$data/passivity_boundary.csv" --where profile=$profile \
+      --where "limits=saturation|limiter" --x hand_N --y min_stable_rate_hz --group series \
+      --logy --legend tr --xlabel "hand push (N)" \
+      --ylabel "lowest stable update rate (Hz; 20000 = unstable at 10 kHz)" \
+      --title "$profile: stable above each line (skin / bone 10 mm under skin)" \
+      --out "$figures/passivity_$profile.png"
+  done
+  "$chart" "${c[@]}" --csv "$data/passivity.csv" --where scene=bone --where hand_frac=0.2 \
+    --where "limits=saturation|limiter" --x rate_hz --y inj_mW --group profile,limits --logx \
+    --logy --legend bl --xlabel "update rate (Hz)" \
+    --ylabel "energy injected by the rendering (mW)" \
+    --title "Hand pushing 20% of max force onto skin over bone (2.5 N step at contact)" \
+    --out "$figures/passivity_energy.png"
+  ls -1 "$figures"/*.png
+}
+
+if [[ $charts_only == 0 ]]; then
+  if [[ ! -f "$build/build.ninja" && ! -f "$build/Makefile" ]]; then
+    cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+  fi
+  cmake --build "$build" --parallel "$jobs" \
+    --target study_speed_accuracy study_pop_through study_passivity
+  mkdir -p "$data"
+  for study in speed_accuracy pop_through passivity; do
+    echo "== study_$study ${quick[*]}"
+    SECONDS=0
+    "$build/tests/bench/study_$study" --out "$data" "${quick[@]}" | tee "$data/$study.log"
+    echo "   (${SECONDS} s wall)"
+  done
+fi
+
+if [[ ! -x "$chart" ]]; then
+  cmake --build "$build" --parallel "$jobs" --target palpchart 2>/dev/null || true
+fi
+if [[ ! -x "$chart" ]]; then
+  echo "palpchart was not built (VTK missing?): CSVs are in $data, no charts" >&2
+  exit 1
+fi
+if [[ -n ${DISPLAY:-} ]]; then
+  charts
+elif command -v xvfb-run >/dev/null; then
+  # One virtual display for all charts.
+  PALP_BUILD_DIR=$build PALP_FIGURES_DIR=$figures PALP_STUDIES_DIR=$data \
+    xvfb-run -a "$0" --charts-only
+else
+  echo "no display and no xvfb-run: install xvfb (deploy/install-deps.sh) to render charts" >&2
+  exit 1
+fi
+
+if [[ $charts_only == 0 ]]; then
+  echo "== measured (this machine: $(nproc) cores, $(uname -m))"
+  sed -n '/Pareto front/,/^  [a-z]*: \|^wrote/p' "$data/speed_accuracy.log" | grep -v "^wrote" || true
+  grep -h -E "static threshold|push  finger" "$data/pop_through.log" || true
+  awk '/stable from/ { key = $1 " " $2 " " $3; n[key]++; if ($0 ~ /never/) bad[key]++ }
+       END { for (k in n) printf "passivity %-32s %d of %d hand forces unstable at every rate\n",
+                                 k, bad[k], n[k] }' "$data/passivity.log" | sort
+fi
