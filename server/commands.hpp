@@ -14,5 +14,6 @@ int cmd_prep(const Arguments& args);     // cmd_prep.cpp
 int cmd_run(const Arguments& args);      // cmd_run.cpp
 int cmd_traj(const Arguments& args);     // cmd_traj.cpp
 int cmd_bench(const Arguments& args);    // cmd_bench.cpp
+int cmd_probe(const Arguments& args);    // cmd_probe.cpp (palpd observer)
 
 }  // namespace palp::cli

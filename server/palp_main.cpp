@@ -33,6 +33,7 @@ Commands:
                             the paper's trajectories (slide-ramp, slide-speed, press-hold, ribs)
   bench --scene S --tool T --ticks N
                             time the tick in-process; last line JSON
+  probe HOST:PORT           observe a running palpd: frames/s, delivery, latency, stats
   version                   print the version
 
 Run `palp <command> --help` for the options of a command.
@@ -59,6 +60,7 @@ int dispatch(int argc, char** argv) {
       {"run", cli::cmd_run},
       {"traj", cli::cmd_traj},
       {"bench", cli::cmd_bench},
+      {"probe", cli::cmd_probe},
   };
   const auto it = commands.find(command);
   if (it == commands.end()) throw UsageError("unknown command '" + command + "' (try palp --help)");

@@ -1,0 +1,144 @@
+// palp.v1 conversions and checks: see protocol.hpp.
+#include "net/protocol.hpp"
+
+#include <cmath>
+
+#include "net/framing.hpp"
+
+namespace palp::net {
+
+std::string encode_frame(const google::protobuf::MessageLite& message) {
+  const std::size_t size = message.ByteSizeLong();
+  std::uint8_t prefix[kMaxVarintBytes];
+  const std::size_t n = encode_varint(size, prefix);
+  std::string out(n + size, '\0');
+  std::copy(prefix, prefix + n, out.begin());
+  message.SerializeWithCachedSizesToArray(reinterpret_cast<std::uint8_t*>(out.data() + n));
+  return out;
+}
+
+void to_proto(const Vec3d& v, v1::Vec3* out) {
+  out->set_x(v.x);
+  out->set_y(v.y);
+  out->set_z(v.z);
+}
+
+void to_proto(const Pose& pose, v1::Pose* out) {
+  to_proto(pose.position, out->mutable_position());
+  v1::Quat* q = out->mutable_orientation();
+  q->set_w(pose.orientation.w);
+  q->set_x(pose.orientation.x);
+  q->set_y(pose.orientation.y);
+  q->set_z(pose.orientation.z);
+}
+
+Vec3d from_proto(const v1::Vec3& v) {
+  return {v.x(), v.y(), v.z()};
+}
+
+Pose from_proto(const v1::Pose& pose) {
+  Pose p;
+  p.position = from_proto(pose.position());
+  const v1::Quat& q = pose.orientation();
+  p.orientation = pose.has_orientation() ? Quat{q.w(), q.x(), q.y(), q.z()} : Quat{};
+  return p;
+}
+
+void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* out) {
+  const rt::TickRecord& t = snapshot.tick;
+  out->set_seq(t.seq);
+  out->set_server_time_ns(t.t_ns);
+  to_proto(t.pose, out->mutable_device_pose());
+  to_proto(t.force, out->mutable_force());
+  to_proto(t.torque, out->mutable_torque());
+  to_proto(t.u, out->mutable_displacement());
+  out->set_n_contact(static_cast<std::uint32_t>(t.n_contact));
+  out->set_tick_status(t.tick_status);
+  out->set_safety_status(t.safety_status);
+  out->set_fault(t.fault);
+  out->set_contact_points(snapshot.contact_points);
+  if (!contacts) return;
+  for (std::uint32_t i = 0; i < snapshot.contact_count; ++i) {
+    const rt::ContactSnapshot& c = snapshot.contacts[i];
+    v1::Contact* pc = out->add_contacts();
+    to_proto(c.x, pc->mutable_position());
+    to_proto(c.s, pc->mutable_surface());
+    to_proto(c.p, pc->mutable_proxy());
+    pc->set_in_contact(c.in_contact != 0);
+    to_proto(c.f, pc->mutable_force());
+  }
+}
+
+namespace {
+
+ClientCheck bad(v1::Error::Code code, std::string reason) {
+  return {false, code, std::move(reason)};
+}
+
+bool finite(const v1::Vec3& v) {
+  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
+
+bool usable_pose(const v1::Pose& pose) {
+  if (!finite(pose.position())) return false;
+  if (!pose.has_orientation()) return true;
+  const v1::Quat& q = pose.orientation();
+  const double n2 = q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z();
+  return std::isfinite(n2) && n2 >= 0.25 && n2 <= 4.0;
+}
+
+}  // namespace
+
+ClientCheck parse_client_message(std::string_view body, v1::ClientMessage& out) {
+  out.Clear();
+  if (!out.ParseFromArray(body.data(), static_cast<int>(body.size())))
+    return bad(v1::Error::MALFORMED, "undecodable ClientMessage");
+  switch (out.msg_case()) {
+    case v1::ClientMessage::kHello: {
+      const v1::Hello& h = out.hello();
+      if (h.client_name().size() > kMaxNameBytes || h.token().size() > kMaxNameBytes)
+        return bad(v1::Error::BAD_REQUEST, "client_name or token too long");
+      if (!std::isfinite(h.frame_rate_hz()) || h.frame_rate_hz() < 0.0)
+        return bad(v1::Error::BAD_REQUEST, "frame_rate_hz must be finite and >= 0");
+      if (h.role() != v1::OBSERVER && h.role() != v1::CONTROLLER)
+        return bad(v1::Error::BAD_REQUEST, "role must be OBSERVER or CONTROLLER");
+      return {};
+    }
+    case v1::ClientMessage::kPing:
+      return {};
+    case v1::ClientMessage::kCommand: {
+      const v1::Command& c = out.command();
+      switch (c.kind_case()) {
+        case v1::Command::kSetTool:
+          if (c.set_tool().tool().size() > kMaxNameBytes)
+            return bad(v1::Error::BAD_REQUEST, "tool name too long");
+          return {};
+        case v1::Command::kSetParameter:
+          if (c.set_parameter().name().size() > kMaxNameBytes)
+            return bad(v1::Error::BAD_REQUEST, "parameter name too long");
+          if (!std::isfinite(c.set_parameter().value()))
+            return bad(v1::Error::BAD_REQUEST, "parameter value must be finite");
+          return {};
+        case v1::Command::kStartRecording:
+          if (c.start_recording().name().size() > kMaxNameBytes)
+            return bad(v1::Error::BAD_REQUEST, "recording name too long");
+          return {};
+        case v1::Command::kPause:
+        case v1::Command::kStopRecording:
+          return {};
+        case v1::Command::KIND_NOT_SET:
+          break;
+      }
+      return bad(v1::Error::BAD_REQUEST, "empty Command");
+    }
+    case v1::ClientMessage::kDevicePose:
+      if (!usable_pose(out.device_pose().pose()))
+        return bad(v1::Error::BAD_REQUEST, "device pose not finite or not a rotation");
+      return {};
+    case v1::ClientMessage::MSG_NOT_SET:
+      break;
+  }
+  return bad(v1::Error::MALFORMED, "empty ClientMessage");
+}
+
+}  // namespace palp::net

@@ -1,0 +1,682 @@
+// The palpd network server: see server.hpp. Everything below runs on the io thread except the
+// constructor, start(), stop() and the atomic counters.
+#include "net/server.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <deque>
+#include <thread>
+#include <vector>
+
+#include "asio.hpp"
+#include "errors.hpp"
+#include "net/framing.hpp"
+#include "net/protocol.hpp"
+
+namespace palp::net {
+
+using asio::ip::tcp;
+using Bytes = std::shared_ptr<const std::string>;
+
+namespace {
+
+Bytes frame_of(const v1::ServerMessage& message) {
+  return std::make_shared<const std::string>(encode_frame(message));
+}
+
+Bytes error_frame(v1::Error::Code code, const std::string& reason, bool fatal) {
+  v1::ServerMessage m;
+  v1::Error* e = m.mutable_error();
+  e->set_code(code);
+  e->set_reason(reason);
+  e->set_fatal(fatal);
+  return frame_of(m);
+}
+
+// Constant-time comparison of the token.
+bool same_token(const std::string& a, const std::string& b) {
+  unsigned char diff = a.size() == b.size() ? 0 : 1;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    diff |= static_cast<unsigned char>(a[i] ^ (i < b.size() ? b[i] : 0));
+  return diff == 0;
+}
+
+std::int64_t seconds_to_ns(double s) {
+  return static_cast<std::int64_t>(s * 1e9);
+}
+
+}  // namespace
+
+class Server::Impl {
+ public:
+  struct Session;
+
+  Impl(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop, ControlTarget* control)
+      : config_(std::move(config)),
+        scene_(std::move(scene)),
+        loop_(loop),
+        control_(control),
+        acceptor_(io_),
+        poll_timer_(io_),
+        house_timer_(io_) {
+    asio::error_code ec;
+    const asio::ip::address address = asio::ip::make_address(config_.bind, ec);
+    if (ec) throw UsageError("--bind: '" + config_.bind + "' is not an IP address");
+    const tcp::endpoint endpoint(address, config_.port);
+    acceptor_.open(endpoint.protocol(), ec);
+    if (!ec) acceptor_.set_option(tcp::acceptor::reuse_address(true), ec);
+    if (!ec) acceptor_.bind(endpoint, ec);
+    if (!ec) acceptor_.listen(asio::socket_base::max_listen_connections, ec);
+    if (ec)
+      throw ResourceError("cannot listen on " + config_.bind + ":" + std::to_string(config_.port) +
+                          ": " + ec.message());
+    port_ = acceptor_.local_endpoint().port();
+  }
+
+  ~Impl() { stop(); }
+
+  void start() {
+    if (thread_.joinable()) return;
+    last_stats_ns_ = rt::monotonic_ns();
+    last_stats_ticks_ = loop_.stats().ticks;
+    accept();
+    schedule_poll();
+    schedule_house();
+    thread_ = std::thread([this] { io_.run(); });
+  }
+
+  void stop() {
+    if (!thread_.joinable()) return;
+    asio::post(io_, [this] {
+      asio::error_code ec;
+      acceptor_.close(ec);
+      poll_timer_.cancel();
+      house_timer_.cancel();
+      for (auto& s : sessions_) close(*s);
+      sessions_.clear();
+      io_.stop();
+    });
+    thread_.join();
+    client_count_.store(0);
+  }
+
+  void scene_changed() {
+    asio::post(io_, [this] {
+      for (auto& s : sessions_)
+        if (s->welcomed && !s->closing) {
+          s->control.push_back(scene_frame());
+          pump(s);
+        }
+    });
+  }
+
+  std::uint16_t port() const { return port_; }
+  std::size_t client_count() const { return client_count_.load(); }
+  ServerCounters counters() const {
+    ServerCounters c;
+    c.accepted = accepted_.load();
+    c.rejected = rejected_.load();
+    c.protocol_errors = protocol_errors_.load();
+    c.frames_sent = frames_sent_.load();
+    c.frames_dropped = frames_dropped_.load();
+    c.timeouts = timeouts_.load();
+    return c;
+  }
+
+  struct Session {
+    explicit Session(asio::io_context& io, std::size_t max_frame)
+        : socket(io), decoder(max_frame) {}
+    tcp::socket socket;
+    std::uint64_t id = 0;
+    std::string name;
+    v1::Role role = v1::ROLE_UNSPECIFIED;
+    bool welcomed = false;  // Hello accepted
+    bool ready = false;     // scene and volume sent: frames flow
+    bool closing = false;   // a fatal error is queued: close once written
+    bool closed = false;
+    bool reading = false;
+    bool writing = false;
+    bool want_contacts = false;
+    std::int64_t frame_interval_ns = 0;
+    std::int64_t next_frame_ns = 0;
+    FrameDecoder decoder;
+    std::array<std::uint8_t, 8192> rbuf{};
+    std::deque<Bytes> control;  // Welcome, SceneInfo, results, errors, stats, pongs
+    std::deque<Bytes> frames;   // bounded, newest kept
+    std::vector<Bytes> inflight;
+    std::vector<asio::const_buffer> buffers;
+    std::int64_t connected_ns = 0, last_rx_ns = 0, write_started_ns = 0;
+    std::uint64_t frames_sent = 0, frames_dropped = 0;
+    // Volume streaming.
+    std::uint32_t volume_step = 0;
+    std::array<std::int64_t, 3> volume_dims{};
+    std::uint32_t volume_k = 0, volume_chunk = 0, volume_chunks = 0, volume_slab = 1;
+  };
+  using SessionPtr = std::shared_ptr<Session>;
+
+ private:
+  // ------------------------------------------------------------------ accept
+  void accept() {
+    auto session = std::make_shared<Session>(io_, config_.max_frame_bytes);
+    acceptor_.async_accept(session->socket, [this, session](const asio::error_code& ec) {
+      if (ec) {
+        if (ec != asio::error::operation_aborted && acceptor_.is_open()) accept();
+        return;
+      }
+      on_accept(session);
+      accept();
+    });
+  }
+
+  void on_accept(const SessionPtr& s) {
+    asio::error_code ec;
+    s->socket.set_option(tcp::no_delay(true), ec);
+    if (config_.send_buffer_bytes > 0)
+      s->socket.set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes), ec);
+    s->id = ++next_id_;
+    s->connected_ns = s->last_rx_ns = rt::monotonic_ns();
+    accepted_.fetch_add(1);
+    std::erase_if(sessions_, [](const SessionPtr& other) { return other->closed; });
+    sessions_.push_back(s);
+    client_count_.store(sessions_.size());
+    if (sessions_.size() > config_.max_clients) {
+      fatal(s, v1::Error::TOO_MANY_CLIENTS,
+            "the server is full (" + std::to_string(config_.max_clients) + " clients)");
+      return;
+    }
+    read(s);
+  }
+
+  // ------------------------------------------------------------------ read
+  void read(const SessionPtr& s) {
+    if (s->closing || s->closed || s->reading) return;
+    s->reading = true;
+    s->socket.async_read_some(
+        asio::buffer(s->rbuf), [this, s](const asio::error_code& ec, std::size_t n) {
+          s->reading = false;
+          if (s->closed) return;
+          if (ec) {
+            close(*s);
+            return;
+          }
+          s->last_rx_ns = rt::monotonic_ns();
+          s->decoder.feed(s->rbuf.data(), n);
+          std::string_view body;
+          for (;;) {
+            const FrameStatus status = s->decoder.next(body);
+            if (status == FrameStatus::Incomplete) break;
+            if (status == FrameStatus::TooLarge) {
+              fatal(s, v1::Error::FRAME_TOO_LARGE,
+                    "frame larger than " + std::to_string(config_.max_frame_bytes) + " bytes");
+              return;
+            }
+            if (status == FrameStatus::BadPrefix) {
+              fatal(s, v1::Error::MALFORMED, "bad length prefix");
+              return;
+            }
+            handle(s, body);
+            if (s->closing || s->closed) return;
+          }
+          read(s);
+        });
+  }
+
+  void handle(const SessionPtr& s, std::string_view body) {
+    v1::ClientMessage msg;
+    const ClientCheck check = parse_client_message(body, msg);
+    if (!s->welcomed) {
+      if (!check.ok) {
+        fatal(s, check.code, check.reason);
+        return;
+      }
+      if (msg.msg_case() != v1::ClientMessage::kHello) {
+        fatal(s, v1::Error::EXPECTED_HELLO, "the first message must be a Hello");
+        return;
+      }
+      hello(s, msg.hello());
+      return;
+    }
+    if (!check.ok) {
+      error(s, check.code, check.reason);
+      return;
+    }
+    switch (msg.msg_case()) {
+      case v1::ClientMessage::kHello:
+        error(s, v1::Error::BAD_REQUEST, "Hello was already received");
+        return;
+      case v1::ClientMessage::kPing: {
+        v1::ServerMessage m;
+        v1::Pong* p = m.mutable_pong();
+        p->set_id(msg.ping().id());
+        p->set_client_time_ns(msg.ping().client_time_ns());
+        p->set_server_time_ns(rt::monotonic_ns());
+        s->control.push_back(frame_of(m));
+        pump(s);
+        return;
+      }
+      case v1::ClientMessage::kCommand:
+        if (s->role != v1::CONTROLLER) {
+          error(s, v1::Error::PERMISSION_DENIED, "observers cannot send commands");
+          return;
+        }
+        command(s, msg.command());
+        return;
+      case v1::ClientMessage::kDevicePose:
+        if (s->role != v1::CONTROLLER) {
+          error(s, v1::Error::PERMISSION_DENIED, "observers cannot drive the device");
+          return;
+        }
+        if (!control_ ||
+            !control_->set_device_pose(from_proto(msg.device_pose().pose()), rt::monotonic_ns()))
+          error(s, v1::Error::BAD_REQUEST, "the device is not remote");
+        return;
+      case v1::ClientMessage::MSG_NOT_SET:
+        break;
+    }
+  }
+
+  void hello(const SessionPtr& s, const v1::Hello& h) {
+    if (h.protocol_version() != kProtocolVersion) {
+      fatal(s, v1::Error::VERSION_MISMATCH,
+            "protocol version " + std::to_string(h.protocol_version()) +
+                " is not supported (this server speaks " + std::to_string(kProtocolVersion) + ")");
+      return;
+    }
+    if (h.role() == v1::CONTROLLER) {
+      if (!config_.token.empty() && !same_token(h.token(), config_.token)) {
+        fatal(s, v1::Error::UNAUTHORIZED, "CONTROLLER needs the server's token");
+        return;
+      }
+      for (const auto& other : sessions_)
+        if (other != s && other->role == v1::CONTROLLER && !other->closed) {
+          fatal(s, v1::Error::CONTROLLER_BUSY, "another controller is connected");
+          return;
+        }
+    }
+    s->welcomed = true;
+    s->role = h.role();
+    s->name = h.client_name();
+    s->want_contacts = h.want_contacts();
+    s->frame_interval_ns =
+        h.frame_rate_hz() > 0.0 ? static_cast<std::int64_t>(1e9 / h.frame_rate_hz()) : 0;
+    v1::ServerMessage m;
+    v1::Welcome* w = m.mutable_welcome();
+    w->set_protocol_version(kProtocolVersion);
+    w->set_client_id(s->id);
+    w->set_role(s->role);
+    w->set_server_name(config_.server_name);
+    w->set_tick_rate_hz(loop_.config().rate_hz);
+    w->set_server_time_ns(rt::monotonic_ns());
+    s->control.push_back(frame_of(m));
+    s->control.push_back(scene_frame());
+    plan_volume(*s, h.volume_step(), h.volume_max_dim());
+    if (s->volume_chunks == 0) s->ready = true;
+    pump(s);
+  }
+
+  void command(const SessionPtr& s, const v1::Command& c) {
+    std::string failure;
+    bool scene_change = false;
+    if (!control_) {
+      failure = "this server takes no commands";
+    } else
+      try {
+        switch (c.kind_case()) {
+          case v1::Command::kSetTool:
+            failure = control_->set_tool(c.set_tool().tool());
+            scene_change = failure.empty();
+            break;
+          case v1::Command::kSetParameter:
+            failure = control_->set_parameter(c.set_parameter().name(), c.set_parameter().value());
+            scene_change = failure.empty();
+            break;
+          case v1::Command::kPause:
+            failure = control_->set_paused(c.pause().paused());
+            break;
+          case v1::Command::kStartRecording:
+            failure = control_->start_recording(c.start_recording().name());
+            break;
+          case v1::Command::kStopRecording:
+            failure = control_->stop_recording();
+            break;
+          case v1::Command::KIND_NOT_SET:
+            failure = "empty command";
+            break;
+        }
+      } catch (const std::exception& e) {
+        failure = e.what();
+        scene_change = false;
+      }
+    v1::ServerMessage m;
+    v1::CommandResult* r = m.mutable_result();
+    r->set_request_id(c.request_id());
+    r->set_ok(failure.empty());
+    r->set_message(failure);
+    s->control.push_back(frame_of(m));
+    pump(s);
+    if (scene_change)
+      for (auto& other : sessions_)
+        if (other->welcomed && !other->closing) {
+          other->control.push_back(scene_frame());
+          pump(other);
+        }
+  }
+
+  // ------------------------------------------------------------------ scene and volume
+  Bytes scene_frame() {
+    v1::ServerMessage m;
+    v1::SceneInfo* si = m.mutable_scene();
+    si->set_source(scene_.source);
+    v1::Grid* g = si->mutable_grid();
+    for (int a = 0; a < 3; ++a) {
+      g->add_dims(scene_.grid.dims[a]);
+      g->add_spacing(scene_.grid.spacing[a]);
+      g->add_origin(scene_.grid.world.origin[a]);
+    }
+    for (double d : scene_.grid.world.direction) g->add_direction(d);
+    for (const auto& [k, v] : scene_.metadata) (*si->mutable_metadata())[k] = v;
+    const std::shared_ptr<const Model> model = loop_.model();
+    v1::ToolInfo* tool = si->mutable_tool();
+    tool->set_name(model->tool().name);
+    for (const Vec3d& p : model->tool().points) to_proto(p, tool->add_points());
+    const ForceParams& fp = model->params();
+    v1::Parameters* p = si->mutable_parameters();
+    p->set_c(fp.c);
+    p->set_k(fp.k);
+    p->set_bone_fmax(fp.bone_fmax);
+    p->set_bone_flip(fp.bone_flip);
+    p->set_bone_enabled(fp.bone_enabled);
+    p->set_bone_mode(to_string(fp.bone_mode));
+    p->set_bone_k(fp.bone_k);
+    si->set_device(scene_.device);
+    si->set_device_profile(scene_.device_profile);
+    si->set_tick_rate_hz(loop_.config().rate_hz);
+    return frame_of(m);
+  }
+
+  void plan_volume(Session& s, std::uint32_t step, std::uint32_t max_dim) {
+    if (!scene_.fields || (step == 0 && max_dim == 0)) return;
+    const Index3 dims = scene_.grid.dims;
+    if (step == 0) {
+      const std::int64_t largest = std::max({dims[0], dims[1], dims[2]});
+      step = static_cast<std::uint32_t>((largest + max_dim - 1) / max_dim);
+    }
+    step = std::clamp<std::uint32_t>(step, 1, 1024);
+    s.volume_step = step;
+    for (int a = 0; a < 3; ++a) s.volume_dims[a] = (dims[a] + step - 1) / step;
+    const std::size_t slice_bytes =
+        static_cast<std::size_t>(s.volume_dims[0] * s.volume_dims[1]) * sizeof(float);
+    s.volume_slab = static_cast<std::uint32_t>(std::max<std::size_t>(
+        1, config_.volume_chunk_bytes / std::max<std::size_t>(1, slice_bytes)));
+    s.volume_chunks =
+        static_cast<std::uint32_t>((s.volume_dims[2] + s.volume_slab - 1) / s.volume_slab);
+    s.volume_k = 0;
+    s.volume_chunk = 0;
+  }
+
+  Bytes next_volume_chunk(Session& s) {
+    const FieldSampler& fields = *scene_.fields;
+    const std::uint32_t k_count = std::min<std::uint32_t>(
+        s.volume_slab, static_cast<std::uint32_t>(s.volume_dims[2]) - s.volume_k);
+    const std::size_t n = static_cast<std::size_t>(s.volume_dims[0] * s.volume_dims[1]) * k_count;
+    std::vector<float> surf(n), bone(fields.has_bone() ? n : 0);
+    const Vec3 sp = scene_.grid.spacing;
+    std::size_t v = 0;
+    for (std::uint32_t k = 0; k < k_count; ++k)
+      for (std::int64_t j = 0; j < s.volume_dims[1]; ++j)
+        for (std::int64_t i = 0; i < s.volume_dims[0]; ++i, ++v) {
+          const double st = s.volume_step;
+          const Vec3d x{static_cast<double>(i) * st * sp[0], static_cast<double>(j) * st * sp[1],
+                        static_cast<double>(s.volume_k + k) * st * sp[2]};
+          surf[v] = static_cast<float>(fields.sample_surf(x).value);
+          if (!bone.empty()) bone[v] = static_cast<float>(fields.sample_bone(x).value);
+        }
+    v1::ServerMessage m;
+    v1::VolumeChunk* c = m.mutable_volume();
+    c->set_step(s.volume_step);
+    for (int a = 0; a < 3; ++a) {
+      c->add_dims(s.volume_dims[a]);
+      c->add_spacing(sp[a] * s.volume_step);
+    }
+    c->set_k_begin(s.volume_k);
+    c->set_k_count(k_count);
+    c->set_d_surf(reinterpret_cast<const char*>(surf.data()), surf.size() * sizeof(float));
+    if (!bone.empty())
+      c->set_d_bone(reinterpret_cast<const char*>(bone.data()), bone.size() * sizeof(float));
+    c->set_chunk_index(s.volume_chunk);
+    c->set_chunk_count(s.volume_chunks);
+    s.volume_k += k_count;
+    ++s.volume_chunk;
+    if (s.volume_chunk == s.volume_chunks) s.ready = true;
+    return frame_of(m);
+  }
+
+  // ------------------------------------------------------------------ write
+  void pump(const SessionPtr& s) {
+    if (s->writing || s->closed) return;
+    s->inflight.clear();
+    s->buffers.clear();
+    std::size_t frames_now = 0;
+    while (!s->control.empty()) {
+      s->inflight.push_back(std::move(s->control.front()));
+      s->control.pop_front();
+    }
+    if (!s->closing && !s->ready && s->volume_chunks > 0 && s->inflight.empty())
+      s->inflight.push_back(next_volume_chunk(*s));
+    if (!s->closing && s->ready) {
+      while (!s->frames.empty()) {
+        s->inflight.push_back(std::move(s->frames.front()));
+        s->frames.pop_front();
+        ++frames_now;
+      }
+    }
+    if (s->inflight.empty()) {
+      if (s->closing) close(*s);
+      return;
+    }
+    for (const Bytes& b : s->inflight) s->buffers.push_back(asio::buffer(*b));
+    s->writing = true;
+    s->write_started_ns = rt::monotonic_ns();
+    asio::async_write(s->socket, s->buffers,
+                      [this, s, frames_now](const asio::error_code& ec, std::size_t) {
+                        s->writing = false;
+                        if (s->closed) return;
+                        if (ec) {
+                          close(*s);
+                          return;
+                        }
+                        s->frames_sent += frames_now;
+                        frames_sent_.fetch_add(frames_now);
+                        pump(s);
+                      });
+  }
+
+  void error(const SessionPtr& s, v1::Error::Code code, const std::string& reason) {
+    protocol_errors_.fetch_add(1);
+    s->control.push_back(error_frame(code, reason, false));
+    pump(s);
+  }
+
+  void fatal(const SessionPtr& s, v1::Error::Code code, const std::string& reason) {
+    protocol_errors_.fetch_add(1);
+    rejected_.fetch_add(1);
+    s->frames.clear();
+    s->control.push_back(error_frame(code, reason, true));
+    s->closing = true;
+    pump(s);
+  }
+
+  void close(Session& s) {
+    if (s.closed) return;
+    s.closed = true;
+    asio::error_code ec;
+    s.socket.shutdown(tcp::socket::shutdown_both, ec);
+    s.socket.close(ec);
+  }
+
+  // ------------------------------------------------------------------ frames from the loop
+  void schedule_poll() {
+    poll_timer_.expires_after(std::chrono::nanoseconds(
+        std::max<std::int64_t>(seconds_to_ns(config_.poll_interval_s), 50'000)));
+    poll_timer_.async_wait([this](const asio::error_code& ec) {
+      if (ec) return;
+      drain();
+      schedule_poll();
+    });
+  }
+
+  void drain() {
+    rt::SnapshotRing& ring = loop_.net_ring();
+    std::vector<SessionPtr> touched;
+    while (const rt::Snapshot* snap = ring.front()) {
+      Bytes plain, full;
+      const std::int64_t t = snap->tick.t_ns;
+      for (const SessionPtr& s : sessions_) {
+        if (!s->ready || s->closing || s->closed) continue;
+        if (s->frame_interval_ns > 0) {
+          if (t < s->next_frame_ns) continue;
+          s->next_frame_ns = std::max(s->next_frame_ns + s->frame_interval_ns, t);
+          if (s->next_frame_ns <= t) s->next_frame_ns = t + s->frame_interval_ns;
+        }
+        Bytes& bytes = s->want_contacts ? full : plain;
+        if (!bytes) {
+          v1::ServerMessage m;
+          fill_frame(*snap, s->want_contacts, m.mutable_frame());
+          bytes = frame_of(m);
+        }
+        s->frames.push_back(bytes);
+        if (s->frames.size() > config_.queue_frames) {
+          s->frames.pop_front();
+          ++s->frames_dropped;
+          frames_dropped_.fetch_add(1);
+        }
+        if (std::find(touched.begin(), touched.end(), s) == touched.end()) touched.push_back(s);
+      }
+      ring.pop();
+    }
+    for (const SessionPtr& s : touched) pump(s);
+  }
+
+  // ------------------------------------------------------------------ housekeeping
+  void schedule_house() {
+    house_timer_.expires_after(std::chrono::milliseconds(50));
+    house_timer_.async_wait([this](const asio::error_code& ec) {
+      if (ec) return;
+      housekeeping();
+      schedule_house();
+    });
+  }
+
+  void housekeeping() {
+    const std::int64_t now = rt::monotonic_ns();
+    for (const SessionPtr& s : sessions_) {
+      if (s->closed) continue;
+      const bool stalled_write = s->writing && config_.write_timeout_s > 0 &&
+                                 now - s->write_started_ns > seconds_to_ns(config_.write_timeout_s);
+      if (stalled_write) {
+        timeouts_.fetch_add(1);
+        close(*s);  // the socket does not drain: an Error could not get through either
+        continue;
+      }
+      if (s->closing) continue;
+      if (!s->welcomed && now - s->connected_ns > seconds_to_ns(config_.hello_timeout_s)) {
+        timeouts_.fetch_add(1);
+        fatal(s, v1::Error::TIMEOUT, "no Hello received in time");
+        continue;
+      }
+      if (config_.idle_timeout_s > 0 &&
+          now - s->last_rx_ns > seconds_to_ns(config_.idle_timeout_s)) {
+        timeouts_.fetch_add(1);
+        fatal(s, v1::Error::TIMEOUT, "nothing received for too long (send Ping)");
+        continue;
+      }
+    }
+    std::erase_if(sessions_, [](const SessionPtr& s) { return s->closed; });
+    client_count_.store(sessions_.size());
+    if (now - last_stats_ns_ >= seconds_to_ns(config_.stats_interval_s)) send_stats(now);
+  }
+
+  void send_stats(std::int64_t now) {
+    const rt::LoopStats ls = loop_.stats();
+    const double dt = static_cast<double>(now - last_stats_ns_) * 1e-9;
+    const double rate = dt > 0 ? static_cast<double>(ls.ticks - last_stats_ticks_) / dt : 0.0;
+    last_stats_ns_ = now;
+    last_stats_ticks_ = ls.ticks;
+    v1::ServerMessage m;
+    v1::Stats* st = m.mutable_stats();
+    st->set_server_time_ns(now);
+    st->set_target_rate_hz(loop_.config().rate_hz);
+    st->set_rate_hz(rate);
+    st->set_ticks(ls.ticks);
+    st->set_overruns(ls.overruns);
+    st->set_faults(ls.faults);
+    for (double b : rt::kJitterBucketUpperUs) st->add_jitter_bucket_upper_us(b);
+    for (std::uint64_t c : ls.jitter) st->add_jitter_counts(c);
+    st->set_jitter_max_us(static_cast<double>(ls.max_late_ns) * 1e-3);
+    st->set_tick_mean_us(ls.ticks ? static_cast<double>(ls.tick_ns_sum) * 1e-3 /
+                                        static_cast<double>(ls.ticks)
+                                  : 0.0);
+    st->set_tick_max_us(static_cast<double>(ls.tick_ns_max) * 1e-3);
+    st->set_clients(static_cast<std::uint32_t>(sessions_.size()));
+    st->set_frames_published(ls.net_published);
+    st->set_frames_lost(ls.net_dropped);
+    st->set_realtime(ls.realtime);
+    st->set_recording(control_ ? control_->recording() : ls.recording);
+    st->set_record_lost(control_ ? control_->record_lost() : ls.record_dropped);
+    st->set_paused(ls.paused);
+    st->set_last_fault(ls.last_fault);
+    for (const SessionPtr& s : sessions_) {
+      if (!s->welcomed || s->closing || s->closed) continue;
+      st->set_client_frames_sent(s->frames_sent);
+      st->set_client_frames_dropped(s->frames_dropped);
+      s->control.push_back(frame_of(m));
+      pump(s);
+    }
+  }
+
+  ServerConfig config_;
+  SceneDescription scene_;
+  rt::HapticLoop& loop_;
+  ControlTarget* control_;
+  asio::io_context io_;
+  tcp::acceptor acceptor_;
+  asio::steady_timer poll_timer_, house_timer_;
+  std::thread thread_;
+  std::vector<SessionPtr> sessions_;
+  std::uint16_t port_ = 0;
+  std::uint64_t next_id_ = 0;
+  std::int64_t last_stats_ns_ = 0;
+  std::uint64_t last_stats_ticks_ = 0;
+  std::atomic<std::size_t> client_count_{0};
+  std::atomic<std::uint64_t> accepted_{0}, rejected_{0}, protocol_errors_{0}, frames_sent_{0},
+      frames_dropped_{0}, timeouts_{0};
+};
+
+Server::Server(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop,
+               ControlTarget* control)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(scene), loop, control)) {}
+Server::~Server() {
+  stop();
+}
+std::uint16_t Server::port() const {
+  return impl_->port();
+}
+void Server::start() {
+  impl_->start();
+}
+void Server::stop() {
+  impl_->stop();
+}
+std::size_t Server::client_count() const {
+  return impl_->client_count();
+}
+ServerCounters Server::counters() const {
+  return impl_->counters();
+}
+void Server::scene_changed() {
+  impl_->scene_changed();
+}
+
+}  // namespace palp::net

@@ -1,0 +1,105 @@
+// The palpd network server (Asio, one io thread): streams the haptic loop's snapshots to many
+// clients over TCP in palp.v1 (proto/palp.proto), and hands controller commands to palpd.
+//
+// Per client: Hello first (version 1, role, token for CONTROLLER when one is configured), then
+// Welcome, SceneInfo and - when asked for - the render volume in chunks, and only then
+// HapticFrames (late joiners get the scene before frames). Frames go into a bounded per-client
+// queue; when it is full the oldest frame is dropped (counted), so a slow client gets the newest
+// frames and never holds anyone up. One write is in flight per client, gathering everything
+// queued. Stats about once a second. Sockets use TCP_NODELAY.
+//
+// Protocol violations get an Error with a reason and never take the server down:
+//   first message not a Hello, version mismatch, bad role, wrong token, second controller,
+//   too many clients, undecodable envelope before Hello, oversize frame or bad length prefix
+//     -> Error (fatal) and the connection is closed after it is sent;
+//   undecodable or invalid message after Hello, Command / DevicePose from an observer, second
+//   Hello -> Error (not fatal).
+// Timeouts: no Hello within hello_timeout_s, nothing received for idle_timeout_s (clients Ping),
+// a write that makes no progress for write_timeout_s: the connection is closed.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "field_sampler.hpp"
+#include "haptic_loop.hpp"
+#include "volume.hpp"
+
+namespace palp::net {
+
+struct ServerConfig {
+  std::string bind = "127.0.0.1";
+  std::uint16_t port = 7400;  // 0: any free port (see Server::port())
+  std::size_t max_clients = 16;
+  std::string token;                        // non-empty: CONTROLLER must present it
+  std::size_t max_frame_bytes = 64 * 1024;  // client -> server
+  std::size_t queue_frames = 256;           // HapticFrames queued per client before dropping
+  double hello_timeout_s = 5.0;
+  double idle_timeout_s = 30.0;  // 0: off
+  double write_timeout_s = 5.0;  // 0: off
+  double stats_interval_s = 1.0;
+  double poll_interval_s = 0.0005;  // how often the io thread drains the loop's snapshot ring
+  std::size_t volume_chunk_bytes = 1 << 20;  // per map, per chunk
+  int send_buffer_bytes = 0;                 // SO_SNDBUF of client sockets (0: system default)
+  std::string server_name = "palpd";
+};
+
+// What SceneInfo describes besides the model (which comes from the loop).
+struct SceneDescription {
+  std::string source;
+  Grid grid;
+  std::map<std::string, std::string> metadata;
+  std::string device;
+  std::string device_profile;
+  std::shared_ptr<const FieldSampler> fields;  // sampled for the render volume
+};
+
+// What Commands do; palpd wires it to the loop, the recorder and the remote device. Each
+// returns "" on success or the reason for refusing. Called on the io thread.
+class ControlTarget {
+ public:
+  virtual ~ControlTarget() = default;
+  virtual std::string set_tool(const std::string& tool) = 0;
+  virtual std::string set_parameter(const std::string& name, double value) = 0;
+  virtual std::string set_paused(bool paused) = 0;
+  virtual std::string start_recording(const std::string& name) = 0;
+  virtual std::string stop_recording() = 0;
+  virtual bool recording() const = 0;
+  virtual std::uint64_t record_lost() const = 0;
+  // false: there is no remote device to drive.
+  virtual bool set_device_pose(const Pose& pose, std::int64_t received_ns) = 0;
+};
+
+struct ServerCounters {
+  std::uint64_t accepted = 0;
+  std::uint64_t rejected = 0;         // closed with a fatal Error
+  std::uint64_t protocol_errors = 0;  // Errors sent
+  std::uint64_t frames_sent = 0;
+  std::uint64_t frames_dropped = 0;  // stale frames dropped from client queues
+  std::uint64_t timeouts = 0;
+};
+
+class Server {
+ public:
+  // Binds and listens (ResourceError when the address cannot be used); nothing runs until start().
+  Server(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop, ControlTarget* control);
+  ~Server();  // stop()
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  std::uint16_t port() const;
+  void start();  // the io thread
+  void stop();   // closes every connection and joins; idempotent
+  std::size_t client_count() const;
+  ServerCounters counters() const;
+  // Sends SceneInfo again to every client (after the tool or parameters changed).
+  void scene_changed();
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace palp::net

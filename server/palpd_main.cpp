@@ -1,0 +1,452 @@
+// palpd — the real-time haptic server.
+//   scene + tool + parameters -> Model; DEVICE -> HapticLoop (its own thread, --rate HZ) ->
+//   snapshot ring -> Server (Asio io thread) -> clients; record ring -> Recorder (--record FILE)
+// Configuration: a TOML file (--config FILE) whose keys are the long option names; the command
+// line overrides it. Errors print one line and exit 1 (failure) or 2 (usage).
+#include <signal.h>
+#include <time.h>
+
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "cli.hpp"
+#include "device.hpp"
+#include "errors.hpp"
+#include "force_model.hpp"
+#include "haptic_loop.hpp"
+#include "model_setup.hpp"
+#include "net/server.hpp"
+#include "recording.hpp"
+#include "safety.hpp"
+#include "trajectory.hpp"
+
+namespace palp {
+namespace {
+
+constexpr const char* kUsage =
+    R"(usage: palpd --scene SCENE --device DEVICE [--port P] [--rate HZ] [options]
+
+The real-time haptic server: runs the force model at a fixed rate on a dedicated thread, drives
+the device, and streams frames to clients over TCP (palp.v1, proto/palp.proto).
+
+Devices:
+  sim                     the built-in palpation path for the scene, looping (torso: press,
+                          slide across the ribs, lift; other scenes: press, slide, hold, lift)
+  sim:FILE                a trajectory CSV (t,px,py,pz,qw,qx,qy,qz) at its timestamps, looping
+  replay:FILE             a palpd recording, tick by tick, reproducing its forces exactly; scene,
+                          tool, rate, profile and parameters default to the recording's
+  remote                  the pose comes from the CONTROLLER client (DevicePose messages)
+
+Options:
+)";
+
+constexpr const char* kOptions = R"(  --device DEVICE         see above (required)
+  --tool TOOL             finger:N, twofinger:N, probe:NXxNY (default finger:37)
+  --param NAME=VALUE      force parameter override, repeatable (as in palp run)
+  --device-profile NAME   safety limits after the model: falcon, phantom-premium, omega
+                          (default: none)
+  --rate HZ               loop rate, 1..100000 (default 1000; tested 500..10000)
+  --port P                TCP port (default 7400; 0 = any free port, printed at start)
+  --bind ADDR             address to listen on (default 127.0.0.1; 0.0.0.0 for a lab network)
+  --token TOKEN           CONTROLLER clients must present it (prefer the config file)
+  --max-clients N         default 16
+  --queue N               haptic frames queued per client before the oldest is dropped (256)
+  --idle-timeout S        close clients that send nothing (Ping) for S s (30; 0 = never)
+  --hello-timeout S       close clients that send no Hello within S s (5)
+  --write-timeout S       close clients whose socket accepts nothing for S s (5; 0 = never)
+  --poll-us US            how often the network thread takes new frames from the loop (500)
+  --record FILE           record every tick (binary, see server/recording.hpp) and FILE's .csv
+  --record-dir DIR        where StartRecording commands write (default: the current directory)
+  --watchdog-ms MS        a tick starting MS later than its deadline zeroes the force (5; 0 off)
+  --device-timeout-ms MS  a device silent for MS zeroes the force (100; 0 = off)
+  --priority N            SCHED_FIFO priority of the loop thread (80)
+  --no-realtime           do not ask for SCHED_FIFO and locked memory
+  --duration S            stop after S seconds (default: until SIGINT / SIGTERM)
+  --config FILE           TOML file with any of these options as keys (scene = "phantom:torso",
+                          rate = 1000, no-realtime = true, param = ["c=2.0"], ...)
+  -q, --quiet             print only warnings and errors
+  -h, --help              show this help
+)";
+
+const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime"};
+const std::vector<std::string> kValued = {
+    "device",   "tool",         "device-profile", "rate",
+    "port",     "bind",         "token",          "max-clients",
+    "queue",    "idle-timeout", "hello-timeout",  "write-timeout",
+    "record",   "record-dir",   "watchdog-ms",    "device-timeout-ms",
+    "priority", "duration",     "config",         "poll-us"};
+
+std::string number_text(double v) {
+  std::string s;
+  append_number(s, v);
+  return s;
+}
+
+// The TOML file as "--key=value" arguments (placed before the command line's, which win).
+cli::Arguments config_arguments(const std::string& path) {
+  toml::table table;
+  try {
+    table = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw UsageError(path + ": " + std::string(e.description()) + " (line " +
+                     std::to_string(e.source().begin.line) + ")");
+  }
+  cli::Arguments out;
+  for (const auto& [key_node, node] : table) {
+    const std::string key(key_node.str());
+    const auto scalar = [&](const toml::node& n) -> std::string {
+      if (const auto s = n.value<std::string>()) return *s;
+      if (const auto i = n.value<std::int64_t>()) return std::to_string(*i);
+      if (const auto d = n.value<double>()) return number_text(*d);
+      throw UsageError(path + ": '" + key + "' must be a string or a number");
+    };
+    if (key == "config") throw UsageError(path + ": 'config' cannot be set in a config file");
+    if (key == "param") {
+      if (const toml::array* a = node.as_array()) {
+        for (const toml::node& item : *a) out.push_back("--param=" + scalar(item));
+      } else if (const toml::table* t = node.as_table()) {
+        for (const auto& [name, value] : *t)
+          out.push_back("--param=" + std::string(name.str()) + "=" + scalar(value));
+      } else {
+        throw UsageError(path + ": 'param' must be an array of \"NAME=VALUE\" or a table");
+      }
+      continue;
+    }
+    if (std::find(kFlags.begin(), kFlags.end(), key) != kFlags.end() || key == "realtime") {
+      const auto b = node.value<bool>();
+      if (!b) throw UsageError(path + ": '" + key + "' must be true or false");
+      if (key == "realtime") {
+        if (!*b) out.push_back("--no-realtime");
+      } else if (*b) {
+        out.push_back("--" + key);
+      }
+      continue;
+    }
+    if (std::find(kValued.begin(), kValued.end(), key) == kValued.end() &&
+        std::find(cli::kSceneOptions.begin(), cli::kSceneOptions.end(), key) ==
+            cli::kSceneOptions.end())
+      throw UsageError(path + ": unknown key '" + key + "'");
+    out.push_back("--" + key + "=" + scalar(node));
+  }
+  return out;
+}
+
+// Finds "--config FILE" / "--config=FILE" in argv without parsing the rest.
+std::optional<std::string> config_path(const cli::Arguments& argv) {
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    if (argv[i] == "--config" && i + 1 < argv.size()) return argv[i + 1];
+    if (argv[i].rfind("--config=", 0) == 0) return argv[i].substr(9);
+  }
+  return std::nullopt;
+}
+
+std::vector<std::string> param_assignments(const ForceParams& p) {
+  return {"c=" + number_text(p.c),
+          "k=" + number_text(p.k),
+          "bone_fmax=" + number_text(p.bone_fmax),
+          "bone_flip=" + number_text(p.bone_flip),
+          std::string("bone_enabled=") + (p.bone_enabled ? "1" : "0"),
+          "grad_epsilon=" + number_text(p.grad_epsilon),
+          "direction_epsilon=" + number_text(p.direction_epsilon),
+          std::string("bone_mode=") + (p.bone_mode == BoneMode::Robust ? "1" : "0"),
+          "bone_k=" + number_text(p.bone_k)};
+}
+
+// Commands from the controller, wired to the loop, the recorder and the remote device.
+class App final : public net::ControlTarget {
+ public:
+  App(rt::HapticLoop& loop, std::shared_ptr<const FieldSampler> fields, rt::Device& device,
+      rt::RecordingMetadata metadata, std::string record_dir)
+      : loop_(loop),
+        fields_(std::move(fields)),
+        remote_(dynamic_cast<rt::RemoteDevice*>(&device)),
+        metadata_(std::move(metadata)),
+        record_dir_(std::move(record_dir)) {}
+
+  std::string set_tool(const std::string& name) override {
+    const Tool tool = parse_tool(name);
+    const auto current = loop_.model();
+    const ForceParams params =
+        tool.kind == current->tool().kind ? current->params() : default_params(tool.kind);
+    loop_.swap_model(std::make_shared<const Model>(fields_, tool, params));
+    return {};
+  }
+  std::string set_parameter(const std::string& name, double value) override {
+    const auto current = loop_.model();
+    ForceParams params = current->params();
+    set_param(params, name, value);
+    validate(params);
+    loop_.swap_model(std::make_shared<const Model>(fields_, current->tool(), params));
+    return {};
+  }
+  std::string set_paused(bool paused) override {
+    loop_.set_paused(paused);
+    return {};
+  }
+  std::string start_recording(const std::string& name) override {
+    if (name.empty() || name.size() > 128 || name.find('/') != std::string::npos ||
+        name.front() == '.')
+      return "recording name must be a plain file name (no '/', not starting with '.')";
+    return start(std::filesystem::path(record_dir_) / name);
+  }
+  std::string start(const std::filesystem::path& path) {
+    const std::lock_guard lock(mutex_);
+    if (recorder_) return "already recording to " + recorder_->path();
+    rt::RecordingMetadata meta = metadata_;
+    const auto model = loop_.model();
+    meta["tool"] = model->tool().name;
+    const std::vector<std::string> params = param_assignments(model->params());
+    for (const std::string& a : params) {
+      const auto eq = a.find('=');
+      meta["param." + a.substr(0, eq)] = a.substr(eq + 1);
+    }
+    const std::uint64_t first = loop_.stats().ticks;
+    recorder_ = std::make_unique<rt::Recorder>(loop_.record_ring(), path.string(), meta, first);
+    loop_.set_recording(true);
+    return {};
+  }
+  std::string stop_recording() override {
+    std::unique_ptr<rt::Recorder> done;
+    {
+      const std::lock_guard lock(mutex_);
+      if (!recorder_) return "not recording";
+      loop_.set_recording(false);
+      done = std::move(recorder_);
+    }
+    done->stop();
+    return {};
+  }
+  bool recording() const override {
+    const std::lock_guard lock(mutex_);
+    return recorder_ != nullptr;
+  }
+  std::uint64_t record_lost() const override { return loop_.stats().record_dropped; }
+  bool set_device_pose(const Pose& pose, std::int64_t received_ns) override {
+    if (!remote_) return false;
+    remote_->submit(pose, received_ns);
+    return true;
+  }
+  std::uint64_t recorded() const {
+    const std::lock_guard lock(mutex_);
+    return recorder_ ? recorder_->count() : 0;
+  }
+
+ private:
+  rt::HapticLoop& loop_;
+  std::shared_ptr<const FieldSampler> fields_;
+  rt::RemoteDevice* remote_;
+  rt::RecordingMetadata metadata_;
+  std::string record_dir_;
+  mutable std::mutex mutex_;
+  std::unique_ptr<rt::Recorder> recorder_;
+};
+
+double positive(const cli::Args& args, const std::string& key, double fallback) {
+  const double v = args.number(key, fallback);
+  if (v < 0) throw UsageError("--" + key + " must not be negative");
+  return v;
+}
+
+int run(const cli::Arguments& argv_in) {
+  cli::Arguments argv;
+  if (const auto path = config_path(argv_in)) argv = config_arguments(*path);
+  argv.insert(argv.end(), argv_in.begin(), argv_in.end());
+  const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
+  std::vector<std::string> valued = cli::kSceneOptions;
+  valued.insert(valued.end(), kValued.begin(), kValued.end());
+  cli::Args args(argv, kFlags, valued);
+  if (args.has("help")) {
+    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions;
+    return 0;
+  }
+  if (!args.positional().empty())
+    throw UsageError("palpd takes no positional arguments, got '" + args.positional()[0] + "'");
+  const auto device_spec = args.get("device");
+  if (!device_spec)
+    throw UsageError("palpd needs --device DEVICE (sim, sim:FILE, replay:FILE, remote)");
+  const bool quiet = args.has("quiet");
+
+  // A replay brings its own scene, tool, rate, profile and parameters unless given.
+  std::optional<rt::Recording> replay;
+  std::vector<std::string> params_in = assignments;
+  std::vector<std::string> defaults;
+  if (device_spec->rfind("replay:", 0) == 0) {
+    replay = rt::read_recording(device_spec->substr(7));
+    const auto meta = [&](const std::string& key) -> std::optional<std::string> {
+      const auto it = replay->metadata.find(key);
+      if (it == replay->metadata.end() || it->second.empty()) return std::nullopt;
+      return it->second;
+    };
+    for (const char* key : {"scene", "tool", "rate", "device-profile", "scheme", "storage"})
+      if (!args.has(key))
+        if (const auto v = meta(key)) defaults.push_back("--" + std::string(key) + "=" + *v);
+    std::vector<std::string> recorded_params;
+    for (const auto& [key, value] : replay->metadata)
+      if (key.rfind("param.", 0) == 0) recorded_params.push_back(key.substr(6) + "=" + value);
+    params_in.insert(params_in.begin(), recorded_params.begin(), recorded_params.end());
+  }
+  if (!defaults.empty()) {
+    defaults.insert(defaults.end(), argv.begin(), argv.end());
+    args = cli::Args(defaults, kFlags, valued);
+  }
+
+  const Tool tool = parse_tool(args.get("tool").value_or("finger:37"));
+  const ForceParams params = cli::force_params(tool, params_in);
+  const DeviceProfile* profile = nullptr;
+  if (const auto name = args.get("device-profile")) profile = &device_profile(*name);
+  rt::LoopConfig loop_config;
+  loop_config.rate_hz = args.number("rate", 1000.0);
+  if (!(loop_config.rate_hz >= 1.0 && loop_config.rate_hz <= 100000.0))
+    throw UsageError("--rate must be between 1 and 100000 Hz");
+  loop_config.realtime = !args.has("no-realtime");
+  loop_config.priority = static_cast<int>(args.number("priority", 80));
+  loop_config.watchdog_late_s = positive(args, "watchdog-ms", 5.0) * 1e-3;
+  loop_config.device_timeout_s = positive(args, "device-timeout-ms", 100.0) * 1e-3;
+  loop_config.profile = profile;
+  net::ServerConfig server_config;
+  server_config.bind = args.get("bind").value_or("127.0.0.1");
+  const double port = args.number("port", 7400);
+  if (port < 0 || port > 65535 || port != std::floor(port))
+    throw UsageError("--port must be an integer in 0..65535");
+  server_config.port = static_cast<std::uint16_t>(port);
+  server_config.token = args.get("token").value_or("");
+  server_config.max_clients = static_cast<std::size_t>(positive(args, "max-clients", 16));
+  server_config.queue_frames =
+      std::max<std::size_t>(1, static_cast<std::size_t>(positive(args, "queue", 256)));
+  server_config.idle_timeout_s = positive(args, "idle-timeout", 30);
+  server_config.hello_timeout_s = positive(args, "hello-timeout", 5);
+  server_config.write_timeout_s = positive(args, "write-timeout", 5);
+  server_config.poll_interval_s = std::max(50.0, positive(args, "poll-us", 500)) * 1e-6;
+  const double duration = positive(args, "duration", 0);
+  const std::string record_dir = args.get("record-dir").value_or(".");
+  (void)cli::scene_options(args);
+
+  std::unique_ptr<rt::Device> device =
+      replay ? std::make_unique<rt::ReplayDevice>(std::move(replay->records))
+             : rt::make_device(*device_spec);
+  const Scene scene = cli::load_scene_for(args, "palpd", quiet);
+  auto model = std::make_shared<const Model>(scene.fields, tool, params);
+
+  rt::DeviceConfig device_config;
+  device_config.rate_hz = loop_config.rate_hz;
+  device_config.fields = scene.fields;
+  device_config.tool = tool;
+  device_config.timeout_s = std::max(loop_config.device_timeout_s, 0.01);
+  if (device->configure(device_config) != rt::DeviceStatus::Ok)
+    throw InputError("device " + *device_spec + ": " + device->last_error());
+  if (device->activate() != rt::DeviceStatus::Ok)
+    throw InputError("device " + *device_spec + ": " + device->last_error());
+
+  // Signals are taken by sigtimedwait below, in this thread only: block them before any thread.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  rt::HapticLoop loop(model, *device, loop_config);
+  rt::RecordingMetadata metadata = {
+      {"scene", *args.get("scene")},
+      {"rate", number_text(loop_config.rate_hz)},
+      {"device", *device_spec},
+      {"device-profile", profile ? std::string(profile->name) : ""},
+      {"scheme", to_string(scene.fields->config().gradient)},
+      {"storage", to_string(scene.fields->config().storage)},
+      {"palp_version", PALP_VERSION},
+  };
+  App app(loop, scene.fields, *device, metadata, record_dir);
+  net::SceneDescription description;
+  description.source = *args.get("scene");
+  description.grid = scene.grid;
+  description.metadata = {{"prep_dir", scene.prep_dir},
+                          {"scheme", to_string(scene.fields->config().gradient)},
+                          {"storage", to_string(scene.fields->config().storage)}};
+  description.device = *device_spec;
+  description.device_profile = profile ? std::string(profile->name) : "";
+  description.fields = scene.fields;
+  net::Server server(server_config, description, loop, &app);
+
+  if (const auto record = args.get("record")) {
+    const std::string failure = app.start(*record);
+    if (!failure.empty()) throw Error(failure);
+  }
+  loop.start();
+  server.start();
+  if (!loop.realtime_report().empty() &&
+      (!quiet || loop.realtime_report().rfind("warning", 0) == 0))
+    std::fprintf(stderr, "palpd: %s\n", loop.realtime_report().c_str());
+  if (!quiet) {
+    std::printf("palpd: listening on %s:%u, device %s, tool %s, %.6g Hz%s\n",
+                server_config.bind.c_str(), static_cast<unsigned>(server.port()),
+                device_spec->c_str(), tool.name.c_str(), loop_config.rate_hz,
+                profile ? (std::string(", profile ") + std::string(profile->name)).c_str() : "");
+    std::fflush(stdout);
+  }
+
+  const std::int64_t start_ns = rt::monotonic_ns();
+  int exit_signal = 0;
+  while (!loop.finished()) {
+    timespec wait{0, 100'000'000};
+    const int sig = sigtimedwait(&signals, nullptr, &wait);
+    if (sig == SIGINT || sig == SIGTERM) {
+      exit_signal = sig;
+      break;
+    }
+    if (duration > 0 && static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9 >= duration)
+      break;
+  }
+  if (loop.finished()) {
+    // Let the network thread pass on the last frames before it stops.
+    timespec pause{0, 50'000'000};
+    nanosleep(&pause, nullptr);
+  }
+  server.stop();
+  loop.stop();  // the device gets zero force
+  if (app.recording()) app.stop_recording();
+  device->deactivate();
+
+  const rt::LoopStats s = loop.stats();
+  const net::ServerCounters c = server.counters();
+  if (!quiet) {
+    std::printf(
+        "palpd: %llu ticks, %llu overruns, %llu faults, max lateness %.1f us, "
+        "mean tick %.2f us; %llu clients served, %llu frames sent, %llu dropped%s\n",
+        static_cast<unsigned long long>(s.ticks), static_cast<unsigned long long>(s.overruns),
+        static_cast<unsigned long long>(s.faults), static_cast<double>(s.max_late_ns) * 1e-3,
+        s.ticks ? static_cast<double>(s.tick_ns_sum) * 1e-3 / static_cast<double>(s.ticks) : 0.0,
+        static_cast<unsigned long long>(c.accepted), static_cast<unsigned long long>(c.frames_sent),
+        static_cast<unsigned long long>(c.frames_dropped), exit_signal ? " (signal)" : "");
+  }
+  if (s.record_dropped > 0)
+    std::fprintf(stderr, "palpd: warning: the recording lost %llu ticks\n",
+                 static_cast<unsigned long long>(s.record_dropped));
+  return 0;
+}
+
+}  // namespace
+}  // namespace palp
+
+int main(int argc, char** argv) {
+  try {
+    return palp::run(palp::cli::Arguments(argv + 1, argv + argc));
+  } catch (const palp::UsageError& e) {
+    std::fprintf(stderr, "palpd: %s\n", e.what());
+    return 2;
+  } catch (const palp::Error& e) {
+    std::fprintf(stderr, "palpd: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "palpd: error: %s\n", e.what());
+    return 1;
+  }
+}
