@@ -8,7 +8,7 @@ packages=(
   zlib1g-dev libdeflate-dev libgdcm-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   libprotobuf-dev protobuf-compiler libasio-dev libtomlplusplus-dev
-  libvtk9-dev xvfb xauth
+  libvtk9-dev xvfb xauth libgl1-mesa-dri
 )
 
 missing=()
