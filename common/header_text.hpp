@@ -8,11 +8,15 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <initializer_list>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
+#include "errors.hpp"
 #include "gzip.hpp"
 
 namespace palp::header_text {
@@ -112,5 +116,40 @@ inline std::string beside(const std::string& header_path, std::string_view name)
   if (p.is_absolute()) return p.string();
   return (std::filesystem::path(header_path).parent_path() / p).string();
 }
+
+// The key-value fields of a parsed text header, with lookups that fail with a one-line
+// InputError naming the file. A missing required key reads missing_prefix + key + missing_suffix.
+class HeaderFields {
+ public:
+  HeaderFields(const std::map<std::string, std::string>& fields, const std::string& path,
+               std::string missing_prefix, std::string missing_suffix)
+      : fields_(fields),
+        path_(path),
+        missing_prefix_(std::move(missing_prefix)),
+        missing_suffix_(std::move(missing_suffix)) {}
+
+  // The value of the first of `keys` present, or nullopt.
+  std::optional<std::string> find(std::initializer_list<const char*> keys) const {
+    for (const char* key : keys) {
+      const auto it = fields_.find(key);
+      if (it != fields_.end()) return it->second;
+    }
+    return std::nullopt;
+  }
+
+  std::string required(const char* key) const {
+    const auto value = find({key});
+    if (!value) throw error(missing_prefix_ + key + missing_suffix_);
+    return *value;
+  }
+
+  InputError error(const std::string& message) const { return InputError(path_ + ": " + message); }
+  const std::string& path() const { return path_; }
+
+ private:
+  const std::map<std::string, std::string>& fields_;
+  const std::string& path_;
+  std::string missing_prefix_, missing_suffix_;
+};
 
 }  // namespace palp::header_text

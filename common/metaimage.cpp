@@ -50,24 +50,11 @@ MetaHeader parse_lines(const std::string& path) {
                    (head.size() == kMaxHeaderBytes ? " in its first 1 MiB" : ""));
 }
 
-class MetaFields {
+// MetaImage fields: the shared lookups plus the MetaImage value forms (number lists, booleans).
+class MetaFields : public ht::HeaderFields {
  public:
-  MetaFields(const MetaHeader& header, const std::string& path) : header_(header), path_(path) {}
-
-  // The first of `keys` present, or nullopt.
-  std::optional<std::string> find(std::initializer_list<const char*> keys) const {
-    for (const char* key : keys) {
-      const auto it = header_.fields.find(key);
-      if (it != header_.fields.end()) return it->second;
-    }
-    return std::nullopt;
-  }
-
-  std::string required(const char* key) const {
-    const auto value = find({key});
-    if (!value) throw error(std::string("missing ") + key);
-    return *value;
-  }
+  MetaFields(const MetaHeader& header, const std::string& path)
+      : HeaderFields(header.fields, path, "missing ", "") {}
 
   std::vector<double> numbers(std::initializer_list<const char*> keys, std::size_t count,
                               std::vector<double> fallback) const {
@@ -94,12 +81,6 @@ class MetaFields {
     }
     return fallback;
   }
-
-  InputError error(const std::string& message) const { return InputError(path_ + ": " + message); }
-
- private:
-  const MetaHeader& header_;
-  const std::string& path_;
 };
 
 ScalarType element_type(const MetaFields& f) {

@@ -74,28 +74,11 @@ NrrdHeader parse_lines(const std::string& path) {
   return header;
 }
 
-class NrrdFields {
+// NRRD fields: the shared lookups.
+class NrrdFields : public ht::HeaderFields {
  public:
-  NrrdFields(const NrrdHeader& header, const std::string& path) : header_(header), path_(path) {}
-
-  std::optional<std::string> find(std::initializer_list<const char*> keys) const {
-    for (const char* key : keys) {
-      const auto it = header_.fields.find(key);
-      if (it != header_.fields.end()) return it->second;
-    }
-    return std::nullopt;
-  }
-  std::string required(const char* key) const {
-    const auto value = find({key});
-    if (!value) throw error(std::string("missing field \"") + key + "\"");
-    return *value;
-  }
-  InputError error(const std::string& message) const { return nrrd_error(path_, message); }
-  const std::string& path() const { return path_; }
-
- private:
-  const NrrdHeader& header_;
-  const std::string& path_;
+  NrrdFields(const NrrdHeader& header, const std::string& path)
+      : HeaderFields(header.fields, path, "missing field \"", "\"") {}
 };
 
 ScalarType scalar_type(const NrrdFields& f) {
