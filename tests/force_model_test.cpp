@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "heap_allocation_counter.hpp"
+
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
@@ -18,37 +20,6 @@
 
 #include "distance_transform.hpp"
 #include "errors.hpp"
-
-// Counts heap allocations made while g_count_allocations is set.
-namespace {
-std::atomic<bool> g_count_allocations{false};
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Replacements of the global allocation functions. GCC 12 cannot see that these pair up (it
-// warns -Wmismatched-new-delete on the free in operator delete), so that warning is off here.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-[[gnu::noinline]] void* operator new(std::size_t n) {
-  if (g_count_allocations.load(std::memory_order_relaxed))
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-[[gnu::noinline]] void* operator new[](std::size_t n) {
-  return ::operator new(n);
-}
-[[gnu::noinline]] void operator delete(void* p) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace palp {
 namespace {

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "heap_allocation_counter.hpp"
+
 #include <atomic>
 #include <cstdlib>
 #include <new>
@@ -11,35 +13,6 @@
 
 #include "errors.hpp"
 #include "palpd_test_util.hpp"
-
-// Heap allocations made while g_counting is set (global replacements below).
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_heap_allocations{0};
-}  // namespace
-
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-[[gnu::noinline]] void* operator new(std::size_t n) {
-  if (g_counting.load(std::memory_order_relaxed))
-    g_heap_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-[[gnu::noinline]] void* operator new[](std::size_t n) {
-  return ::operator new(n);
-}
-[[gnu::noinline]] void operator delete(void* p) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace palp::rt {
 namespace {
@@ -307,15 +280,15 @@ TEST(HapticLoop, StepNeverAllocates) {
   auto other = std::make_shared<const Model>(model->fields_ptr(), parse_tool("finger:19"));
   loop.swap_model(other);
   loop.set_recording(true);
-  g_heap_allocations = 0;
-  g_counting = true;
+  g_allocations = 0;
+  g_count_allocations = true;
   for (std::int64_t n = 1; n < 200; ++n) {
     if (n == 100) loop.set_paused(true);
     if (n == 110) loop.set_paused(false);
     loop.step(n * kPeriod, n * kPeriod + (n == 150 ? 9'000'000 : 0));
   }
-  g_counting = false;
-  EXPECT_EQ(g_heap_allocations.load(), 0);
+  g_count_allocations = false;
+  EXPECT_EQ(g_allocations.load(), 0);
   const LoopStats s = loop.stats();
   EXPECT_EQ(s.ticks, 200u);
   EXPECT_EQ(s.faults, 2u);  // the device timeout and the late tick
