@@ -1,40 +1,22 @@
 // The palp command line as a user meets it: help on every command, one-line errors with the
 // documented exit codes, and the phantom and prep commands end to end.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "cli_test_util.hpp"
+
+namespace palp {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-Outcome run_palp(const std::string& args) {
-  const std::string command = std::string(PALP_CLI_PATH) + " " + args + " 2>&1 </dev/null";
-  Outcome outcome;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
-}
-
-int line_count(const std::string& text) {
-  int lines = 0;
-  for (char c : text) lines += c == '\n';
-  return lines;
+// palp with a private scene cache in this test's directory; stderr together with stdout.
+testing::CliOutcome run_palp(const std::string& args) {
+  return testing::run_palp_cli(args, testing::shared_cli_dir() / "cache");
 }
 
 class PalpCli : public ::testing::Test {
@@ -52,7 +34,7 @@ class PalpCli : public ::testing::Test {
 
 TEST_F(PalpCli, HelpOnEveryCommand) {
   for (const char* args : {"--help", "phantom --help", "prep --help", "prep -h"}) {
-    const Outcome out = run_palp(args);
+    const auto out = run_palp(args);
     EXPECT_EQ(out.exit_code, 0) << args;
     EXPECT_NE(out.output.find("usage: palp"), std::string::npos) << args;
   }
@@ -60,12 +42,13 @@ TEST_F(PalpCli, HelpOnEveryCommand) {
 }
 
 TEST_F(PalpCli, UsageMistakesExitWithTwoAndOneLine) {
-  for (const char* args : {"frobnicate", "prep", "prep x", "prep x --out", "phantom cube",
-                           "prep phantom:cube --out d --band abc", "phantom cube --out f --dims 1x2",
-                           "prep phantom:cube --out d --bogus"}) {
-    const Outcome out = run_palp(args);
+  for (const char* args :
+       {"frobnicate", "prep", "prep x", "prep x --out", "phantom cube",
+        "prep phantom:cube --out d --band abc", "phantom cube --out f --dims 1x2",
+        "prep phantom:cube --out d --bogus"}) {
+    const auto out = run_palp(args);
     EXPECT_EQ(out.exit_code, 2) << args << ": " << out.output;
-    EXPECT_EQ(line_count(out.output), 1) << args << ": " << out.output;
+    EXPECT_EQ(testing::count_lines(out.output), 1) << args << ": " << out.output;
   }
 }
 
@@ -79,33 +62,36 @@ TEST_F(PalpCli, BadInputsGiveOneLineErrorsAndExitOne) {
   const fs::path empty_dir = dir_ / "empty";
   fs::create_directories(empty_dir);
   for (const std::string& input : {(dir_ / "missing.nii.gz").string(), truncated.string(),
-                                  empty_dir.string(), std::string("phantom:nothing")}) {
-    const Outcome out = run_palp("prep " + input + " --out " + (dir_ / "out").string());
+                                   empty_dir.string(), std::string("phantom:nothing")}) {
+    const auto out = run_palp("prep " + input + " --out " + (dir_ / "out").string());
     EXPECT_NE(out.exit_code, 0) << input;
-    EXPECT_EQ(line_count(out.output), 2) << input << ": " << out.output;  // banner + the error
+    EXPECT_EQ(testing::count_lines(out.output), 2)
+        << input << ": " << out.output;  // banner + the error
     EXPECT_NE(out.output.find("palp"), std::string::npos);
   }
 }
 
 TEST_F(PalpCli, PhantomThenPrepThenCachedPrep) {
   const fs::path ct = dir_ / "cube.nii.gz";
-  const Outcome made = run_palp("phantom cube --out " + ct.string() + " --dims 60x60x60");
+  const auto made = run_palp("phantom cube --out " + ct.string() + " --dims 60x60x60");
   ASSERT_EQ(made.exit_code, 0) << made.output;
   ASSERT_TRUE(fs::exists(ct));
   const std::string prep = "prep " + ct.string() + " --out " + (dir_ / "prep").string();
-  const Outcome first = run_palp(prep);
+  const auto first = run_palp(prep);
   ASSERT_EQ(first.exit_code, 0) << first.output;
   for (const char* stage : {"read CT", "body mask", "d_surf", "d_bone", "total"}) {
     EXPECT_NE(first.output.find(stage), std::string::npos) << stage << "\n" << first.output;
   }
-  for (const char* file : {"body.nii.gz", "bone.nii.gz", "d_surf.nii.gz", "d_bone.nii.gz", "prep.json"}) {
+  for (const char* file :
+       {"body.nii.gz", "bone.nii.gz", "d_surf.nii.gz", "d_bone.nii.gz", "prep.json"}) {
     EXPECT_TRUE(fs::exists(dir_ / "prep" / file)) << file;
   }
-  const Outcome second = run_palp(prep);
+  const auto second = run_palp(prep);
   ASSERT_EQ(second.exit_code, 0);
   EXPECT_NE(second.output.find("cached"), std::string::npos) << second.output;
-  const Outcome forced = run_palp(prep + " --no-cache");
+  const auto forced = run_palp(prep + " --no-cache");
   EXPECT_EQ(forced.output.find("cached"), std::string::npos) << forced.output;
 }
 
 }  // namespace
+}  // namespace palp
