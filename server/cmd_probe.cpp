@@ -4,7 +4,8 @@
 // connection fails. The last line of the output is JSON.
 //
 // Latency is (time received - the frame's server_time_ns), both CLOCK_MONOTONIC: meaningful only
-// on the server's own host (a loopback address); elsewhere it is reported as unavailable.
+// on the server's own host (a loopback address, or --same-host for another address of the same
+// machine, e.g. across a network namespace); elsewhere it is reported as unavailable.
 // server_time_ns is the tick's deadline, so the figure includes the tick itself, the loop's
 // wake-up lateness, the network thread's polling interval and the socket.
 #include <algorithm>
@@ -35,6 +36,8 @@ Options:
   --rate HZ               frames per second to ask for (default 0: every tick)
   --stall S               no frame for S seconds counts as a stall (default 1)
   --contacts              ask for per-contact data in every frame
+  --same-host             the server shares this machine's clock though not reached on
+                          loopback (another network namespace): report latency anyway
   --volume-max-dim N      ask for the render volume, at most N voxels along each axis
   --role ROLE             observer (default) or controller
   --token TOKEN           the server's token (controller)
@@ -50,7 +53,9 @@ struct Report {
   std::uint64_t first_seq = 0, last_seq = 0;
   std::int64_t first_rx_ns = 0, last_rx_ns = 0;
   std::int64_t first_t_ns = 0, last_t_ns = 0;
-  std::uint64_t gaps = 0, gap_frames = 0;
+  std::uint64_t gaps = 0, gap_frames = 0, max_gap = 0;
+  std::int64_t max_interval_ns = 0;  // longest time between two frames received
+  std::uint64_t intervals_over_50ms = 0;
   std::uint64_t fault_frames = 0, contact_frames = 0;
   std::vector<double> latency_us;
   std::uint64_t volume_chunks = 0, volume_bytes = 0;
@@ -186,6 +191,11 @@ class Probe {
         } else if (f.seq() > r.last_seq + 1 && hello_.frame_rate_hz() == 0.0) {
           ++r.gaps;
           r.gap_frames += f.seq() - r.last_seq - 1;
+          r.max_gap = std::max<std::uint64_t>(r.max_gap, f.seq() - r.last_seq - 1);
+        }
+        if (r.frames > 0) {
+          r.max_interval_ns = std::max(r.max_interval_ns, now - r.last_rx_ns);
+          if (now - r.last_rx_ns > 50'000'000) ++r.intervals_over_50ms;
         }
         ++r.frames;
         r.last_seq = f.seq();
@@ -275,7 +285,7 @@ std::string json_number(double v) {
 }  // namespace
 
 int cmd_probe(const Arguments& argv) {
-  const Args args(argv, {"help", "quiet", "contacts"},
+  const Args args(argv, {"help", "quiet", "contacts", "same-host"},
                   {"duration", "rate", "stall", "volume-max-dim", "role", "token", "name"});
   if (args.has("help")) {
     std::cout << kProbeUsage;
@@ -323,7 +333,7 @@ int cmd_probe(const Arguments& argv) {
   }
   const double delivered =
       expected > 0 ? std::min(1.0, static_cast<double>(r.frames) / expected) : 0.0;
-  const bool latency_ok = probe.loopback() && !r.latency_us.empty();
+  const bool latency_ok = (probe.loopback() || args.has("same-host")) && !r.latency_us.empty();
   const double p50 = latency_ok ? percentile(r.latency_us, 0.5) : NAN;
   const double p90 = latency_ok ? percentile(r.latency_us, 0.9) : NAN;
   const double p99 = latency_ok ? percentile(r.latency_us, 0.99) : NAN;
@@ -338,9 +348,10 @@ int cmd_probe(const Arguments& argv) {
                   r.scene.tool().name().c_str(), r.scene.device().c_str(), r.scene.tick_rate_hz());
     std::printf(
         "  frames    %llu in %.3f s: %.1f frames/s, delivered %.4f (%llu gaps, %llu frames "
-        "missing), %llu with contact, %llu zeroed by faults\n",
+        "missing, largest gap %llu), %llu with contact, %llu zeroed by faults\n",
         static_cast<unsigned long long>(r.frames), span_s, fps, delivered,
         static_cast<unsigned long long>(r.gaps), static_cast<unsigned long long>(r.gap_frames),
+        static_cast<unsigned long long>(r.max_gap),
         static_cast<unsigned long long>(r.contact_frames),
         static_cast<unsigned long long>(r.fault_frames));
     if (latency_ok)
@@ -348,6 +359,9 @@ int cmd_probe(const Arguments& argv) {
                   p50, p90, p99, p999, lmax);
     else
       std::printf("  latency   n/a (not on the server's host, or no frames)\n");
+    std::printf("  arrivals  longest silence %.1f ms, %llu silences over 50 ms\n",
+                static_cast<double>(r.max_interval_ns) * 1e-6,
+                static_cast<unsigned long long>(r.intervals_over_50ms));
     if (r.volume_chunks)
       std::printf("  volume    %llu chunks, %llu bytes\n",
                   static_cast<unsigned long long>(r.volume_chunks),
@@ -374,14 +388,18 @@ int cmd_probe(const Arguments& argv) {
   }
   std::printf(
       "{\"ok\":%s,\"frames\":%llu,\"frames_per_s\":%s,\"delivered\":%s,\"gaps\":%llu,"
+      "\"gap_frames\":%llu,\"max_gap\":%llu,\"max_interval_ms\":%s,\"intervals_over_50ms\":%llu,"
       "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
       "\"server_rate_hz\":%s,\"overruns\":%llu,\"faults\":%llu,\"jitter_max_us\":%s,"
       "\"clients\":%u}\n",
       r.failure.empty() ? "true" : "false", static_cast<unsigned long long>(r.frames),
       json_number(fps).c_str(), json_number(delivered).c_str(),
-      static_cast<unsigned long long>(r.gaps), json_number(p50).c_str(), json_number(p90).c_str(),
-      json_number(p99).c_str(), json_number(p999).c_str(), json_number(lmax).c_str(),
-      json_number(r.have_stats ? r.stats.rate_hz() : NAN).c_str(),
+      static_cast<unsigned long long>(r.gaps), static_cast<unsigned long long>(r.gap_frames),
+      static_cast<unsigned long long>(r.max_gap),
+      json_number(static_cast<double>(r.max_interval_ns) * 1e-6).c_str(),
+      static_cast<unsigned long long>(r.intervals_over_50ms), json_number(p50).c_str(),
+      json_number(p90).c_str(), json_number(p99).c_str(), json_number(p999).c_str(),
+      json_number(lmax).c_str(), json_number(r.have_stats ? r.stats.rate_hz() : NAN).c_str(),
       static_cast<unsigned long long>(r.stats.overruns()),
       static_cast<unsigned long long>(r.stats.faults()),
       json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients());

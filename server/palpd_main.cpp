@@ -10,6 +10,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <optional>
@@ -71,6 +72,8 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
   --priority N            SCHED_FIFO priority of the loop thread (80)
   --no-realtime           do not ask for SCHED_FIFO and locked memory
   --duration S            stop after S seconds (default: until SIGINT / SIGTERM)
+  --stats-json FILE       at exit, write the loop's and the server's counters as JSON (ticks,
+                          overruns, lateness histogram and percentile bounds, frames sent)
   --config FILE           TOML file with any of these options as keys (scene = "phantom:torso",
                           rate = 1000, no-realtime = true, param = ["c=2.0"], ...)
   -q, --quiet             print only warnings and errors
@@ -79,11 +82,12 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
 
 const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime"};
 const std::vector<std::string> kValued = {
-    "device",   "tool",         "device-profile", "rate",
-    "port",     "bind",         "token",          "max-clients",
-    "queue",    "idle-timeout", "hello-timeout",  "write-timeout",
-    "record",   "record-dir",   "watchdog-ms",    "device-timeout-ms",
-    "priority", "duration",     "config",         "poll-us"};
+    "device",    "tool",         "device-profile", "rate",
+    "port",      "bind",         "token",          "max-clients",
+    "queue",     "idle-timeout", "hello-timeout",  "write-timeout",
+    "record",    "record-dir",   "watchdog-ms",    "device-timeout-ms",
+    "priority",  "duration",     "config",         "poll-us",
+    "stats-json"};
 
 std::string number_text(double v) {
   std::string s;
@@ -172,7 +176,14 @@ class App final : public net::ControlTarget {
         metadata_(std::move(metadata)),
         record_dir_(std::move(record_dir)) {}
 
+  // A recording holds one tool and one parameter set (in its metadata), which is what lets a
+  // replay reproduce every force; so they cannot change while one runs.
+  static constexpr const char* kLockedWhileRecording =
+      "stop the recording first: tool and parameters are fixed while recording, so that its "
+      "replay reproduces every force";
+
   std::string set_tool(const std::string& name) override {
+    if (recording()) return kLockedWhileRecording;
     const Tool tool = parse_tool(name);
     const auto current = loop_.model();
     const ForceParams params =
@@ -181,6 +192,7 @@ class App final : public net::ControlTarget {
     return {};
   }
   std::string set_parameter(const std::string& name, double value) override {
+    if (recording()) return kLockedWhileRecording;
     const auto current = loop_.model();
     ForceParams params = current->params();
     set_param(params, name, value);
@@ -249,6 +261,60 @@ class App final : public net::ControlTarget {
   mutable std::mutex mutex_;
   std::unique_ptr<rt::Recorder> recorder_;
 };
+
+// The smallest histogram bucket bound (us) at or below which a fraction q of the ticks woke up;
+// NaN when the quantile falls in the open last bucket or there are no ticks.
+double lateness_bound_us(const rt::LoopStats& s, double q) {
+  std::uint64_t total = 0;
+  for (const std::uint64_t n : s.jitter) total += n;
+  if (total == 0) return NAN;
+  const double wanted = q * static_cast<double>(total);
+  std::uint64_t seen = 0;
+  for (std::size_t b = 0; b < rt::kJitterBucketUpperUs.size(); ++b) {
+    seen += s.jitter[b];
+    if (static_cast<double>(seen) >= wanted) return rt::kJitterBucketUpperUs[b];
+  }
+  return NAN;
+}
+
+std::string json_number(double v) {
+  return std::isfinite(v) ? number_text(v) : "null";
+}
+
+// --stats-json: one object with the loop's and the server's final counters.
+void write_stats_json(const std::string& path, const rt::LoopStats& s, const net::ServerCounters& c,
+                      double rate_hz, double elapsed_s) {
+  const auto u = [](std::uint64_t v) { return std::to_string(v); };
+  const std::uint64_t deadlines = s.ticks + s.overruns;
+  std::string out =
+      "{\"rate_hz\":" + json_number(rate_hz) + ",\"elapsed_s\":" + json_number(elapsed_s) +
+      ",\"ticks\":" + u(s.ticks) + ",\"overruns\":" + u(s.overruns) +
+      ",\"deadline_miss_fraction\":" +
+      json_number(deadlines ? static_cast<double>(s.overruns) / static_cast<double>(deadlines)
+                            : 0.0) +
+      ",\"faults\":" + u(s.faults) + ",\"realtime\":" + (s.realtime ? "true" : "false") +
+      ",\"lateness_us\":{\"p50_at_most\":" + json_number(lateness_bound_us(s, 0.5)) +
+      ",\"p99_at_most\":" + json_number(lateness_bound_us(s, 0.99)) +
+      ",\"p999_at_most\":" + json_number(lateness_bound_us(s, 0.999)) +
+      ",\"max\":" + json_number(static_cast<double>(s.max_late_ns) * 1e-3) +
+      ",\"bucket_upper_us\":[";
+  for (std::size_t b = 0; b < rt::kJitterBucketUpperUs.size(); ++b)
+    out += (b ? "," : "") + json_number(rt::kJitterBucketUpperUs[b]);
+  out += "],\"counts\":[";
+  for (std::size_t b = 0; b < s.jitter.size(); ++b) out += (b ? "," : "") + u(s.jitter[b]);
+  out +=
+      "]},\"tick_us\":{\"mean\":" +
+      json_number(s.ticks ? static_cast<double>(s.tick_ns_sum) * 1e-3 / static_cast<double>(s.ticks)
+                          : 0.0) +
+      ",\"max\":" + json_number(static_cast<double>(s.tick_ns_max) * 1e-3) +
+      "},\"net_published\":" + u(s.net_published) + ",\"net_dropped\":" + u(s.net_dropped) +
+      ",\"clients_accepted\":" + u(c.accepted) + ",\"clients_rejected\":" + u(c.rejected) +
+      ",\"protocol_errors\":" + u(c.protocol_errors) + ",\"timeouts\":" + u(c.timeouts) +
+      ",\"frames_sent\":" + u(c.frames_sent) + ",\"frames_dropped\":" + u(c.frames_dropped) + "}\n";
+  std::ofstream file(path);
+  file << out;
+  if (!file) throw Error("cannot write " + path);
+}
 
 double positive(const cli::Args& args, const std::string& key, double fallback) {
   const double v = args.number(key, fallback);
@@ -328,6 +394,7 @@ int run(const cli::Arguments& argv_in) {
   server_config.poll_interval_s = std::max(50.0, positive(args, "poll-us", 500)) * 1e-6;
   const double duration = positive(args, "duration", 0);
   const std::string record_dir = args.get("record-dir").value_or(".");
+  const std::string stats_json = args.get("stats-json").value_or("");
   (void)cli::scene_options(args);
 
   std::unique_ptr<rt::Device> device =
@@ -417,6 +484,9 @@ int run(const cli::Arguments& argv_in) {
 
   const rt::LoopStats s = loop.stats();
   const net::ServerCounters c = server.counters();
+  if (!stats_json.empty())
+    write_stats_json(stats_json, s, c, loop_config.rate_hz,
+                     static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9);
   if (!quiet) {
     std::printf(
         "palpd: %llu ticks, %llu overruns, %llu faults, max lateness %.1f us, "

@@ -217,14 +217,24 @@ TEST(Palpd, ControllerDrivesRemoteDeviceAndRecords) {
   }
   EXPECT_TRUE(touched);
   EXPECT_GT(m.frame().force().z(), 0.0);
-  EXPECT_TRUE(command(3, [](v1::Command& k) { k.mutable_set_tool()->set_tool("finger:19"); }).ok());
+  // Tool and parameters are fixed while recording, so the replay reproduces every force.
+  const v1::CommandResult refused =
+      command(3, [](v1::Command& k) { k.mutable_set_tool()->set_tool("finger:19"); });
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("stop the recording first"), std::string::npos)
+      << refused.message();
+  EXPECT_FALSE(command(6, [](v1::Command& k) {
+                 k.mutable_set_parameter()->set_name("c");
+                 k.mutable_set_parameter()->set_value(1.0);
+               }).ok());
+  EXPECT_TRUE(command(4, [](v1::Command& k) { k.mutable_stop_recording(); }).ok());
+  EXPECT_FALSE(command(5, [](v1::Command& k) { k.mutable_stop_recording(); }).ok());
+  EXPECT_TRUE(command(7, [](v1::Command& k) { k.mutable_set_tool()->set_tool("finger:19"); }).ok());
   ASSERT_TRUE(observer.wait_for(
       [](const v1::ServerMessage& s) {
         return s.has_scene() && s.scene().tool().name() == "finger:19";
       },
       m));
-  EXPECT_TRUE(command(4, [](v1::Command& k) { k.mutable_stop_recording(); }).ok());
-  EXPECT_FALSE(command(5, [](v1::Command& k) { k.mutable_stop_recording(); }).ok());
   ASSERT_TRUE(wait_palpd_exit(log)) << read_text(log);
   const rt::Recording rec = rt::read_recording((dir / "cmd.palprec").string());
   EXPECT_GT(rec.records.size(), 10u);
@@ -272,6 +282,40 @@ TEST(Probe, UsageErrors) {
   const auto help = run_palp_cli("probe --help", cache);
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.output.find("--stall S"), std::string::npos);
+}
+
+// --stats-json writes the final counters; the probe's JSON has the arrival figures, and
+// --same-host keeps latency for a server it trusts to share the clock.
+TEST(Palpd, StatsJsonAndProbeArrivals) {
+  const fs::path dir = shared_cli_dir() / "stats";
+  fs::create_directories(dir);
+  const fs::path log = dir / "palpd.log", stats = dir / "stats.json";
+  const int port = start_palpd(
+      "--scene phantom:sphere --device sim --tool finger:7 --port 0 "
+      "--rate 1000 --duration 2 --no-realtime --stats-json " +
+          stats.string(),
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  const auto probe = run_palp_cli(
+      "probe 127.0.0.1:" + std::to_string(port) + " --duration 1 --same-host", dir / "cache");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  const std::string json = testing::last_line(probe.output);
+  for (const char* key :
+       {"\"gap_frames\":", "\"max_gap\":", "\"max_interval_ms\":", "\"intervals_over_50ms\":"})
+    EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+  EXPECT_EQ(json.find("\"p50\":null"), std::string::npos) << json;
+  EXPECT_NE(probe.output.find("longest silence"), std::string::npos);
+  ASSERT_TRUE(wait_palpd_exit(log)) << read_text(log);
+  const std::string text = read_text(stats);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(text, m, std::regex("\"ticks\":([0-9]+)"))) << text;
+  EXPECT_GT(std::stoull(m[1]), 1000u);
+  EXPECT_TRUE(std::regex_search(text, m, std::regex("\"clients_accepted\":([0-9]+)")));
+  EXPECT_EQ(m[1], "1");
+  for (const char* key : {"\"overruns\":", "\"deadline_miss_fraction\":", "\"p99_at_most\":",
+                          "\"counts\":[", "\"frames_sent\":"})
+    EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
+  EXPECT_EQ(text.back(), '\n');
 }
 
 }  // namespace

@@ -1,0 +1,127 @@
+#!/usr/bin/env bash
+# palpd fan-out on loopback (docs/palpd_benchmarks.md): the torso phantom, the sim device,
+# finger:37, and N observers (`palp probe`, every tick) at each rate, in three scenarios:
+#   plain    N observers
+#   stalled  N observers + a client that says Hello and never reads (4 KiB receive buffer)
+#   garbage  N observers + a client sending random bytes, undecodable messages and bad length
+#            prefixes, reconnecting whenever it is dropped
+# For each: palpd's deadline misses (overruns / deadlines), wake-up lateness (histogram bound
+# for p99, and the max), the observers' p99 tick-to-client latency, the smallest delivered
+# fraction and frames/s over the observers, and the machine's CPU use. One JSON line per
+# scenario goes to OUT/results.jsonl, a Markdown table to stdout.
+#
+#   tests/bench/palpd_fanout.sh [BUILD_DIR]
+#
+# BUILD_DIR (or $PALP_BUILD_DIR, default build) holds server/palpd and server/palp.
+# Environment: PALP_FANOUT_RATES (default "1000 4000"), PALP_FANOUT_OBSERVERS (8),
+# PALP_FANOUT_SECONDS (10 per scenario), PALP_FANOUT_SCENARIOS ("plain stalled garbage"),
+# PALP_FANOUT_OUT (default /tmp/palp-fanout; logs and JSON kept there). Loopback only; every
+# process is bounded by a duration and everything started here is stopped on exit.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+build=${1:-${PALP_BUILD_DIR:-build}}
+case $build in -h | --help) sed -n '2,20p' "$0"; exit 0 ;; esac
+rates=${PALP_FANOUT_RATES:-1000 4000}
+observers=${PALP_FANOUT_OBSERVERS:-8}
+seconds=${PALP_FANOUT_SECONDS:-10}
+scenarios=${PALP_FANOUT_SCENARIOS:-plain stalled garbage}
+out=${PALP_FANOUT_OUT:-/tmp/palp-fanout}
+palpd=$build/server/palpd
+palp=$build/server/palp
+py=/usr/bin/python3
+helper=tests/bench/palpd_bench.py
+export PYTHONDONTWRITEBYTECODE=1
+export PALP_SCENE_CACHE=${PALP_SCENE_CACHE:-$out/cache}
+mkdir -p "$out"
+: >"$out/results.jsonl"
+
+pids=()
+cleanup() {
+  local pid
+  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+# CPU seconds (user + system) used so far by this script's finished children (bash's times,
+# run in this shell: a command substitution would see only its own children).
+child_cpu() {
+  times >"$out/times.txt"
+  cpu_s=$(tail -1 "$out/times.txt" | awk '{ s = 0; for (i = 1; i <= 2; i++) {
+    split($i, a, "m"); sub("s", "", a[2]); s += 60 * a[1] + a[2] } printf "%.3f", s }')
+}
+
+# Starts palpd (background, pid appended to pids); sets port once it listens.
+start_palpd() {
+  local log=$1; shift
+  "$palpd" "$@" >"$log" 2>&1 </dev/null &
+  pids+=($!)
+  local i
+  for ((i = 0; i < 1200; i++)); do
+    if grep -qs "listening on" "$log"; then
+      port=$(sed -n 's/.*listening on [^ ]*:\([0-9]*\),.*/\1/p' "$log" | head -1)
+      return 0
+    fi
+    kill -0 "${pids[-1]}" 2>/dev/null || { cat "$log" >&2; return 1; }
+    sleep 0.1
+  done
+  echo "palpd did not start" >&2
+  return 1
+}
+
+# Warm the scene cache once so no run pays for the torso's prep.
+"$palp" prep phantom:torso >/dev/null 2>&1 || true
+
+for rate in $rates; do
+  for scenario in $scenarios; do
+    name=${scenario}_${rate}hz_${observers}obs
+    child_cpu; cpu0=$cpu_s; wall0=$(date +%s.%N)
+    dir=$out/$name
+    rm -rf "$dir"; mkdir -p "$dir"
+    start_palpd "$dir/palpd.log" --scene phantom:torso --device sim --tool finger:37 \
+      --rate "$rate" --port 0 --duration $((seconds + 4)) --stats-json "$dir/stats.json"
+    palpd_pid=${pids[-1]}
+    extra=()
+    case $scenario in
+      stalled) "$py" "$helper" stall 127.0.0.1 "$port" $((seconds + 2)) >"$dir/extra.log" 2>&1 &
+        extra+=($!) ;;
+      garbage) "$py" "$helper" garbage 127.0.0.1 "$port" $((seconds + 2)) >"$dir/extra.log" 2>&1 &
+        extra+=($!) ;;
+      plain) ;;
+      *) echo "unknown scenario $scenario" >&2; exit 2 ;;
+    esac
+    pids+=("${extra[@]}")
+    sleep 0.5
+    probes=()
+    for ((i = 0; i < observers; i++)); do
+      "$palp" probe "127.0.0.1:$port" --duration "$seconds" --stall 5 --name "obs$i" \
+        >"$dir/probe$i.log" 2>&1 &
+      probes+=($!)
+    done
+    pids+=("${probes[@]}")
+    for pid in "${probes[@]}"; do wait "$pid" || true; done
+    for pid in "${extra[@]}"; do wait "$pid" || true; done
+    wait "$palpd_pid" || true
+    # palpd, the observers and the extra client: CPU time over (wall time x cores)
+    child_cpu
+    cpu=$(awk -v c0="$cpu0" -v c1="$cpu_s" -v w0="$wall0" -v w1="$(date +%s.%N)" \
+      -v n="$(nproc)" 'BEGIN{printf "%.1f", 100 * (c1 - c0) / ((w1 - w0) * n)}')
+    row=$("$py" "$helper" summary "$name" "$dir/stats.json" "$dir"/probe*.log)
+    echo "${row%\}},\"cpu_used_pct\":$cpu,\"seconds\":$seconds}" | tee -a "$out/results.jsonl"
+  done
+done
+
+"$py" - "$out/results.jsonl" <<'EOF'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
+f = lambda v, d=1: "n/a" if v is None else f"{v:.{d}f}"
+print("\n| scenario | ticks | misses (overruns) | lateness p99 (bound) / max, us | "
+      "latency p99 (worst observer), us | min delivered | min frames/s | CPU used |")
+print("|---|---|---|---|---|---|---|---|")
+for r in rows:
+    print(f"| {r['scenario']} | {r['ticks']} | {f(r['miss_pct'], 3)} % ({r['overruns']}) | "
+          f"<= {f(r['late_p99_us_at_most'], 0)} / {f(r['late_max_us'])} | "
+          f"{f(r['latency_p99_us_max'])} | {f(r['delivered_min'], 4)} | "
+          f"{f(r['frames_per_s_min'])} | {r['cpu_used_pct']} % |")
+EOF
