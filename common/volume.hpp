@@ -17,8 +17,8 @@ namespace palp {
 using Index3 = std::array<std::int64_t, 3>;
 using Vec3 = std::array<double, 3>;
 
-// Where the grid sits in the scanner's world (LPS, mm): world = origin + direction * (spacing .* ijk).
-// direction is row-major 3x3 whose columns are the i, j, k axis directions.
+// Where the grid sits in the scanner's world (LPS, mm): world = origin + direction * (spacing .*
+// ijk). direction is row-major 3x3 whose columns are the i, j, k axis directions.
 struct WorldPlacement {
   Vec3 origin{0.0, 0.0, 0.0};
   std::array<double, 9> direction{1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -77,9 +77,9 @@ struct Volume {
   std::size_t size() const { return data.size(); }
 };
 
-using CtVolume = Volume<std::int16_t>;   // Hounsfield units
-using Mask = Volume<std::uint8_t>;       // 0 / 1
-using DistanceMap = Volume<float>;       // signed distance, mm, positive inside
+using CtVolume = Volume<std::int16_t>;  // Hounsfield units
+using Mask = Volume<std::uint8_t>;      // 0 / 1
+using DistanceMap = Volume<float>;      // signed distance, mm, positive inside
 
 template <class T>
 Volume<T>::Volume(const Grid& g, T fill, const std::string& what) : grid(g) {

@@ -55,12 +55,8 @@ int dispatch(int argc, char** argv) {
     return 0;
   }
   const std::map<std::string, std::function<int(const cli::Arguments&)>> commands = {
-      {"phantom", cli::cmd_phantom},
-      {"prep", cli::cmd_prep},
-      {"run", cli::cmd_run},
-      {"traj", cli::cmd_traj},
-      {"bench", cli::cmd_bench},
-      {"probe", cli::cmd_probe},
+      {"phantom", cli::cmd_phantom}, {"prep", cli::cmd_prep},   {"run", cli::cmd_run},
+      {"traj", cli::cmd_traj},       {"bench", cli::cmd_bench}, {"probe", cli::cmd_probe},
   };
   const auto it = commands.find(command);
   if (it == commands.end()) throw UsageError("unknown command '" + command + "' (try palp --help)");

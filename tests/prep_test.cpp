@@ -63,7 +63,8 @@ TEST_F(PrepTest, WritesAllOutputsOnTheInputGridWithItsWorldPlacement) {
     EXPECT_EQ(g->dims, ct.grid.dims);
     EXPECT_EQ(g->spacing, ct.grid.spacing);
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(g->world.origin[a], ct.grid.world.origin[a], 1e-4);
-    for (int a = 0; a < 9; ++a) EXPECT_NEAR(g->world.direction[a], ct.grid.world.direction[a], 1e-6);
+    for (int a = 0; a < 9; ++a)
+      EXPECT_NEAR(g->world.direction[a], ct.grid.world.direction[a], 1e-6);
   }
   // The written maps are exactly the maps of the written masks, voxel for voxel.
   const DistanceMap expected_surf = signed_distance(body, params.distance);

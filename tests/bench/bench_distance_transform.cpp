@@ -31,8 +31,8 @@ void BM_SignedDistance(benchmark::State& state) {
     palp::DistanceMap map = palp::signed_distance(mask, params);
     benchmark::DoNotOptimize(map.data.data());
   }
-  state.counters["voxels/s"] = benchmark::Counter(
-      static_cast<double>(mask.grid.voxel_count()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["voxels/s"] = benchmark::Counter(static_cast<double>(mask.grid.voxel_count()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_SignedDistance)
     ->ArgsProduct({{128, 256, 384}, {1, 2}})
