@@ -21,6 +21,10 @@
 
 namespace palp::header_text {
 
+// How much of a file a text header may take: the parsers read at most this much before the data
+// (their messages say "1 MiB").
+inline constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;
+
 // The first `max_bytes` of a file (fewer if the file is shorter).
 inline std::string read_head(const std::string& path, std::size_t max_bytes) {
   DecodedReader reader(path, 0, Compression::none);

@@ -14,8 +14,6 @@ namespace {
 
 namespace ht = header_text;
 
-constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;
-
 struct MetaHeader {
   std::map<std::string, std::string> fields;
   std::uint64_t data_offset = 0;  // first byte after the ElementDataFile line
@@ -23,7 +21,7 @@ struct MetaHeader {
 
 // Reads "Key = Value" lines up to and including ElementDataFile.
 MetaHeader parse_lines(const std::string& path) {
-  const std::string head = ht::read_head(path, kMaxHeaderBytes);
+  const std::string head = ht::read_head(path, ht::kMaxHeaderBytes);
   MetaHeader header;
   std::size_t pos = 0;
   int line_number = 0;
@@ -47,7 +45,7 @@ MetaHeader parse_lines(const std::string& path) {
     }
   }
   throw InputError(path + ": MetaImage header has no ElementDataFile line" +
-                   (head.size() == kMaxHeaderBytes ? " in its first 1 MiB" : ""));
+                   (head.size() == ht::kMaxHeaderBytes ? " in its first 1 MiB" : ""));
 }
 
 // MetaImage fields: the shared lookups plus the MetaImage value forms (number lists, booleans).

@@ -14,8 +14,6 @@ namespace {
 
 namespace ht = header_text;
 
-constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;
-
 struct NrrdHeader {
   std::map<std::string, std::string> fields;
   std::uint64_t data_offset = 0;  // first byte after the blank line (attached data)
@@ -36,7 +34,7 @@ void check_magic(std::string_view first_line, const std::string& path) {
 
 // Reads the magic line and "field: value" lines up to the blank line (or the end of file).
 NrrdHeader parse_lines(const std::string& path) {
-  const std::string head = ht::read_head(path, kMaxHeaderBytes);
+  const std::string head = ht::read_head(path, ht::kMaxHeaderBytes);
   NrrdHeader header;
   std::size_t pos = 0;
   int line_number = 0;
@@ -69,7 +67,7 @@ NrrdHeader parse_lines(const std::string& path) {
         std::string(ht::trim(line.substr(colon + 2)));
   }
   if (line_number == 0) throw nrrd_error(path, "file is empty");
-  if (head.size() == kMaxHeaderBytes) throw nrrd_error(path, "header is longer than 1 MiB");
+  if (head.size() == ht::kMaxHeaderBytes) throw nrrd_error(path, "header is longer than 1 MiB");
   header.data_offset = head.size();
   return header;
 }
