@@ -243,6 +243,10 @@ void write_volume(const std::string& path, const Volume<T>& volume, ScalarType t
 
 }  // namespace
 
+std::string ct_voxel_file(const std::string& path) {
+  return read_header(path).voxels.path;
+}
+
 CtVolume read_ct(const std::string& input) {
   const std::string phantom_prefix = "phantom:";
   if (input.rfind(phantom_prefix, 0) == 0) return make_phantom(input.substr(phantom_prefix.size()));

@@ -17,6 +17,10 @@ namespace palp {
 // Reads any supported CT input (a file, a DICOM directory, or "phantom:NAME").
 CtVolume read_ct(const std::string& input);
 
+// The file holding the voxels of a CT file: the file itself, or the detached data file its
+// header names (.mhd, .nhdr). Reads only the header; throws as read_ct does for a bad one.
+std::string ct_voxel_file(const std::string& path);
+
 // Writes a volume as NIfTI-1 (.nii or .nii.gz, chosen by the extension), with the grid's world
 // placement written back as qform and sform (RAS, as NIfTI requires).
 void write_nifti(const std::string& path, const CtVolume& volume);

@@ -71,30 +71,6 @@ class ContentHash {
   std::uint64_t state_ = 0xcbf29ce484222325ull;
 };
 
-std::string lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
-}
-
-// A detached header (.mhd, .nhdr) names its data file; the cache must see that file's bytes.
-std::vector<fs::path> detached_data_files(const fs::path& header) {
-  const std::string ext = lower(header.extension().string());
-  if (ext != ".mhd" && ext != ".nhdr") return {};
-  std::ifstream in(header);
-  std::string line;
-  std::vector<fs::path> files;
-  while (std::getline(in, line)) {
-    const std::string key = ext == ".mhd" ? "ElementDataFile" : "data file:";
-    if (line.rfind(key, 0) != 0) continue;
-    std::string value = line.substr(key.size());
-    value.erase(0, value.find_first_not_of(" =\t"));
-    while (!value.empty() && (value.back() == '\r' || value.back() == ' ')) value.pop_back();
-    if (!value.empty() && value != "LOCAL") files.push_back(header.parent_path() / value);
-  }
-  return files;
-}
-
 void hash_input(ContentHash& hash, const std::string& input) {
   if (input.rfind("phantom:", 0) == 0) {
     hash.add(input);
@@ -116,9 +92,9 @@ void hash_input(ContentHash& hash, const std::string& input) {
   }
   if (!fs::exists(path, ec)) throw InputError(input + ": no such file or directory");
   hash.add_file(path);
-  for (const auto& data_file : detached_data_files(path)) {
-    if (fs::exists(data_file, ec)) hash.add_file(data_file);
-  }
+  // A detached header (.mhd, .nhdr) names the file with the voxels: the key follows those too.
+  const std::string voxel_file = ct_voxel_file(input);
+  if (voxel_file != input) hash.add_file(voxel_file);
 }
 
 nlohmann::json grid_json(const Grid& grid) {

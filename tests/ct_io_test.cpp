@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 
 #include "errors.hpp"
 #include "io_test_util.hpp"
@@ -35,6 +36,18 @@ TEST(CtIo, ExtensionsAreCaseInsensitive) {
     write_nifti(dir.file(name), ct);
     EXPECT_EQ(read_ct(dir.file(name)).data, ct.data) << name;
   }
+}
+
+TEST(CtIo, VoxelFileIsTheDetachedDataFileOrTheFileItself) {
+  TempDir dir;
+  write_nifti(dir.file("a.nii.gz"), small_ct());
+  EXPECT_EQ(ct_voxel_file(dir.file("a.nii.gz")), dir.file("a.nii.gz"));
+  std::ofstream(dir.file("b.mhd")) << "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\n"
+                                      "ElementSpacing = 1 1 1\nElementType = MET_SHORT\n"
+                                      "ElementDataFile = b_voxels.raw\n";
+  std::ofstream(dir.file("b_voxels.raw"), std::ios::binary) << std::string(16, '\0');
+  EXPECT_EQ(ct_voxel_file(dir.file("b.mhd")), dir.file("b_voxels.raw"));
+  EXPECT_THROW(ct_voxel_file(dir.file("c.unknown")), InputError);
 }
 
 TEST(CtIo, PhantomInputsGoToTheGenerator) {

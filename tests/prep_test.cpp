@@ -118,6 +118,18 @@ TEST_F(PrepTest, SecondRunIsServedFromTheCacheUntilInputOrParametersChange) {
   EXPECT_FALSE(run_prep(input, out, other_band).from_cache);
 }
 
+TEST_F(PrepTest, CacheKeyFollowsTheVoxelsOfADetachedHeader) {
+  const std::string header = (dir_ / "ct.mhd").string();
+  std::ofstream(header) << "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\n"
+                           "ElementSpacing = 1 1 1\nElementType = MET_SHORT\n"
+                           "ElementDataFile = ct.raw\n";
+  std::ofstream(dir_ / "ct.raw", std::ios::binary) << std::string(16, '\0');
+  const std::string before = prep_cache_key(header, {});
+  EXPECT_EQ(prep_cache_key(header, {}), before);
+  std::ofstream(dir_ / "ct.raw", std::ios::binary) << std::string(15, '\0') << 'x';
+  EXPECT_NE(prep_cache_key(header, {}), before);  // same header, other voxels
+}
+
 TEST_F(PrepTest, AcceptsPhantomInputs) {
   EXPECT_NE(prep_cache_key("phantom:cube", {}), prep_cache_key("phantom:sphere", {}));
   EXPECT_THROW(run_prep("phantom:nonexistent", (dir_ / "out").string(), {}), UsageError);
