@@ -8,7 +8,8 @@ packages=(
   zlib1g-dev libdeflate-dev libgdcm-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   libprotobuf-dev protobuf-compiler libasio-dev libtomlplusplus-dev
-  libvtk9-dev xvfb xauth libgl1-mesa-dri
+  libvtk9-dev libglfw3-dev xvfb xauth libgl1-mesa-dri
+  libusb-1.0-0-dev libumockdev-dev umockdev
 )
 
 missing=()
