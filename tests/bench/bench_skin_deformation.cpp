@@ -1,0 +1,106 @@
+// Google Benchmark of the skin deformation update (common/skin_deformation.cpp) at the size the
+// palpview issue sets: a 512x512x400 CT decimated to 256x256x200 at 1.6 x 1.6 x 2 mm, pressed by
+// a finger pad of 1, 7, 19 or 37 contacts (pad radius 7.5 mm for 37) to 3, 6 or 10 mm, sliding
+// 0.8 mm between frames so every update also restores what the previous one wrote. Measures
+// only; never part of CTest.
+//
+// Data flow: synthetic body (elliptic cylinder along k, -1000 HU outside, soft tissue inside) ->
+// SkinDeformer over it -> per iteration: the pad's proxies on the anterior skin (y = y_skin),
+// contact points `depth` mm deeper with a small per-point friction drag -> update() into the
+// render buffer. Counters: ChainMail elements in the ROI, voxels in the written box.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <vector>
+
+#include "skin_deformation.hpp"
+#include "tool.hpp"
+
+namespace {
+
+constexpr std::array<std::int64_t, 3> kDims{256, 256, 200};
+constexpr std::array<double, 3> kSpacing{1.6, 1.6, 2.0};
+constexpr double kCentreX = 204.8, kCentreY = 204.8, kSemiX = 180.0, kSemiY = 130.0;
+
+std::vector<float> body_volume() {
+  std::vector<float> v(static_cast<std::size_t>(kDims[0] * kDims[1] * kDims[2]));
+  for (std::int64_t k = 0; k < kDims[2]; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 0; i < kDims[0]; ++i) {
+        const double x = (i * kSpacing[0] - kCentreX) / kSemiX;
+        const double y = (j * kSpacing[1] - kCentreY) / kSemiY;
+        v[i + kDims[0] * (j + kDims[1] * k)] =
+            x * x + y * y < 1.0 ? static_cast<float>(40.0 + 20.0 * std::sin(0.3 * i + 0.2 * k))
+                                : -1000.0f;
+      }
+  return v;
+}
+
+// Contacts of a finger:n pad pressed along +y into the anterior skin at (cx, y_skin, cz).
+std::vector<palp::DeformContact> press(int n, double cx, double cz, double depth) {
+  const double y_skin = kCentreY - kSemiY;
+  std::vector<palp::DeformContact> contacts;
+  const auto points = palp::finger_pad_points(n, 0.0);
+  for (std::size_t m = 0; m < points.size(); ++m) {
+    const palp::Vec3d p{cx + points[m].x, y_skin, cz + points[m].y};
+    const palp::Vec3d drag{0.3 * std::cos(0.7 * m), 0.0, 0.3 * std::sin(0.7 * m)};
+    contacts.push_back({p + palp::Vec3d{0.0, depth, 0.0} + drag, p});
+  }
+  return contacts;
+}
+
+void BM_SkinDeformUpdate(benchmark::State& state) {
+  static const std::vector<float> original = body_volume();
+  const int contacts_per_pad = static_cast<int>(state.range(0));
+  const double depth = static_cast<double>(state.range(1));
+  palp::SkinDeformer deformer(kDims, kSpacing, original);
+  std::vector<float> out = original;
+  const std::vector<palp::DeformContact> frames[2] = {press(contacts_per_pad, 204.8, 200.0, depth),
+                                                      press(contacts_per_pad, 205.6, 200.0, depth)};
+  palp::DeformResult last;
+  std::int64_t frame = 0;
+  for (int warm = 0; warm < 4; ++warm) last = deformer.update(frames[warm % 2], out);
+  for (auto _ : state) {
+    last = deformer.update(frames[frame++ % 2], out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["roi_elements"] = static_cast<double>(last.elements);
+  state.counters["written_voxels"] = static_cast<double>(
+      (last.hi[0] - last.lo[0]) * (last.hi[1] - last.lo[1]) * (last.hi[2] - last.lo[2]));
+}
+BENCHMARK(BM_SkinDeformUpdate)
+    ->ArgsProduct({{1, 7, 19, 37}, {3, 6, 10}})
+    ->ArgNames({"contacts", "depth_mm"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The same, with a smaller and a larger ROI margin (the propagation box does not depend on it;
+// only the ChainMail box's reset does).
+void BM_SkinDeformMargin(benchmark::State& state) {
+  static const std::vector<float> original = body_volume();
+  palp::DeformerParams params;
+  params.roi_margin_mm = static_cast<double>(state.range(0));
+  palp::SkinDeformer deformer(kDims, kSpacing, original, params);
+  std::vector<float> out = original;
+  const std::vector<palp::DeformContact> frames[2] = {press(37, 204.8, 200.0, 6.0),
+                                                      press(37, 205.6, 200.0, 6.0)};
+  palp::DeformResult last;
+  std::int64_t frame = 0;
+  for (int warm = 0; warm < 4; ++warm) last = deformer.update(frames[warm % 2], out);
+  for (auto _ : state) {
+    last = deformer.update(frames[frame++ % 2], out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["roi_elements"] = static_cast<double>(last.elements);
+}
+BENCHMARK(BM_SkinDeformMargin)
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(40)
+    ->ArgNames({"margin_mm"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
