@@ -1,0 +1,496 @@
+// palpview: the render client. Connects to palpd, shows the volume, the tool, its contacts and
+// proxies, the force, and the skin deformation; observes, or (--controller) drives palpd's
+// `remote` device with mouse and keyboard (or a scripted trajectory, --script).
+//
+// Data flow per frame:
+//   GLFW events -> camera / windowing / ControllerInput
+//   StreamClient::latest() -> RenderScene::update_state          (receive)
+//   RenderScene::update_deformation (SkinDeformer, in place)       (deformation)
+//   RenderScene::render (VTK ray casting + geometry + HUD)         (render)
+//   controller: pose -> StreamClient::send_pose; tool / pause requests -> commands
+// At exit the frame-time split is printed and (--stats-json) written as JSON.
+// Exit codes: 0 done, 1 failure (no display, no scene within --timeout in screenshot mode,
+// refused by the server), 2 usage.
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "controller_input.hpp"
+#include "errors.hpp"
+#include "render_scene.hpp"
+#include "stream_client.hpp"
+#include "trajectory.hpp"
+#include "view_window.hpp"
+
+namespace palp::view {
+namespace {
+
+constexpr const char* kUsage = R"(usage: palpview --connect HOST:PORT [options]
+
+The render client: connects to palpd, shows the volume, the tool, contacts, proxies and force,
+and deforms the skin where the tool presses.
+
+  --connect HOST:PORT     palpd's address (required)
+  --observer              only watch (default); the mouse moves this view's camera
+  --controller            drive palpd's `remote` device (palpd --device remote) with mouse
+                          and keyboard
+  --token T               the server's controller token
+  --name NAME             client name shown by the server (default palpview)
+  --rate HZ               frames/s asked of the server (default 120)
+  --volume-max-dim N      render volume: at most N voxels per axis (default 256)
+  --preset skin|bone|soft transfer-function preset (default skin)
+  --no-deformation        do not deform the skin
+  --width W --height H    window size (default 1280x800)
+  --camera AZ,EL,DIST     camera azimuth and elevation (degrees) from the anterior view and
+                          distance (mm, 0 = fit)
+  --screenshot FILE       render --frames N frames from the live stream, write a PNG, exit
+  --frames N              frames before the screenshot (default 5)
+  --timeout S             how long --screenshot waits for the scene (default 60)
+  --script FILE           controller: send the poses of a trajectory CSV
+                          (t,px,py,pz,qw,qx,qy,qz; t from the first live frame), then hold
+                          the last one
+  --stats-json FILE       write the frame-time split (receive/deformation/render) as JSON
+  --duration S            exit after S seconds
+  -h, --help              this text
+
+Mouse: left drag orbits (controller: slides the tool; shift: rotates it), middle drag orbits,
+right drag windows (x: level, y: width), scroll zooms (controller: presses; ctrl: zooms).
+Keys: P next preset, [ ] level, - = width, Home camera reset, Esc quit; controller: arrows
+slide, W/S press, Q/E R/F Z/C rotate, 1/2/3 finger:37/twofinger:19/probe:9x3, space pause,
+backspace start pose.
+)";
+
+struct Options {
+  std::string host;
+  std::uint16_t port = 0;
+  bool controller = false;
+  std::string token;
+  std::string name = "palpview";
+  double rate_hz = 120.0;
+  std::uint32_t volume_max_dim = 256;
+  PresetId preset = PresetId::Skin;
+  bool deformation = true;
+  int width = 1280, height = 800;
+  double az = 0, el = 0, dist = 0;
+  std::string screenshot;
+  int frames = 5;
+  double timeout_s = 60.0;
+  std::string script;
+  std::string stats_json;
+  double duration_s = 0;  // 0: until closed
+};
+
+double parse_number(const std::string& option, const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
+    return v;
+  } catch (const std::exception&) {
+    throw UsageError(option + ": not a number: '" + text + "'");
+  }
+}
+
+int parse_int(const std::string& option, const std::string& text, int lo, int hi) {
+  const double v = parse_number(option, text);
+  if (v != std::floor(v) || v < lo || v > hi)
+    throw UsageError(option + ": expected an integer from " + std::to_string(lo) + " to " +
+                     std::to_string(hi) + ", got '" + text + "'");
+  return static_cast<int>(v);
+}
+
+// Returns nullopt for --help.
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options o;
+  bool have_connect = false, have_frames = false;
+  for (int n = 1; n < argc; ++n) {
+    const std::string arg = argv[n];
+    const auto value = [&]() -> std::string {
+      if (n + 1 >= argc) throw UsageError(arg + " needs a value");
+      return argv[++n];
+    };
+    if (arg == "-h" || arg == "--help") return std::nullopt;
+    if (arg == "--connect") {
+      parse_host_port(value(), o.host, o.port);
+      have_connect = true;
+    } else if (arg == "--observer") {
+      o.controller = false;
+    } else if (arg == "--controller") {
+      o.controller = true;
+    } else if (arg == "--token") {
+      o.token = value();
+    } else if (arg == "--name") {
+      o.name = value();
+    } else if (arg == "--rate") {
+      o.rate_hz = parse_number(arg, value());
+      if (o.rate_hz < 0 || o.rate_hz > 100000) throw UsageError("--rate: 0 to 100000 Hz");
+    } else if (arg == "--volume-max-dim") {
+      o.volume_max_dim = static_cast<std::uint32_t>(parse_int(arg, value(), 0, 4096));
+    } else if (arg == "--preset") {
+      o.preset = parse_preset(value());
+    } else if (arg == "--no-deformation") {
+      o.deformation = false;
+    } else if (arg == "--width") {
+      o.width = parse_int(arg, value(), 64, 8192);
+    } else if (arg == "--height") {
+      o.height = parse_int(arg, value(), 64, 8192);
+    } else if (arg == "--camera") {
+      const std::string text = value();
+      const auto c1 = text.find(','), c2 = text.find(',', c1 == std::string::npos ? 0 : c1 + 1);
+      if (c1 == std::string::npos || c2 == std::string::npos)
+        throw UsageError("--camera: expected AZ,EL,DIST, got '" + text + "'");
+      o.az = parse_number(arg, text.substr(0, c1));
+      o.el = parse_number(arg, text.substr(c1 + 1, c2 - c1 - 1));
+      o.dist = parse_number(arg, text.substr(c2 + 1));
+      if (o.dist < 0) throw UsageError("--camera: the distance must be >= 0");
+    } else if (arg == "--screenshot") {
+      o.screenshot = value();
+    } else if (arg == "--frames") {
+      o.frames = parse_int(arg, value(), 1, 1000000);
+      have_frames = true;
+    } else if (arg == "--timeout") {
+      o.timeout_s = parse_number(arg, value());
+      if (o.timeout_s <= 0) throw UsageError("--timeout: must be > 0");
+    } else if (arg == "--script") {
+      o.script = value();
+    } else if (arg == "--stats-json") {
+      o.stats_json = value();
+    } else if (arg == "--duration") {
+      o.duration_s = parse_number(arg, value());
+      if (o.duration_s <= 0) throw UsageError("--duration: must be > 0");
+    } else {
+      throw UsageError("unknown option '" + arg + "'");
+    }
+  }
+  if (!have_connect) throw UsageError("--connect HOST:PORT is required");
+  if (have_frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");
+  if (!o.script.empty() && !o.controller) throw UsageError("--script needs --controller");
+  return o;
+}
+
+// Per-phase frame times (ms).
+struct PhaseTimes {
+  std::vector<double> receive, deformation, render;
+  std::vector<double> render_modified, render_unchanged;  // render ms with / without re-upload
+  std::int64_t deform_active = 0;
+  std::int64_t roi_voxels_sum = 0;
+};
+
+nlohmann::json summary(std::vector<double> v) {
+  nlohmann::json j;
+  j["n"] = v.size();
+  if (v.empty()) return j;
+  std::sort(v.begin(), v.end());
+  const auto q = [&](double f) {
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(f * static_cast<double>(v.size())))];
+  };
+  j["mean"] = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  j["p50"] = q(0.5);
+  j["p95"] = q(0.95);
+  j["max"] = v.back();
+  return j;
+}
+
+double mean_of(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+}
+
+// The pose of a trajectory at time t (the last row with t_row <= t; the first before it).
+Pose script_pose(const Trajectory& script, double t) {
+  std::size_t n = 0;
+  while (n + 1 < script.size() && script[n + 1].t <= t) ++n;
+  return script[n].pose;
+}
+
+int run(const Options& o) {
+  Trajectory script;
+  if (!o.script.empty()) script = read_trajectory_csv(o.script);
+  const bool screenshot = !o.screenshot.empty();
+
+  StreamOptions stream;
+  stream.host = o.host;
+  stream.port = o.port;
+  stream.controller = o.controller;
+  stream.token = o.token;
+  stream.client_name = o.name;
+  stream.frame_rate_hz = o.rate_hz;
+  stream.volume_max_dim = o.volume_max_dim;
+
+  ViewWindow window(
+      {o.width, o.height, !screenshot, "palpview " + o.host + ":" + std::to_string(o.port)});
+  SceneSettings settings;
+  settings.preset = o.preset;
+  settings.deformation = o.deformation;
+  settings.camera_azimuth_deg = o.az;
+  settings.camera_elevation_deg = o.el;
+  settings.camera_distance_mm = o.dist;
+  RenderScene scene(window.render_window(), settings);
+  ControllerInput controller;
+  bool controller_ready = false;
+  std::uint64_t controller_connection = 0;
+
+  // Input mapping (see the usage text).
+  bool orbiting = false, windowing = false;
+  double last_x = 0, last_y = 0;
+  ViewEvents events;
+  events.mouse_button = [&](int button, bool pressed, double x, double y, int mods) {
+    last_x = x, last_y = y;
+    if (button == GLFW_MOUSE_BUTTON_LEFT && o.controller) {
+      controller.button(MouseButton::Left, pressed, x, y, (mods & GLFW_MOD_SHIFT) != 0);
+    } else if (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_MIDDLE) {
+      orbiting = pressed;
+    } else if (button == GLFW_MOUSE_BUTTON_RIGHT) {
+      windowing = pressed;
+    }
+  };
+  events.cursor = [&](double x, double y) {
+    const double dx = x - last_x, dy = y - last_y;
+    last_x = x, last_y = y;
+    if (o.controller && controller.cursor(x, y, scene.camera_axes())) return;
+    if (orbiting) scene.orbit(-0.3 * dx, 0.3 * dy);
+    if (windowing) scene.adjust_window(2.0 * dx, std::exp(-0.005 * dy));
+  };
+  events.scroll = [&](double dy, int mods) {
+    if (o.controller && !(mods & GLFW_MOD_CONTROL))
+      controller.scroll(-dy);  // wheel towards the user presses in
+    else
+      scene.zoom(std::pow(1.1, dy));
+  };
+  events.key = [&](int key, int) {
+    const CameraAxes axes = scene.camera_axes();
+    switch (key) {
+      case GLFW_KEY_ESCAPE:
+        window.request_close();
+        return;
+      case GLFW_KEY_P:
+        scene.set_preset(static_cast<PresetId>((static_cast<int>(scene.preset()) + 1) % 3));
+        return;
+      case GLFW_KEY_LEFT_BRACKET:
+        scene.adjust_window(-20.0, 1.0);
+        return;
+      case GLFW_KEY_RIGHT_BRACKET:
+        scene.adjust_window(20.0, 1.0);
+        return;
+      case GLFW_KEY_MINUS:
+        scene.adjust_window(0.0, 1.0 / 1.2);
+        return;
+      case GLFW_KEY_EQUAL:
+        scene.adjust_window(0.0, 1.2);
+        return;
+      case GLFW_KEY_HOME:
+        scene.reset_camera();
+        return;
+      default:
+        break;
+    }
+    if (!o.controller) return;
+    static const std::pair<int, InputKey> kKeys[] = {
+        {GLFW_KEY_LEFT, InputKey::SlideLeft},     {GLFW_KEY_RIGHT, InputKey::SlideRight},
+        {GLFW_KEY_UP, InputKey::SlideUp},         {GLFW_KEY_DOWN, InputKey::SlideDown},
+        {GLFW_KEY_W, InputKey::PressIn},          {GLFW_KEY_S, InputKey::PressOut},
+        {GLFW_KEY_Q, InputKey::YawLeft},          {GLFW_KEY_E, InputKey::YawRight},
+        {GLFW_KEY_R, InputKey::PitchUp},          {GLFW_KEY_F, InputKey::PitchDown},
+        {GLFW_KEY_Z, InputKey::RollLeft},         {GLFW_KEY_C, InputKey::RollRight},
+        {GLFW_KEY_1, InputKey::ToolFinger},       {GLFW_KEY_2, InputKey::ToolTwoFinger},
+        {GLFW_KEY_3, InputKey::ToolProbe},        {GLFW_KEY_SPACE, InputKey::Pause},
+        {GLFW_KEY_BACKSPACE, InputKey::ResetPose}};
+    for (const auto& [glfw_key, input] : kKeys)
+      if (glfw_key == key) controller.key(input, axes);
+  };
+  window.set_events(events);
+
+  StreamClient client(stream);
+  client.start();
+
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  const auto seconds_since = [](Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+  };
+  std::optional<Clock::time_point> live_since;
+  PhaseTimes times;
+  int live_frames = 0;
+  std::int64_t frames = 0;
+  double view_fps = 0;
+  auto fps_window_start = Clock::now();
+  int fps_window_frames = 0;
+  std::uint32_t max_contacts = 0;
+  LatestState state;
+  int exit_code = 0;
+  bool refused_reported = false;
+
+  while (!window.should_close()) {
+    window.poll_events();
+    const auto t0 = Clock::now();
+    state = client.latest();
+    HudInputs hud;
+    hud.view_fps = view_fps;
+    hud.controller = o.controller;
+    scene.update_state(state, hud);
+    const bool live = state.volume && state.frame.valid;
+    if (live && !live_since) live_since = Clock::now();
+
+    if (o.controller && state.volume) {
+      if (!controller_ready || controller_connection != state.connection) {
+        const RenderVolume& v = *state.volume;
+        if (!controller_ready) controller.reset(initial_pose(v.dims, v.spacing, v.d_surf));
+        controller_ready = true;
+        controller_connection = state.connection;
+      }
+      if (!script.empty() && live_since)
+        controller.reset(script_pose(script, seconds_since(*live_since)));
+      client.send_pose(controller.pose());
+      if (auto tool = controller.take_tool_request()) client.set_tool(*tool);
+      if (auto paused = controller.take_pause_request()) client.set_paused(*paused);
+    }
+    const auto t1 = Clock::now();
+    const DeformResult deform = scene.update_deformation();
+    const auto t2 = Clock::now();
+    scene.render();
+    const auto t3 = Clock::now();
+
+    const auto ms = [](Clock::time_point a, Clock::time_point b) {
+      return std::chrono::duration<double, std::milli>(b - a).count();
+    };
+    if (live) {
+      times.receive.push_back(ms(t0, t1));
+      times.deformation.push_back(ms(t1, t2));
+      times.render.push_back(ms(t2, t3));
+      (deform.active ? times.render_modified : times.render_unchanged).push_back(ms(t2, t3));
+      if (deform.active) {
+        ++times.deform_active;
+        times.roi_voxels_sum += (deform.hi[0] - deform.lo[0]) * (deform.hi[1] - deform.lo[1]) *
+                                (deform.hi[2] - deform.lo[2]);
+      }
+      max_contacts = std::max(max_contacts, state.frame.n_contact);
+      ++live_frames;
+    }
+    ++frames;
+    ++fps_window_frames;
+    const double fps_elapsed = seconds_since(fps_window_start);
+    if (fps_elapsed >= 0.5) {
+      view_fps = fps_window_frames / fps_elapsed;
+      fps_window_frames = 0;
+      fps_window_start = Clock::now();
+    }
+
+    if (state.link.state == LinkState::Refused && !refused_reported) {
+      std::cerr << "palpview: refused by " << o.host << ":" << o.port << ": " << state.link.message
+                << "\n";
+      refused_reported = true;
+      if (screenshot) {
+        exit_code = 1;
+        break;
+      }
+    }
+    if (screenshot) {
+      if (live_frames >= o.frames) {
+        write_png(window.render_window(), o.screenshot);
+        std::cout << "palpview: wrote " << o.screenshot << " after " << live_frames
+                  << " live frames\n";
+        break;
+      }
+      if (seconds_since(start) > o.timeout_s) {
+        std::cerr << "palpview: no scene from " << o.host << ":" << o.port << " within "
+                  << o.timeout_s << " s (link " << to_string(state.link.state)
+                  << (state.link.message.empty() ? "" : ": " + state.link.message) << ")\n";
+        exit_code = 1;
+        break;
+      }
+    }
+    if (o.duration_s > 0 && seconds_since(start) >= o.duration_s) break;
+  }
+  client.stop();
+
+  // The frame-time split.
+  std::printf(
+      "palpview: %lld frames (%d live), receive %.3f ms, deformation %.3f ms, render "
+      "%.3f ms per live frame (mean); render with volume re-upload %.3f ms (%zu), "
+      "without %.3f ms (%zu)\n",
+      static_cast<long long>(frames), live_frames, mean_of(times.receive),
+      mean_of(times.deformation), mean_of(times.render), mean_of(times.render_modified),
+      times.render_modified.size(), mean_of(times.render_unchanged), times.render_unchanged.size());
+  if (!o.stats_json.empty()) {
+    nlohmann::json j;
+    j["frames"] = frames;
+    j["live_frames"] = live_frames;
+    const auto size = window.framebuffer_size();
+    j["width"] = size[0];
+    j["height"] = size[1];
+    j["receive_ms"] = summary(times.receive);
+    j["deformation_ms"] = summary(times.deformation);
+    j["render_ms"] = summary(times.render);
+    j["render_ms_volume_reuploaded"] = summary(times.render_modified);
+    j["render_ms_volume_unchanged"] = summary(times.render_unchanged);
+    j["deformation_active_frames"] = times.deform_active;
+    j["roi_voxels_mean"] = times.deform_active > 0 ? static_cast<double>(times.roi_voxels_sum) /
+                                                         static_cast<double>(times.deform_active)
+                                                   : 0.0;
+    j["deformation"] = o.deformation;
+    j["controller"] = o.controller;
+    j["link_state"] = to_string(state.link.state);
+    j["stream_frames_per_s"] = state.link.frames_per_s;
+    j["delivered"] = state.link.delivered;
+    j["latency_ms"] = state.link.latency_ms;
+    j["connections"] = state.link.connections;
+    j["max_contacts"] = max_contacts;
+    if (state.volume) j["volume_dims"] = state.volume->dims;
+    if (state.scene) {
+      j["scene_dims"] = state.scene->dims;
+      j["tool"] = state.scene->tool;
+    }
+    const Pose& p = state.frame.pose;
+    j["last_frame_valid"] = state.frame.valid;
+    j["last_pose"] = {p.position.x,    p.position.y,    p.position.z,   p.orientation.w,
+                      p.orientation.x, p.orientation.y, p.orientation.z};
+    if (o.controller) {
+      const Pose& c = controller.pose();
+      j["sent_pose"] = {c.position.x,    c.position.y,    c.position.z,   c.orientation.w,
+                        c.orientation.x, c.orientation.y, c.orientation.z};
+    }
+    std::ofstream out(o.stats_json);
+    out << j.dump(2) << "\n";
+    if (!out) throw ResourceError("cannot write " + o.stats_json);
+  }
+  return exit_code;
+}
+
+}  // namespace
+}  // namespace palp::view
+
+int main(int argc, char** argv) {
+  using namespace palp;
+  std::optional<view::Options> options;
+  try {
+    options = view::parse_options(argc, argv);
+  } catch (const UsageError& e) {
+    std::cerr << "palpview: " << e.what() << "\n(palpview --help for the options)\n";
+    return 2;
+  }
+  if (!options) {
+    std::cout << view::kUsage;
+    return 0;
+  }
+  try {
+    return view::run(*options);
+  } catch (const UsageError& e) {
+    std::cerr << "palpview: " << e.what() << "\n";
+    return 2;
+  } catch (const Error& e) {
+    std::cerr << "palpview: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "palpview: " << e.what() << "\n";
+    return 1;
+  }
+}
