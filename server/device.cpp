@@ -3,6 +3,8 @@
 
 #include "errors.hpp"
 #include "recording.hpp"
+#include "usb/spacemouse_device.hpp"
+#include "usb/usb_haptic_device.hpp"
 
 namespace palp::rt {
 
@@ -18,10 +20,24 @@ const char* to_string(DeviceStatus status) {
       return "disconnected";
     case DeviceStatus::Finished:
       return "finished";
+    case DeviceStatus::Absent:
+      return "absent";
     case DeviceStatus::Error:
       break;
   }
   return "error";
+}
+
+const char* to_string(DeviceState state) {
+  switch (state) {
+    case DeviceState::Present:
+      return "present";
+    case DeviceState::Absent:
+      return "absent";
+    case DeviceState::Fault:
+      break;
+  }
+  return "fault";
 }
 
 std::unique_ptr<Device> make_device(std::string_view spec) {
@@ -39,8 +55,15 @@ std::unique_ptr<Device> make_device(std::string_view spec) {
     return std::make_unique<ReplayDevice>(read_recording(arg).records);
   }
   if (kind == "remote" && colon == std::string_view::npos) return std::make_unique<RemoteDevice>();
+  if (kind == "usb-haptic") {
+    UsbHapticDevice::Options options;
+    if (colon != std::string_view::npos) options.id = usb::parse_usb_id(arg, "usb-haptic:VID:PID");
+    return std::make_unique<UsbHapticDevice>(std::move(options));
+  }
+  if (kind == "spacemouse") return make_spacemouse_device(arg);
   throw UsageError("unknown device '" + std::string(spec) +
-                   "' (sim, sim:FILE, replay:FILE, remote)");
+                   "' (sim, sim:FILE, replay:FILE, remote, usb-haptic[:VID:PID], "
+                   "spacemouse[:position|:rate][:VID:PID])");
 }
 
 }  // namespace palp::rt

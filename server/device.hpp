@@ -10,11 +10,19 @@
 //                  and the same zeroed ticks, so the model reproduces the recorded forces bit for
 //                  bit (same scene, tool, parameters, profile and rate)
 //   remote         the pose comes from a CONTROLLER client over the network (RemoteDevice::submit)
+//   usb-haptic[:VID:PID]  a force-feedback device speaking the open haptic protocol over USB
+//                  (docs/usb-protocol.md; default 1209:0001), hot-plug safe
+//                  (usb/usb_haptic_device.hpp)
+//   spacemouse[:position|:rate][:VID:PID]  a 3Dconnexion SpaceMouse as a pose source (rate mode
+//                  by default); no force output, so clients show the force on screen
+//                  (usb/spacemouse_device.hpp)
 //
 // read() and write() run in the real-time thread: they never allocate, lock, log or throw. A
 // device that samples at its own rate answers NoData when it has nothing new (the loop keeps the
 // last pose); one that can disappear answers Timeout or Disconnected, and the loop zeroes the
-// force and reports the fault (haptic_loop.hpp).
+// force and reports the fault (haptic_loop.hpp). A hot-plug device that is not plugged in answers
+// Absent: the loop zeroes the force, keeps ticking and reports the device absent (one absent
+// period per unplug, not a fault per tick). state() says Present / Absent / Fault for clients.
 #pragma once
 
 #include <atomic>
@@ -39,8 +47,12 @@ enum class DeviceStatus : std::uint8_t {
   Disconnected,  // the device is gone
   Finished,      // a played-back source reached its end
   Error,         // anything else; last_error() says what
+  Absent,        // a hot-plug device that is not plugged in (not a fault): zero force
 };
 const char* to_string(DeviceStatus status);
+
+// DeviceState (snapshot.hpp): Present / Absent / Fault, as clients see it.
+const char* to_string(DeviceState state);
 
 struct DeviceSample {
   Pose pose{};
@@ -74,6 +86,14 @@ class Device {
   virtual DeviceStatus read(std::int64_t now_ns, DeviceSample& sample) noexcept = 0;
   virtual DeviceStatus write(const DeviceCommand& command) noexcept = 0;
   virtual DeviceStatus deactivate() = 0;
+
+  // Real time (an atomic load): the device's state for clients. Devices that cannot vanish are
+  // always Present.
+  virtual DeviceState state() const noexcept { return DeviceState::Present; }
+  // Whether the device renders the force it is written (false: a pose source only).
+  virtual bool renders_force() const noexcept { return true; }
+  // Not real time: the device's last event or error, for people ("" when nothing to say).
+  virtual std::string status_message() const { return {}; }
 
   const std::string& last_error() const { return error_; }
 
@@ -142,6 +162,7 @@ class ReplayDevice final : public Device {
 class RemoteDevice final : public Device {
  public:
   std::string_view kind() const noexcept override { return "remote"; }
+  bool renders_force() const noexcept override { return false; }
   DeviceStatus configure(const DeviceConfig& config) override;
   DeviceStatus activate() override;
   // NoData until the first pose and between poses; Timeout when the last pose is older than
@@ -168,8 +189,8 @@ class RemoteDevice final : public Device {
   std::int64_t timeout_ns_ = 250'000'000;
 };
 
-// "sim", "sim:FILE", "replay:FILE", "remote". UsageError for anything else, InputError for a
-// file that cannot be read.
+// "sim", "sim:FILE", "replay:FILE", "remote", "usb-haptic[:VID:PID]". UsageError for anything
+// else, InputError for a file that cannot be read.
 std::unique_ptr<Device> make_device(std::string_view spec);
 
 }  // namespace palp::rt

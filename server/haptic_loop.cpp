@@ -56,6 +56,7 @@ HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopC
   dt_s_ = static_cast<double>(period_ns_) * 1e-9;
   current_ = std::make_unique<Bundle>(Bundle{model, make_state(*model)});
   requested_ = std::move(model);
+  device_state_.store(static_cast<std::uint8_t>(device_.state()), std::memory_order_relaxed);
 }
 
 HapticLoop::~HapticLoop() {
@@ -180,7 +181,18 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     case DeviceStatus::Error:
       zero |= kFaultDeviceLost;
       break;
+    case DeviceStatus::Absent:
+      zero |= kZeroDeviceAbsent;
+      have_pose_ = false;  // after a replug, wait for a fresh pose
+      break;
   }
+  DeviceState device_state = device_.state();
+  if ((zero & kZeroDeviceAbsent) && device_state == DeviceState::Present)
+    device_state = DeviceState::Absent;
+  const bool absent = (zero & kZeroDeviceAbsent) != 0;
+  if (absent && !absent_) absent_events_.fetch_add(1, std::memory_order_relaxed);
+  absent_ = absent;
+  device_state_.store(static_cast<std::uint8_t>(device_state), std::memory_order_relaxed);
   if (!have_pose_) zero |= kZeroNoPose;
   if (paused_.load(std::memory_order_relaxed)) zero |= kZeroPaused;
 
@@ -235,17 +247,18 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       last_fault_.store(zero & kFaultMask, std::memory_order_relaxed);
     }
   }
-  publish(rec, published_state, points);
+  publish(rec, published_state, points, device_state);
   ticks_.fetch_add(1, std::memory_order_release);
   const std::int64_t spent = monotonic_ns() - begin;
   tick_ns_sum_.fetch_add(static_cast<std::uint64_t>(spent), std::memory_order_relaxed);
   store_max(tick_ns_max_, spent);
 }
 
-void HapticLoop::publish(const TickRecord& record, const State* state,
-                         std::uint32_t points) noexcept {
+void HapticLoop::publish(const TickRecord& record, const State* state, std::uint32_t points,
+                         DeviceState device_state) noexcept {
   if (Snapshot* s = net_ring_.claim()) {
     s->tick = record;
+    s->device_state = device_state;
     s->contact_points = points;
     s->contact_count = 0;
     if (state) {
@@ -265,6 +278,7 @@ void HapticLoop::publish(const TickRecord& record, const State* state,
   if (recording_on_) {
     if (Snapshot* r = record_ring_.claim()) {
       r->tick = record;
+      r->device_state = device_state;
       r->contact_points = points;
       r->contact_count = 0;
       record_ring_.commit();
@@ -312,6 +326,8 @@ LoopStats HapticLoop::stats() const {
   s.paused = paused();
   s.recording = recording_.load(std::memory_order_relaxed);
   s.finished = finished();
+  s.device_state = device_state();
+  s.absent_events = absent_events_.load(std::memory_order_relaxed);
   s.net_published = net_ring_.published();
   s.net_dropped = net_ring_.dropped();
   s.record_published = record_ring_.published();

@@ -15,8 +15,14 @@
 // The model state is reset (proxies forgotten), so contact restarts cleanly when the fault
 // clears; with a device profile the rate limit then ramps the force back in.
 //
-// Zeroed ticks that are not faults (paused, no pose yet) carry their own bits too, so a replay
-// reproduces them (DeviceSample::forced_fault).
+// Zeroed ticks that are not faults (paused, no pose yet, device absent) carry their own bits too,
+// so a replay reproduces them (DeviceSample::forced_fault).
+//
+// Hot-plug: a device answering Absent is not a fault. The force is zeroed that very tick, the
+// model state resets, the loop keeps ticking, and every snapshot carries the device's state
+// (Device::state(): Present / Absent / Fault). Each unplug counts once (LoopStats::absent_events);
+// after a replug the loop waits for the first pose again (kZeroNoPose), so the NoData timeout does
+// not fire on the stale pose from before.
 //
 // Parameters change without the loop allocating: the new Model and its State are built by the
 // caller and handed over through an atomic pointer; the loop swaps them in at the start of a
@@ -46,8 +52,9 @@ enum LoopFault : std::uint32_t {
   kFaultDeviceLost = 1u << 2,     // the device is disconnected or failed
   kFaultDeviceWrite = 1u << 3,    // writing the force failed
   kFaultMask = 0xffu,
-  kZeroPaused = 1u << 8,  // paused by a command: zero force, model not ticked
-  kZeroNoPose = 1u << 9,  // no pose from the device yet
+  kZeroPaused = 1u << 8,         // paused by a command: zero force, model not ticked
+  kZeroNoPose = 1u << 9,         // no pose from the device yet
+  kZeroDeviceAbsent = 1u << 10,  // the device is not plugged in (hot-plug; not a fault)
 };
 
 // CLOCK_MONOTONIC in nanoseconds (the time base of every snapshot and message).
@@ -85,6 +92,8 @@ struct LoopStats {
   bool paused = false;
   bool recording = false;
   bool finished = false;  // the device reported Finished and the loop stopped
+  DeviceState device_state = DeviceState::Present;  // as of the last tick
+  std::uint64_t absent_events = 0;                  // present -> absent transitions (unplugs)
   std::uint64_t net_published = 0, net_dropped = 0;
   std::uint64_t record_published = 0, record_dropped = 0;
 };
@@ -127,6 +136,10 @@ class HapticLoop {
   LoopStats stats() const;
   const LoopConfig& config() const { return config_; }
   std::int64_t period_ns() const { return period_ns_; }
+  const Device& device() const { return device_; }
+  DeviceState device_state() const {
+    return static_cast<DeviceState>(device_state_.load(std::memory_order_relaxed));
+  }
 
  private:
   struct Bundle {
@@ -135,7 +148,8 @@ class HapticLoop {
   };
   void run();
   void collect_retired();
-  void publish(const TickRecord& record, const State* state, std::uint32_t points) noexcept;
+  void publish(const TickRecord& record, const State* state, std::uint32_t points,
+               DeviceState device_state) noexcept;
 
   LoopConfig config_;
   Device& device_;
@@ -153,6 +167,7 @@ class HapticLoop {
   Vec3d prev_force_{};
   Vec3d prev_position_{};
   bool prev_valid_ = false;
+  bool absent_ = false;  // the last tick found the device absent
 
   // Shared counters (relaxed atomics: written by the loop, read by anyone).
   std::atomic<std::uint64_t> ticks_{0}, overruns_{0}, faults_{0};
@@ -160,6 +175,8 @@ class HapticLoop {
   std::array<std::atomic<std::uint64_t>, kJitterBuckets> jitter_{};
   std::atomic<std::int64_t> max_late_ns_{0}, tick_ns_max_{0};
   std::atomic<std::uint64_t> tick_ns_sum_{0};
+  std::atomic<std::uint64_t> absent_events_{0};
+  std::atomic<std::uint8_t> device_state_{static_cast<std::uint8_t>(DeviceState::Present)};
   std::atomic<bool> paused_{false}, recording_{false}, stop_{false}, finished_{false};
   std::atomic<int> record_request_{0};  // 1: start recording (reset state), 2: stop
   bool recording_on_ = false;           // loop side

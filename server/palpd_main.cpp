@@ -46,6 +46,10 @@ Devices:
   replay:FILE             a palpd recording, tick by tick, reproducing its forces exactly; scene,
                           tool, rate, profile and parameters default to the recording's
   remote                  the pose comes from the CONTROLLER client (DevicePose messages)
+  usb-haptic[:VID:PID]    a USB force-feedback device speaking the open haptic protocol
+                          (docs/usb-protocol.md; VID:PID in hex, default 1209:0001); hot-plug:
+                          it may come after palpd starts and go at any time (zero force while
+                          absent); a permission error names the udev rule to install
 
 Options:
 )";
@@ -286,31 +290,50 @@ void write_stats_json(const std::string& path, const rt::LoopStats& s, const net
                       double rate_hz, double elapsed_s) {
   const auto u = [](std::uint64_t v) { return std::to_string(v); };
   const std::uint64_t deadlines = s.ticks + s.overruns;
-  std::string out =
-      "{\"rate_hz\":" + json_number(rate_hz) + ",\"elapsed_s\":" + json_number(elapsed_s) +
-      ",\"ticks\":" + u(s.ticks) + ",\"overruns\":" + u(s.overruns) +
-      ",\"deadline_miss_fraction\":" +
-      json_number(deadlines ? static_cast<double>(s.overruns) / static_cast<double>(deadlines)
-                            : 0.0) +
-      ",\"faults\":" + u(s.faults) + ",\"realtime\":" + (s.realtime ? "true" : "false") +
-      ",\"lateness_us\":{\"p50_at_most\":" + json_number(lateness_bound_us(s, 0.5)) +
-      ",\"p99_at_most\":" + json_number(lateness_bound_us(s, 0.99)) +
-      ",\"p999_at_most\":" + json_number(lateness_bound_us(s, 0.999)) +
-      ",\"max\":" + json_number(static_cast<double>(s.max_late_ns) * 1e-3) +
-      ",\"bucket_upper_us\":[";
+  // Appended piece by piece: one long operator+ chain trips GCC 12's -Wrestrict false positive.
+  std::string out;
+  const auto field = [&out](const char* key, const std::string& value, const char* sep = ",") {
+    out.append(sep).append("\"").append(key).append("\":").append(value);
+  };
+  field("rate_hz", json_number(rate_hz), "{");
+  field("elapsed_s", json_number(elapsed_s));
+  field("ticks", u(s.ticks));
+  field("overruns", u(s.overruns));
+  field("deadline_miss_fraction",
+        json_number(deadlines ? static_cast<double>(s.overruns) / static_cast<double>(deadlines)
+                              : 0.0));
+  field("faults", u(s.faults));
+  field("device_absent_events", u(s.absent_events));
+  field("realtime", s.realtime ? "true" : "false");
+  field("lateness_us", "");
+  field("p50_at_most", json_number(lateness_bound_us(s, 0.5)), "{");
+  field("p99_at_most", json_number(lateness_bound_us(s, 0.99)));
+  field("p999_at_most", json_number(lateness_bound_us(s, 0.999)));
+  field("max", json_number(static_cast<double>(s.max_late_ns) * 1e-3));
+  field("bucket_upper_us", "[");
   for (std::size_t b = 0; b < rt::kJitterBucketUpperUs.size(); ++b)
-    out += (b ? "," : "") + json_number(rt::kJitterBucketUpperUs[b]);
-  out += "],\"counts\":[";
-  for (std::size_t b = 0; b < s.jitter.size(); ++b) out += (b ? "," : "") + u(s.jitter[b]);
-  out +=
-      "]},\"tick_us\":{\"mean\":" +
+    out.append(b ? "," : "").append(json_number(rt::kJitterBucketUpperUs[b]));
+  out.append("]");
+  field("counts", "[");
+  for (std::size_t b = 0; b < s.jitter.size(); ++b) out.append(b ? "," : "").append(u(s.jitter[b]));
+  out.append("]}");
+  field("tick_us", "");
+  field(
+      "mean",
       json_number(s.ticks ? static_cast<double>(s.tick_ns_sum) * 1e-3 / static_cast<double>(s.ticks)
-                          : 0.0) +
-      ",\"max\":" + json_number(static_cast<double>(s.tick_ns_max) * 1e-3) +
-      "},\"net_published\":" + u(s.net_published) + ",\"net_dropped\":" + u(s.net_dropped) +
-      ",\"clients_accepted\":" + u(c.accepted) + ",\"clients_rejected\":" + u(c.rejected) +
-      ",\"protocol_errors\":" + u(c.protocol_errors) + ",\"timeouts\":" + u(c.timeouts) +
-      ",\"frames_sent\":" + u(c.frames_sent) + ",\"frames_dropped\":" + u(c.frames_dropped) + "}\n";
+                          : 0.0),
+      "{");
+  field("max", json_number(static_cast<double>(s.tick_ns_max) * 1e-3));
+  out.append("}");
+  field("net_published", u(s.net_published));
+  field("net_dropped", u(s.net_dropped));
+  field("clients_accepted", u(c.accepted));
+  field("clients_rejected", u(c.rejected));
+  field("protocol_errors", u(c.protocol_errors));
+  field("timeouts", u(c.timeouts));
+  field("frames_sent", u(c.frames_sent));
+  field("frames_dropped", u(c.frames_dropped));
+  out.append("}\n");
   std::ofstream file(path);
   file << out;
   if (!file) throw Error("cannot write " + path);
@@ -338,7 +361,8 @@ int run(const cli::Arguments& argv_in) {
     throw UsageError("palpd takes no positional arguments, got '" + args.positional()[0] + "'");
   const auto device_spec = args.get("device");
   if (!device_spec)
-    throw UsageError("palpd needs --device DEVICE (sim, sim:FILE, replay:FILE, remote)");
+    throw UsageError(
+        "palpd needs --device DEVICE (sim, sim:FILE, replay:FILE, remote, usb-haptic[:VID:PID])");
   const bool quiet = args.has("quiet");
 
   // A replay brings its own scene, tool, rate, profile and parameters unless given.
@@ -462,7 +486,17 @@ int run(const cli::Arguments& argv_in) {
 
   const std::int64_t start_ns = rt::monotonic_ns();
   int exit_signal = 0;
+  // Hot-plug devices come and go: say so once per change (with the device's own words, e.g. the
+  // udev rule to install), not once per tick.
+  std::string device_report;
   while (!loop.finished()) {
+    const std::string report = std::string("device ") + rt::to_string(loop.device_state()) + ": " +
+                               device->status_message();
+    if (report != device_report && !device->status_message().empty()) {
+      device_report = report;
+      if (!quiet || loop.device_state() == rt::DeviceState::Fault)
+        std::fprintf(stderr, "palpd: %s\n", report.c_str());
+    }
     timespec wait{0, 100'000'000};
     const int sig = sigtimedwait(&signals, nullptr, &wait);
     if (sig == SIGINT || sig == SIGTERM) {

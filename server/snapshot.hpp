@@ -19,6 +19,13 @@
 
 namespace palp::rt {
 
+// What clients are told about the device (the values of palp.v1 DeviceState).
+enum class DeviceState : std::uint8_t {
+  Present = 1,  // streaming
+  Absent = 2,   // not plugged in, unplugged, or not yet found: zero force
+  Fault = 3,    // plugged in but failing (permission, handshake, device fault bits): zero force
+};
+
 // One contact point of a tick.
 struct ContactSnapshot {
   Vec3d x{};  // position
@@ -51,9 +58,10 @@ struct TickRecord {
 
 struct Snapshot {
   TickRecord tick;
-  std::uint32_t contact_points = 0;       // points of the tool this tick
-  std::uint32_t contact_count = 0;        // entries valid in `contacts` (<= its capacity)
-  std::vector<ContactSnapshot> contacts;  // capacity fixed at construction
+  DeviceState device_state = DeviceState::Present;  // alongside the record (not recorded)
+  std::uint32_t contact_points = 0;                 // points of the tool this tick
+  std::uint32_t contact_count = 0;                  // entries valid in `contacts` (<= its capacity)
+  std::vector<ContactSnapshot> contacts;            // capacity fixed at construction
 };
 
 class SnapshotRing {

@@ -172,6 +172,55 @@ TEST(HapticLoop, DeviceFaultsZeroTheForce) {
   EXPECT_EQ(loop.stats().faults, 3u);
 }
 
+// Hot-plug: Absent zeroes the force from that tick on without a fault, counts one event per
+// unplug, puts the state into each snapshot, and after the replug waits for a fresh pose.
+TEST(HapticLoop, AbsentDeviceIsZeroedNotFaulted) {
+  auto model = testing::ball_model();
+  ScriptedDevice d;
+  const Pose p = testing::press_pose(2.0);
+  d.script = {{DeviceStatus::Ok, p},     {DeviceStatus::Absent, p}, {DeviceStatus::Absent, p},
+              {DeviceStatus::NoData, p}, {DeviceStatus::Ok, p},     {DeviceStatus::Absent, p},
+              {DeviceStatus::Ok, p}};
+  d.writes.reserve(64);
+  d.write_after_read.reserve(64);
+  HapticLoop loop(model, d, quiet_config());
+  std::vector<DeviceState> states;
+  for (int n = 0; n < 7; ++n) {
+    loop.step(n * kPeriod, n * kPeriod);
+    states.push_back(loop.device_state());
+  }
+  std::vector<TickRecord> r;
+  std::vector<DeviceState> published;
+  while (const Snapshot* s = loop.net_ring().front()) {
+    r.push_back(s->tick);
+    published.push_back(s->device_state);
+    loop.net_ring().pop();
+  }
+  ASSERT_EQ(r.size(), 7u);
+  constexpr std::uint32_t kAbsent = kZeroDeviceAbsent | kZeroNoPose;  // and no pose while gone
+  const std::uint32_t expected[] = {0, kAbsent, kAbsent, kZeroNoPose, 0, kAbsent, 0};
+  for (int n = 0; n < 7; ++n) {
+    EXPECT_EQ(r[n].fault, expected[n]) << n;
+    const bool absent = expected[n] == kAbsent;
+    EXPECT_EQ(published[n], absent ? DeviceState::Absent : DeviceState::Present) << n;
+    EXPECT_EQ(states[n], published[n]) << n;
+    if (expected[n]) {
+      EXPECT_EQ(r[n].force, Vec3d{}) << n;
+    }
+  }
+  // The tick that found the device absent (the second read) wrote zero, and nothing else.
+  int writes_in_absent_tick = 0;
+  for (std::size_t i = 0; i < d.writes.size(); ++i)
+    if (d.write_after_read[i] == 2) {
+      ++writes_in_absent_tick;
+      EXPECT_EQ(d.writes[i].force, Vec3d{});
+    }
+  EXPECT_GE(writes_in_absent_tick, 1);
+  const LoopStats stats = loop.stats();
+  EXPECT_EQ(stats.faults, 0u);
+  EXPECT_EQ(stats.absent_events, 2u);
+}
+
 TEST(HapticLoop, SilentDeviceTimesOutAfterTheBound) {
   auto model = testing::ball_model();
   ScriptedDevice d;

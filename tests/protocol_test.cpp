@@ -72,6 +72,13 @@ TEST(Protocol, FrameCarriesTheSnapshot) {
   ASSERT_EQ(f.contacts_size(), 2);
   EXPECT_TRUE(f.contacts(1).in_contact());
   EXPECT_EQ(f.contacts(1).proxy().x(), 9.0);
+  EXPECT_EQ(f.device_state(), v1::DEVICE_PRESENT);
+  s.device_state = rt::DeviceState::Absent;
+  fill_frame(s, false, &f);
+  EXPECT_EQ(f.device_state(), v1::DEVICE_ABSENT);
+  s.device_state = rt::DeviceState::Fault;
+  fill_frame(s, false, &f);
+  EXPECT_EQ(f.device_state(), v1::DEVICE_FAULT);
 }
 
 TEST(Protocol, ChecksClientMessages) {

@@ -32,6 +32,18 @@ void to_proto(const Pose& pose, v1::Pose* out) {
   q->set_z(pose.orientation.z);
 }
 
+v1::DeviceState to_proto(rt::DeviceState state) {
+  switch (state) {
+    case rt::DeviceState::Present:
+      return v1::DEVICE_PRESENT;
+    case rt::DeviceState::Absent:
+      return v1::DEVICE_ABSENT;
+    case rt::DeviceState::Fault:
+      return v1::DEVICE_FAULT;
+  }
+  return v1::DEVICE_STATE_UNSPECIFIED;
+}
+
 Vec3d from_proto(const v1::Vec3& v) {
   return {v.x(), v.y(), v.z()};
 }
@@ -57,6 +69,7 @@ void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* ou
   out->set_safety_status(t.safety_status);
   out->set_fault(t.fault);
   out->set_contact_points(snapshot.contact_points);
+  out->set_device_state(to_proto(snapshot.device_state));
   if (!contacts) return;
   for (std::uint32_t i = 0; i < snapshot.contact_count; ++i) {
     const rt::ContactSnapshot& c = snapshot.contacts[i];

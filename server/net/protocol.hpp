@@ -21,10 +21,11 @@ std::string encode_frame(const google::protobuf::MessageLite& message);
 
 void to_proto(const Vec3d& v, v1::Vec3* out);
 void to_proto(const Pose& pose, v1::Pose* out);
+v1::DeviceState to_proto(rt::DeviceState state);
 Vec3d from_proto(const v1::Vec3& v);
 Pose from_proto(const v1::Pose& pose);
 
-// A HapticFrame for a snapshot, with its contacts when `contacts`.
+// A HapticFrame for a snapshot (device state included), with its contacts when `contacts`.
 void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* out);
 
 struct ClientCheck {

@@ -392,6 +392,7 @@ class Server::Impl {
     p->set_bone_k(fp.bone_k);
     si->set_device(scene_.device);
     si->set_device_profile(scene_.device_profile);
+    si->set_device_renders_force(loop_.device().renders_force());
     si->set_tick_rate_hz(loop_.config().rate_hz);
     return frame_of(m);
   }
@@ -528,6 +529,12 @@ class Server::Impl {
   }
 
   void drain() {
+    // A device that comes or goes is told at once (Stats), not at the next stats interval.
+    const rt::DeviceState device_state = loop_.device_state();
+    if (device_state != last_device_state_) {
+      last_device_state_ = device_state;
+      send_stats(rt::monotonic_ns());
+    }
     rt::SnapshotRing& ring = loop_.net_ring();
     std::vector<SessionPtr> touched;
     while (const rt::Snapshot* snap = ring.front()) {
@@ -627,6 +634,8 @@ class Server::Impl {
     st->set_record_lost(control_ ? control_->record_lost() : ls.record_dropped);
     st->set_paused(ls.paused);
     st->set_last_fault(ls.last_fault);
+    st->set_device_state(to_proto(ls.device_state));
+    st->set_device_message(loop_.device().status_message());
     for (const SessionPtr& s : sessions_) {
       if (!s->welcomed || s->closing || s->closed) continue;
       st->set_client_frames_sent(s->frames_sent);
@@ -648,6 +657,7 @@ class Server::Impl {
   std::uint16_t port_ = 0;
   std::uint64_t next_id_ = 0;
   std::int64_t last_stats_ns_ = 0;
+  rt::DeviceState last_device_state_ = rt::DeviceState::Present;
   std::uint64_t last_stats_ticks_ = 0;
   std::atomic<std::size_t> client_count_{0};
   std::atomic<std::uint64_t> accepted_{0}, rejected_{0}, protocol_errors_{0}, frames_sent_{0},
