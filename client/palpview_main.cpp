@@ -7,22 +7,26 @@
 //   StreamClient::latest() -> RenderScene::update_state          (receive)
 //   RenderScene::update_deformation (SkinDeformer, in place)       (deformation)
 //   RenderScene::render (VTK ray casting + geometry + HUD)         (render)
-//   controller: pose -> StreamClient::send_pose; tool / pause requests -> commands
+//   controller: pose -> pose pump thread (250 Hz) -> StreamClient::send_pose;
+//               tool / pause requests -> commands
 // At exit the frame-time split is printed and (--stats-json) written as JSON.
 // Exit codes: 0 done, 1 failure (no display, no scene within --timeout in screenshot mode,
 // refused by the server), 2 usage.
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "controller_input.hpp"
@@ -318,6 +322,40 @@ int run(const Options& o) {
     return std::chrono::duration<double>(Clock::now() - t).count();
   };
   std::optional<Clock::time_point> live_since;
+
+  // Controller poses leave at a steady kPosePumpHz from their own thread, whatever the render
+  // rate: palpd's remote device faults after 100 ms without a pose, and a software renderer
+  // (llvmpipe) draws only a few frames per second. The render thread hands over the pose the
+  // input produced; a --script is sampled here, at the pump's rate, not at the frame rate.
+  struct PosePump {
+    std::mutex mutex;
+    Pose pose{};
+    bool have_pose = false;
+    std::optional<Clock::time_point> live_since;
+    std::atomic<bool> stop{false};
+  } pump;
+  constexpr double kPosePumpHz = 250.0;
+  std::thread pump_thread;
+  if (o.controller) {
+    pump_thread = std::thread([&] {
+      const auto period = std::chrono::duration_cast<Clock::duration>(
+          std::chrono::duration<double>(1.0 / kPosePumpHz));
+      auto next = Clock::now();
+      while (!pump.stop.load()) {
+        next += period;
+        std::this_thread::sleep_until(next);
+        Pose pose;
+        {
+          const std::lock_guard<std::mutex> lock(pump.mutex);
+          if (!pump.have_pose) continue;
+          pose = !script.empty() && pump.live_since
+                     ? script_pose(script, seconds_since(*pump.live_since))
+                     : pump.pose;
+        }
+        client.send_pose(pose);
+      }
+    });
+  }
   PhaseTimes times;
   int live_frames = 0;
   std::int64_t frames = 0;
@@ -349,7 +387,12 @@ int run(const Options& o) {
       }
       if (!script.empty() && live_since)
         controller.reset(script_pose(script, seconds_since(*live_since)));
-      client.send_pose(controller.pose());
+      {
+        const std::lock_guard<std::mutex> lock(pump.mutex);
+        pump.pose = controller.pose();
+        pump.have_pose = true;
+        if (live_since) pump.live_since = live_since;
+      }
       if (auto tool = controller.take_tool_request()) client.set_tool(*tool);
       if (auto paused = controller.take_pause_request()) client.set_paused(*paused);
     }
@@ -410,6 +453,8 @@ int run(const Options& o) {
     }
     if (o.duration_s > 0 && seconds_since(start) >= o.duration_s) break;
   }
+  pump.stop.store(true);
+  if (pump_thread.joinable()) pump_thread.join();
   client.stop();
 
   // The frame-time split.
@@ -424,6 +469,9 @@ int run(const Options& o) {
     nlohmann::json j;
     j["frames"] = frames;
     j["live_frames"] = live_frames;
+    // Rendered frames per second while live (from the first live frame to the end).
+    const double live_s = live_since ? seconds_since(*live_since) : 0.0;
+    j["frames_per_s"] = live_s > 0 ? live_frames / live_s : 0.0;
     const auto size = window.framebuffer_size();
     j["width"] = size[0];
     j["height"] = size[1];
