@@ -37,7 +37,7 @@ elif [[ -n "${DISPLAY:-}" ]]; then
   echo "palpview: a window for ${seconds} s (mouse orbits, P switches preset, Esc quits)"
   "$bin/palp" probe "127.0.0.1:$port" --duration "$seconds" -q &
   probe=$!
-  "$viewer" --connect "127.0.0.1:$port" --duration "$seconds" --camera 60,20,0
+  "$viewer" --connect "127.0.0.1:$port" --duration "$seconds"
   wait "$probe"
 else
   echo "no display: palpview renders under xvfb-run into out/palpview/"
@@ -48,7 +48,7 @@ else
   for n in $(seq 1 "$shots"); do
     # One screenshot about every (seconds / shots) s of the sim path: approach, press, slide.
     xvfb-run -a -s "-screen 0 1280x800x24 -noreset" "$viewer" --connect "127.0.0.1:$port" \
-      --camera 60,20,0 --width 1280 --height 800 --screenshot "out/palpview/torso-$n.png" \
+      --width 1280 --height 800 --screenshot "out/palpview/torso-$n.png" \
       --frames 3 --stats-json "out/palpview/torso-$n.json" | tail -n 2
     sleep "$(awk -v s="$seconds" -v n="$shots" 'BEGIN { d = s / n - 1.5; print (d > 0 ? d : 0) }')"
   done
