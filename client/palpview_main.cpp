@@ -29,12 +29,12 @@
 #include <thread>
 #include <vector>
 
-#include "controller_input.hpp"
-#include "errors.hpp"
-#include "render_scene.hpp"
-#include "stream_client.hpp"
-#include "trajectory.hpp"
-#include "view_window.hpp"
+#include "base/errors.hpp"
+#include "render/render_scene.hpp"
+#include "scene/trajectory.hpp"
+#include "stream/stream_client.hpp"
+#include "window/controller_input.hpp"
+#include "window/view_window.hpp"
 
 namespace palp::view {
 namespace {

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "commands.hpp"
-#include "errors.hpp"
+#include "base/errors.hpp"
+#include "cli/commands.hpp"
 
 namespace palp {
 namespace {

@@ -19,16 +19,16 @@
 
 #include <toml++/toml.h>
 
-#include "cli.hpp"
-#include "device.hpp"
-#include "errors.hpp"
-#include "force_model.hpp"
-#include "haptic_loop.hpp"
-#include "model_setup.hpp"
+#include "base/errors.hpp"
+#include "cli/cli.hpp"
+#include "cli/model_setup.hpp"
+#include "devices/device.hpp"
+#include "loop/haptic_loop.hpp"
+#include "model/force_model.hpp"
+#include "model/safety.hpp"
 #include "net/server.hpp"
-#include "recording.hpp"
-#include "safety.hpp"
-#include "trajectory.hpp"
+#include "rt/recording.hpp"
+#include "scene/trajectory.hpp"
 
 namespace palp {
 namespace {
@@ -69,7 +69,7 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
   --hello-timeout S       close clients that send no Hello within S s (5)
   --write-timeout S       close clients whose socket accepts nothing for S s (5; 0 = never)
   --poll-us US            how often the network thread takes new frames from the loop (500)
-  --record FILE           record every tick (binary, see server/recording.hpp) and FILE's .csv
+  --record FILE           record every tick (binary, see server/rt/recording.hpp) and FILE's .csv
   --record-dir DIR        where StartRecording commands write (default: the current directory)
   --watchdog-ms MS        a tick starting MS later than its deadline zeroes the force (5; 0 off)
   --device-timeout-ms MS  a device silent for MS zeroes the force (100; 0 = off)

@@ -1,5 +1,5 @@
 // remote: the device pose comes from a CONTROLLER client over the network.
-#include "device.hpp"
+#include "devices/device.hpp"
 
 namespace palp::rt {
 

@@ -1,6 +1,6 @@
 // replay:FILE: a recording's poses, one record per tick, with the recorded zero-force ticks
 // reproduced through DeviceSample::forced_fault.
-#include "device.hpp"
+#include "devices/device.hpp"
 
 namespace palp::rt {
 

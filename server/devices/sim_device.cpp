@@ -3,9 +3,9 @@
 // path's period (its duration plus one row interval, so the loop does not repeat a row).
 #include <cmath>
 
-#include "device.hpp"
-#include "errors.hpp"
-#include "trajectory_gen.hpp"
+#include "base/errors.hpp"
+#include "devices/device.hpp"
+#include "scene/trajectory_gen.hpp"
 
 namespace palp::rt {
 

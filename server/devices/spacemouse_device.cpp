@@ -1,4 +1,4 @@
-// The 3Dconnexion SpaceMouse device (usb/spacemouse_device.hpp): HID report parsing and the
+// The 3Dconnexion SpaceMouse device (devices/spacemouse_device.hpp): HID report parsing and the
 // deflection-to-pose mapping (pure), and the device: one UsbLink per VID:PID it may be (the
 // known list, or the one given), reports parsed on the libusb event thread, the newest
 // deflection handed to the loop through a LatestBox, button presses through counters.
@@ -7,7 +7,7 @@
 //                                                                -> button rising edges -> counters
 //   loop thread:  read() -> any link Present? -> newest axes -> PoseMapper (home / lock presses,
 //                 integrate or offset, box, tilt) -> pose;  write() -> counted
-#include "spacemouse_device.hpp"
+#include "devices/spacemouse_device.hpp"
 
 #include <libusb.h>
 
@@ -15,7 +15,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "errors.hpp"
+#include "base/errors.hpp"
 
 namespace palp::rt {
 namespace spacemouse {

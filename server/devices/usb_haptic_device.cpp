@@ -1,12 +1,12 @@
-// The open-haptic USB device (usb/usb_haptic_device.hpp): handshake and frame handling on the
+// The open-haptic USB device (devices/usb_haptic_device.hpp): handshake and frame handling on the
 // libusb event thread, lock-free hand-off to and from the haptic loop.
-#include "usb_haptic_device.hpp"
+#include "devices/usb_haptic_device.hpp"
 
 #include <libusb.h>
 
 #include <cstring>
 
-#include "errors.hpp"
+#include "base/errors.hpp"
 
 namespace palp::rt {
 

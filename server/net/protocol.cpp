@@ -3,34 +3,11 @@
 
 #include <cmath>
 
-#include "net/framing.hpp"
+#include "wire/framing.hpp"
 
 namespace palp::net {
 
-std::string encode_frame(const google::protobuf::MessageLite& message) {
-  const std::size_t size = message.ByteSizeLong();
-  std::uint8_t prefix[kMaxVarintBytes];
-  const std::size_t n = encode_varint(size, prefix);
-  std::string out(n + size, '\0');
-  std::copy(prefix, prefix + n, out.begin());
-  message.SerializeWithCachedSizesToArray(reinterpret_cast<std::uint8_t*>(out.data() + n));
-  return out;
-}
-
-void to_proto(const Vec3d& v, v1::Vec3* out) {
-  out->set_x(v.x);
-  out->set_y(v.y);
-  out->set_z(v.z);
-}
-
-void to_proto(const Pose& pose, v1::Pose* out) {
-  to_proto(pose.position, out->mutable_position());
-  v1::Quat* q = out->mutable_orientation();
-  q->set_w(pose.orientation.w);
-  q->set_x(pose.orientation.x);
-  q->set_y(pose.orientation.y);
-  q->set_z(pose.orientation.z);
-}
+using wire::to_proto;
 
 v1::DeviceState to_proto(rt::DeviceState state) {
   switch (state) {
@@ -42,18 +19,6 @@ v1::DeviceState to_proto(rt::DeviceState state) {
       return v1::DEVICE_FAULT;
   }
   return v1::DEVICE_STATE_UNSPECIFIED;
-}
-
-Vec3d from_proto(const v1::Vec3& v) {
-  return {v.x(), v.y(), v.z()};
-}
-
-Pose from_proto(const v1::Pose& pose) {
-  Pose p;
-  p.position = from_proto(pose.position());
-  const v1::Quat& q = pose.orientation();
-  p.orientation = pose.has_orientation() ? Quat{q.w(), q.x(), q.y(), q.z()} : Quat{};
-  return p;
 }
 
 void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* out) {

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "asio.hpp"
-#include "errors.hpp"
-#include "net/framing.hpp"
+#include "base/errors.hpp"
 #include "net/protocol.hpp"
+#include "wire/framing.hpp"
 
 namespace palp::net {
 
@@ -23,7 +23,7 @@ using Bytes = std::shared_ptr<const std::string>;
 namespace {
 
 Bytes frame_of(const v1::ServerMessage& message) {
-  return std::make_shared<const std::string>(encode_frame(message));
+  return std::make_shared<const std::string>(wire::encode_frame(message));
 }
 
 Bytes error_frame(v1::Error::Code code, const std::string& reason, bool fatal) {
@@ -141,7 +141,7 @@ class Server::Impl {
     bool want_contacts = false;
     std::int64_t frame_interval_ns = 0;
     std::int64_t next_frame_ns = 0;
-    FrameDecoder decoder;
+    wire::FrameDecoder decoder;
     std::array<std::uint8_t, 8192> rbuf{};
     std::deque<Bytes> control;  // Welcome, SceneInfo, results, errors, stats, pongs
     std::deque<Bytes> frames;   // bounded, newest kept
@@ -205,14 +205,14 @@ class Server::Impl {
           s->decoder.feed(s->rbuf.data(), n);
           std::string_view body;
           for (;;) {
-            const FrameStatus status = s->decoder.next(body);
-            if (status == FrameStatus::Incomplete) break;
-            if (status == FrameStatus::TooLarge) {
+            const wire::FrameStatus status = s->decoder.next(body);
+            if (status == wire::FrameStatus::Incomplete) break;
+            if (status == wire::FrameStatus::TooLarge) {
               fatal(s, v1::Error::FRAME_TOO_LARGE,
                     "frame larger than " + std::to_string(config_.max_frame_bytes) + " bytes");
               return;
             }
-            if (status == FrameStatus::BadPrefix) {
+            if (status == wire::FrameStatus::BadPrefix) {
               fatal(s, v1::Error::MALFORMED, "bad length prefix");
               return;
             }
@@ -268,8 +268,8 @@ class Server::Impl {
           error(s, v1::Error::PERMISSION_DENIED, "observers cannot drive the device");
           return;
         }
-        if (!control_ ||
-            !control_->set_device_pose(from_proto(msg.device_pose().pose()), rt::monotonic_ns()))
+        if (!control_ || !control_->set_device_pose(wire::from_proto(msg.device_pose().pose()),
+                                                    rt::monotonic_ns()))
           error(s, v1::Error::BAD_REQUEST, "the device is not remote");
         return;
       case v1::ClientMessage::MSG_NOT_SET:
@@ -380,7 +380,7 @@ class Server::Impl {
     const std::shared_ptr<const Model> model = loop_.model();
     v1::ToolInfo* tool = si->mutable_tool();
     tool->set_name(model->tool().name);
-    for (const Vec3d& p : model->tool().points) to_proto(p, tool->add_points());
+    for (const Vec3d& p : model->tool().points) wire::to_proto(p, tool->add_points());
     const ForceParams& fp = model->params();
     v1::Parameters* p = si->mutable_parameters();
     p->set_c(fp.c);

@@ -23,9 +23,9 @@
 #include <memory>
 #include <string>
 
-#include "field_sampler.hpp"
-#include "haptic_loop.hpp"
-#include "volume.hpp"
+#include "base/volume.hpp"
+#include "loop/haptic_loop.hpp"
+#include "model/field_sampler.hpp"
 
 namespace palp::net {
 

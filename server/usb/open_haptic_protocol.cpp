@@ -1,6 +1,6 @@
 // Byte-level codecs of the open haptic protocol (see open_haptic_protocol.hpp and
 // docs/usb-protocol.md): little-endian fields at fixed offsets, CRC last.
-#include "open_haptic_protocol.hpp"
+#include "usb/open_haptic_protocol.hpp"
 
 #include <cmath>
 #include <cstring>

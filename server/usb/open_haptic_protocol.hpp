@@ -16,8 +16,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "force_model.hpp"
-#include "vec.hpp"
+#include "base/vec.hpp"
+#include "model/force_model.hpp"
 
 namespace palp::usb::ohp {
 

@@ -8,7 +8,7 @@
 //   Present --left / NO_DEVICE / stop--> cancel all transfers --all returned--> close -> Absent
 // The state is an atomic, set to Absent before anything else when the device goes, so a reader
 // in another thread sees the loss at once.
-#include "usb_context.hpp"
+#include "usb/usb_context.hpp"
 
 #include <libusb.h>
 #include <time.h>
@@ -18,7 +18,7 @@
 #include <cstring>
 #include <future>
 
-#include "errors.hpp"
+#include "base/errors.hpp"
 
 namespace palp::usb {
 namespace {

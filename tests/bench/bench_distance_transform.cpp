@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "distance_transform.hpp"
+#include "prep/distance_transform.hpp"
 
 namespace {
 

@@ -1,6 +1,6 @@
-// Google Benchmark of the skin deformation update (common/skin_deformation.cpp) at the size the
-// palpview issue sets: a 512x512x400 CT decimated to 256x256x200 at 1.6 x 1.6 x 2 mm, pressed by
-// a finger pad of 1, 7, 19 or 37 contacts (pad radius 7.5 mm for 37) to 3, 6 or 10 mm, sliding
+// Google Benchmark of the skin deformation update (common/deform/skin_deformation.cpp) at the size
+// the palpview issue sets: a 512x512x400 CT decimated to 256x256x200 at 1.6 x 1.6 x 2 mm, pressed
+// by a finger pad of 1, 7, 19 or 37 contacts (pad radius 7.5 mm for 37) to 3, 6 or 10 mm, sliding
 // 0.8 mm between frames so every update also restores what the previous one wrote. Measures
 // only; never part of CTest.
 //
@@ -13,8 +13,8 @@
 #include <cmath>
 #include <vector>
 
-#include "skin_deformation.hpp"
-#include "tool.hpp"
+#include "deform/skin_deformation.hpp"
+#include "model/tool.hpp"
 
 namespace {
 

@@ -22,12 +22,12 @@
 #include <string>
 #include <string_view>
 
-#include "errors.hpp"
-#include "field_sampler.hpp"
-#include "scene.hpp"
-#include "tool.hpp"
-#include "trajectory.hpp"
-#include "vec.hpp"
+#include "base/errors.hpp"
+#include "base/vec.hpp"
+#include "model/field_sampler.hpp"
+#include "model/tool.hpp"
+#include "scene/scene.hpp"
+#include "scene/trajectory.hpp"
 
 namespace {
 

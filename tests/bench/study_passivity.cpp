@@ -3,8 +3,8 @@
 // stiffness limiter of the device profile.
 //
 // One degree of freedom along the skin normal (the finger presses straight in; a flat skin, so
-// the friction proxy stays put). Per device profile (common/safety.hpp) the device is a mass with
-// viscous damping, its position is read through an encoder of finite resolution, and its force
+// the friction proxy stays put). Per device profile (common/model/safety.hpp) the device is a mass
+// with viscous damping, its position is read through an encoder of finite resolution, and its force
 // saturates at the profile's max force. The hand is a second mass coupled to the device by the
 // grip (spring and damper), damped by the arm and pushing with a set force (ramped in over
 // 0.5 s, then held). The model (finger:1, printed bone law, palp::tick) runs at the update rate
@@ -40,11 +40,11 @@
 #include <string>
 #include <vector>
 
-#include "field_sampler.hpp"
-#include "force_model.hpp"
-#include "safety.hpp"
-#include "study_util.hpp"
-#include "tool.hpp"
+#include "bench/study_util.hpp"
+#include "model/field_sampler.hpp"
+#include "model/force_model.hpp"
+#include "model/safety.hpp"
+#include "model/tool.hpp"
 
 namespace palp::study {
 namespace {

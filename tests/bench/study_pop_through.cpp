@@ -33,10 +33,10 @@
 #include <string>
 #include <vector>
 
-#include "field_sampler.hpp"
-#include "force_model.hpp"
-#include "study_util.hpp"
-#include "tool.hpp"
+#include "bench/study_util.hpp"
+#include "model/field_sampler.hpp"
+#include "model/force_model.hpp"
+#include "model/tool.hpp"
 
 namespace palp::study {
 namespace {

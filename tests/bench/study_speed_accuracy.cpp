@@ -27,12 +27,12 @@
 #include <string>
 #include <vector>
 
-#include "distance_transform.hpp"
-#include "field_sampler.hpp"
-#include "force_model.hpp"
-#include "phantom.hpp"
-#include "study_util.hpp"
-#include "tool.hpp"
+#include "bench/study_util.hpp"
+#include "io/phantom.hpp"
+#include "model/field_sampler.hpp"
+#include "model/force_model.hpp"
+#include "model/tool.hpp"
+#include "prep/distance_transform.hpp"
 
 namespace palp::study {
 namespace {

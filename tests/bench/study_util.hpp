@@ -16,9 +16,9 @@
 #include <variant>
 #include <vector>
 
-#include "distance_transform.hpp"
-#include "vec.hpp"
-#include "volume.hpp"
+#include "base/vec.hpp"
+#include "base/volume.hpp"
+#include "prep/distance_transform.hpp"
 
 namespace palp::study {
 

@@ -24,12 +24,12 @@
 #include <string_view>
 #include <vector>
 
-#include "errors.hpp"
-#include "force_model.hpp"
-#include "scene.hpp"
-#include "tool.hpp"
-#include "trajectory.hpp"
-#include "trajectory_gen.hpp"
+#include "base/errors.hpp"
+#include "model/force_model.hpp"
+#include "model/tool.hpp"
+#include "scene/scene.hpp"
+#include "scene/trajectory.hpp"
+#include "scene/trajectory_gen.hpp"
 
 namespace {
 

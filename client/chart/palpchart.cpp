@@ -1,0 +1,304 @@
+// palpchart — renders a line or scatter chart of CSV columns to a PNG file, off screen.
+//
+//   palpchart --csv FILE --x COL --y COL[,COL...] --out FILE.png [options]
+//
+// Needs an X display (VTK renders through X even off screen); without one it says so and
+// suggests `xvfb-run -a palpchart ...`. Exit status: 0 written, 1 failure, 2 usage.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "chart/chart.hpp"
+
+namespace {
+
+using palp::UsageError;
+namespace chart = palp::chart;
+
+constexpr const char* kUsage =
+    R"(usage: palpchart --csv FILE --x COL --y COL[,COL...] --out FILE.png [options]
+
+Draws the columns of a CSV file (header row) as a line or scatter chart and writes a PNG.
+  --group COL[,COL...]  one series per distinct value (or combination) of these columns
+  --where COL=V[|V...]  keep only rows whose COL equals one of the values (repeatable)
+  --names A[,B...]      series names for the --y columns (default: the column names)
+  --style S             line | points | linepoints (default linepoints)
+  --mark COL            also draw the rows whose COL is non-zero as one highlighted series
+  --pareto              highlight the Pareto front of (x, y), both minimised (one --y column)
+  --mark-label TEXT     name of the highlighted series (default "Pareto front" or COL)
+  --title TEXT          chart title
+  --xlabel TEXT         x axis title (default: the x column)
+  --ylabel TEXT         y axis title (default: the y column)
+  --logx, --logy        logarithmic axes (rows with values <= 0 there are dropped)
+  --xrange LO,HI        x axis range; either end may be empty to follow the data
+  --yrange LO,HI        y axis range, likewise
+  --size WxH            image size in pixels (default 900x600)
+  --legend POS          tr | tl | br | bl | none (default tr)
+Without an X display run it as: xvfb-run -a palpchart ...
+)";
+
+std::vector<std::string> split(std::string_view s, char sep) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t p = s.find(sep, start);
+    out.emplace_back(s.substr(start, p == std::string_view::npos ? s.npos : p - start));
+    if (p == std::string_view::npos) break;
+    start = p + 1;
+  }
+  return out;
+}
+
+double number(const std::string& text, std::string_view option) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v))
+    throw UsageError(std::string(option) + " needs numbers, got '" + text + "'");
+  return v;
+}
+
+struct Options {
+  std::string csv, out, x;
+  std::vector<std::string> y, group, names;
+  std::vector<std::pair<std::string, std::vector<std::string>>> where;
+  chart::Style style = chart::Style::LinePoints;
+  std::string mark, mark_label;
+  bool pareto = false;
+  chart::ChartSpec spec;
+  bool xlabel_set = false, ylabel_set = false;
+};
+
+Options parse_args(int argc, char** argv) {
+  Options o;
+  auto value = [&](int& i) -> std::string {
+    if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + " needs a value");
+    return argv[++i];
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a = argv[i];
+    if (a == "--csv") {
+      o.csv = value(i);
+    } else if (a == "--out") {
+      o.out = value(i);
+    } else if (a == "--x") {
+      o.x = value(i);
+    } else if (a == "--y") {
+      o.y = split(value(i), ',');
+    } else if (a == "--group") {
+      o.group = split(value(i), ',');
+    } else if (a == "--names") {
+      o.names = split(value(i), ',');
+    } else if (a == "--where") {
+      const std::string w = value(i);
+      const std::size_t eq = w.find('=');
+      if (eq == std::string::npos || eq == 0) throw UsageError("--where needs COL=VALUE");
+      o.where.emplace_back(w.substr(0, eq), split(w.substr(eq + 1), '|'));
+    } else if (a == "--style") {
+      const std::string s = value(i);
+      if (s == "line")
+        o.style = chart::Style::Line;
+      else if (s == "points")
+        o.style = chart::Style::Points;
+      else if (s == "linepoints")
+        o.style = chart::Style::LinePoints;
+      else
+        throw UsageError("--style must be line, points or linepoints");
+    } else if (a == "--mark") {
+      o.mark = value(i);
+    } else if (a == "--mark-label") {
+      o.mark_label = value(i);
+    } else if (a == "--pareto") {
+      o.pareto = true;
+    } else if (a == "--title") {
+      o.spec.title = value(i);
+    } else if (a == "--xlabel") {
+      o.spec.x_title = value(i);
+      o.xlabel_set = true;
+    } else if (a == "--ylabel") {
+      o.spec.y_title = value(i);
+      o.ylabel_set = true;
+    } else if (a == "--xrange" || a == "--yrange") {
+      const std::vector<std::string> ends = split(value(i), ',');
+      if (ends.size() != 2) throw UsageError(std::string(a) + " needs LO,HI");
+      std::optional<double> lo, hi;
+      if (!ends[0].empty()) lo = number(ends[0], a);
+      if (!ends[1].empty()) hi = number(ends[1], a);
+      (a == "--xrange" ? o.spec.x_min : o.spec.y_min) = lo;
+      (a == "--xrange" ? o.spec.x_max : o.spec.y_max) = hi;
+    } else if (a == "--logx") {
+      o.spec.log_x = true;
+    } else if (a == "--logy") {
+      o.spec.log_y = true;
+    } else if (a == "--size") {
+      const std::string s = value(i);
+      int w = 0, h = 0;
+      char extra = 0;
+      if (std::sscanf(s.c_str(), "%dx%d%c", &w, &h, &extra) != 2)
+        throw UsageError("--size must be WxH, e.g. 900x600");
+      o.spec.width = w;
+      o.spec.height = h;
+    } else if (a == "--legend") {
+      const std::string s = value(i);
+      if (s == "none")
+        o.spec.legend = false;
+      else if (s == "tr")
+        o.spec.legend_corner = chart::LegendCorner::TopRight;
+      else if (s == "tl")
+        o.spec.legend_corner = chart::LegendCorner::TopLeft;
+      else if (s == "br")
+        o.spec.legend_corner = chart::LegendCorner::BottomRight;
+      else if (s == "bl")
+        o.spec.legend_corner = chart::LegendCorner::BottomLeft;
+      else
+        throw UsageError("--legend must be tr, tl, br, bl or none");
+    } else if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      std::exit(0);
+    } else {
+      throw UsageError("unknown argument '" + std::string(a) + "'");
+    }
+  }
+  if (o.csv.empty() || o.out.empty() || o.x.empty() || o.y.empty())
+    throw UsageError("--csv, --out, --x and --y are required");
+  if (!o.names.empty() && o.names.size() != o.y.size())
+    throw UsageError("--names needs one name per --y column");
+  if (o.pareto && o.y.size() != 1) throw UsageError("--pareto needs exactly one --y column");
+  if (o.pareto && !o.mark.empty()) throw UsageError("use either --pareto or --mark");
+  if (!o.xlabel_set) o.spec.x_title = o.x;
+  if (!o.ylabel_set) o.spec.y_title = o.y.size() == 1 ? o.y[0] : "";
+  return o;
+}
+
+void sort_by_x(chart::Series& s) {
+  std::vector<std::size_t> idx(s.x.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  std::stable_sort(idx.begin(), idx.end(),
+                   [&](std::size_t a, std::size_t b) { return s.x[a] < s.x[b]; });
+  std::vector<double> x, y;
+  for (std::size_t i : idx) {
+    x.push_back(s.x[i]);
+    y.push_back(s.y[i]);
+  }
+  s.x = std::move(x);
+  s.y = std::move(y);
+}
+
+chart::ChartSpec build(const Options& o, const chart::Table& table) {
+  // Rows kept by --where.
+  std::vector<std::size_t> where_cols;
+  for (const auto& w : o.where) where_cols.push_back(table.column(w.first));
+  std::vector<std::size_t> rows;
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    bool keep = true;
+    for (std::size_t k = 0; k < o.where.size(); ++k) {
+      const std::vector<std::string>& allowed = o.where[k].second;
+      keep = keep && std::find(allowed.begin(), allowed.end(), table.rows[r][where_cols[k]]) !=
+                         allowed.end();
+    }
+    if (keep) rows.push_back(r);
+  }
+  if (rows.empty()) throw UsageError("no row of '" + o.csv + "' passes the --where filters");
+
+  std::vector<std::size_t> group_cols;
+  for (const std::string& g : o.group) group_cols.push_back(table.column(g));
+  const std::vector<double> xs = table.numbers(o.x);
+
+  chart::ChartSpec spec = o.spec;
+  const bool sorted = o.style != chart::Style::Points;
+  for (std::size_t yi = 0; yi < o.y.size(); ++yi) {
+    const std::vector<double> ys = table.numbers(o.y[yi]);
+    const std::string yname = o.names.empty() ? o.y[yi] : o.names[yi];
+    // Series per group key, in order of first appearance.
+    std::vector<std::string> keys;
+    std::map<std::string, chart::Series> by_key;
+    for (std::size_t r : rows) {
+      std::string key;
+      for (std::size_t c : group_cols) key += (key.empty() ? "" : " / ") + table.rows[r][c];
+      auto [it, fresh] = by_key.try_emplace(key);
+      if (fresh) {
+        keys.push_back(key);
+        it->second.style = o.style;
+        if (key.empty())
+          it->second.name = yname;
+        else
+          it->second.name = o.y.size() > 1 ? yname + ": " + key : key;
+      }
+      it->second.x.push_back(xs[r]);
+      it->second.y.push_back(ys[r]);
+    }
+    for (const std::string& k : keys) {
+      chart::Series s = std::move(by_key[k]);
+      if (sorted) sort_by_x(s);
+      spec.series.push_back(std::move(s));
+    }
+  }
+
+  // The highlighted series: rows marked by a column, or the computed Pareto front.
+  if (!o.mark.empty() || o.pareto) {
+    chart::Series m;
+    m.highlight = true;
+    m.style = chart::Style::LinePoints;
+    m.line_width = 1.5f;
+    if (o.pareto) {
+      m.name = o.mark_label.empty() ? "Pareto front" : o.mark_label;
+      const std::vector<double> ys = table.numbers(o.y[0]);
+      std::vector<double> fx, fy;
+      for (std::size_t r : rows) {
+        const bool ok = (!spec.log_x || xs[r] > 0.0) && (!spec.log_y || ys[r] > 0.0);
+        fx.push_back(ok ? xs[r] : std::nan(""));
+        fy.push_back(ok ? ys[r] : std::nan(""));
+      }
+      for (std::size_t i : chart::pareto_front(fx, fy)) {
+        m.x.push_back(fx[i]);
+        m.y.push_back(fy[i]);
+      }
+    } else {
+      m.name = o.mark_label.empty() ? o.mark : o.mark_label;
+      if (o.y.size() > 1) m.style = chart::Style::Points;  // marks on several curves
+      const std::vector<double> flags = table.numbers(o.mark);
+      for (std::size_t yi = 0; yi < o.y.size(); ++yi) {
+        const std::vector<double> ys = table.numbers(o.y[yi]);
+        for (std::size_t r : rows)
+          if (std::isfinite(flags[r]) && flags[r] != 0.0) {
+            m.x.push_back(xs[r]);
+            m.y.push_back(ys[r]);
+          }
+      }
+      sort_by_x(m);
+    }
+    if (!m.x.empty()) spec.series.push_back(std::move(m));
+  }
+  return spec;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const Options o = parse_args(argc, argv);
+    if (!chart::display_available()) {
+      std::cerr << chart::no_display_message("palpchart") << "\n";
+      return 1;
+    }
+    const chart::Table table = chart::read_csv(o.csv);
+    chart::render_png(build(o, table), o.out);
+    return 0;
+  } catch (const UsageError& e) {
+    std::cerr << "palpchart: " << e.what() << "\n" << kUsage;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "palpchart: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,122 @@
+// palpview's VTK scene: the volume palpd sent (GPU ray casting through one composed render
+// scalar, transfer_presets.hpp), the tool (fingertip, two fingertips or probe), its contact points
+// coloured by contact, the proxies and their springs, the device force as an arrow, the
+// fingertip's spherical shadow on the skin, the skin deformation (SkinDeformer), and a head-up
+// display (text, banner, force chart). It draws into any vtkRenderWindow: the GLFW-hosted
+// vtkGenericOpenGLRenderWindow of palpview, or an off-screen window in the tests.
+//
+// Data flow per frame (main loop, palpview_main.cpp):
+//   StreamClient::latest() -> update_state(): on a new volume, compose the render scalar into the
+//     buffer the mapper renders and make a SkinDeformer over it; tool pose, contacts, proxies,
+//     springs, arrow, shadow, HUD text and chart from the frame        ("receive" time)
+//   -> update_deformation(): SkinDeformer::update writes the ROI of the same buffer in place,
+//     the scalar array (which points at that buffer, no copy) is marked Modified, so the mapper
+//     re-uploads the volume texture at the next render                ("deformation" time)
+//   -> render(): the window's Render()                                   ("render" time)
+// The HUD strings come from the pure functions hud_text / banner_text / force_text so they are
+// testable without a display.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "base/vec.hpp"
+#include "deform/skin_deformation.hpp"
+#include "render/transfer_presets.hpp"
+#include "stream/stream_client.hpp"
+
+class vtkRenderWindow;
+
+namespace palp::view {
+
+struct CameraAxes;
+
+// What the HUD shows besides the stream's own state.
+struct HudInputs {
+  double view_fps = 0;  // frames/s rendered by palpview
+  PresetId preset = PresetId::Skin;
+  Window window;
+  bool controller = false;
+  bool deformation = true;
+};
+
+// The banner (empty when all is well): connection problems, a stalled stream, an absent or
+// faulty device, a paused loop. One line per problem.
+std::string banner_text(const LatestState& state);
+// The HUD's text block: link, rates, latency, delivered fraction, tick rate, tool, contacts.
+std::string hud_text(const LatestState& state, const HudInputs& inputs);
+// The force line next to the chart, with "force not rendered by the device" when the device does
+// not render force (SceneDescription::device_renders_force false).
+std::string force_text(const LatestState& state);
+
+struct SceneSettings {
+  PresetId preset = PresetId::Skin;
+  bool deformation = true;
+  // Camera about the volume's centre: azimuth about +z and elevation from the anterior view
+  // (looking along +y, up +z); distance in mm, 0 = fit the volume.
+  double camera_azimuth_deg = 0, camera_elevation_deg = 0, camera_distance_mm = 0;
+  double arrow_mm_per_newton = 4.0;
+  double chart_seconds = 5.0;  // force plot span
+  bool overlays = true;        // HUD text, banner and chart
+  bool tool_glyphs = true;     // tool, contacts, proxies, springs, arrow, shadow
+  DeformerParams deformer;
+};
+
+// An RGB image read back from a window (row 0 at the bottom, as OpenGL reads it).
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;  // width * height * 3
+};
+
+class RenderScene {
+ public:
+  // Adds its renderers to `window` (kept by reference count).
+  RenderScene(vtkRenderWindow* window, SceneSettings settings);
+  ~RenderScene();
+  RenderScene(const RenderScene&) = delete;
+  RenderScene& operator=(const RenderScene&) = delete;
+
+  // Applies the newest stream state (see the data flow above). `inputs.preset`/`window` are
+  // ignored (the scene's own are shown).
+  void update_state(const LatestState& state, const HudInputs& inputs);
+  // Runs the skin deformation for the contacts of the last state (no-op when disabled or no
+  // volume). Returns what SkinDeformer reported.
+  DeformResult update_deformation();
+  void render();
+
+  bool has_volume() const;
+  // Camera control (observer mouse).
+  void orbit(double azimuth_deg, double elevation_deg);
+  void zoom(double factor);
+  void reset_camera();
+  CameraAxes camera_axes() const;
+
+  void set_preset(PresetId id);  // resets the window to the preset's default
+  PresetId preset() const;
+  void adjust_window(double dlevel, double width_factor);
+  Window window() const;
+
+  void set_tool_glyphs_visible(bool visible);
+  void set_overlays_visible(bool visible);
+
+  // Display coordinates (pixels, origin bottom left) of a scene point.
+  std::array<double, 2> to_display(const Vec3d& point) const;
+  const std::string& last_hud_text() const;
+  const std::string& last_banner_text() const;
+  // The render scalars currently in the mapper's buffer (deformed when pressing).
+  const std::vector<float>& render_scalars() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Reads the window's last rendered frame back (RGB).
+RgbImage capture_rgb(vtkRenderWindow* window);
+// Writes the window's last rendered frame as a PNG (ResourceError when it cannot be written).
+void write_png(vtkRenderWindow* window, const std::string& path);
+
+}  // namespace palp::view

@@ -1,0 +1,338 @@
+// 3D ChainMail with elastic relaxation (see chainmail.hpp for the constraints and data flow).
+//
+// Propagation. For one component c the links say d_n - d_e in [m_a, M_a] for n = e + a
+// (m_a = link_min(c, a), M_a = link_max(c, a); m_a < 0 < M_a). Given held values v_f at the
+// anchors, every solution satisfies lower(n) <= d_n <= upper(n) with
+//   upper(n) = min_f v_f + S(f -> n),   lower(n) = max_f v_f - S(n -> f),
+// S the weighted L1 chain slack (M_a per link up along a, -m_a per link down). Gibson's
+// propagation moves each element the least distance that satisfies its sponsor, so its fixpoint
+// is the solution nearest rest, clamp(0, lower, upper) (min and max of functions that satisfy
+// the links satisfy them too, so it is a solution, and every solution lies in [lower, upper]).
+// min(0, upper) is the min-plus transform of "v at anchors, 0 elsewhere" by S, and max(0, lower)
+// likewise; S is separable, so each is two 1D sweeps per axis (forward and backward), exact.
+// The boundary, held at 0, needs no sweep: hold_anchors() makes the anchors compatible with it,
+// and then its bounds never decide clamp(0, lower, upper).
+#include "deform/chainmail.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "base/errors.hpp"
+
+namespace palp {
+
+namespace {
+
+using Index3 = std::array<std::int64_t, 3>;
+
+double component(const Vec3d& v, int c) {
+  return c == 0 ? v.x : (c == 1 ? v.y : v.z);
+}
+void set_component(Vec3d& v, int c, double value) {
+  (c == 0 ? v.x : (c == 1 ? v.y : v.z)) = value;
+}
+
+}  // namespace
+
+ChainMail::ChainMail(ChainMailParams params) : params_(params) {
+  if (!(params_.min_stretch > 0.0 && params_.min_stretch <= 1.0) ||
+      !(params_.max_stretch >= 1.0 && std::isfinite(params_.max_stretch)) ||
+      !(params_.max_shear > 0.0 && std::isfinite(params_.max_shear)) ||
+      params_.relax_iterations < 0 || !(params_.relax_rate >= 0.0 && params_.relax_rate <= 1.0))
+    throw UsageError(
+        "chainmail: parameters out of range (need 0 < min_stretch <= 1 <= "
+        "max_stretch, max_shear > 0, relax_iterations >= 0, 0 <= relax_rate <= 1)");
+  if (params_.min_stretch == 1.0 && params_.max_stretch == 1.0)
+    throw UsageError("chainmail: min_stretch = max_stretch = 1 leaves no slack to deform");
+}
+
+void ChainMail::resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h) {
+  for (int a = 0; a < 3; ++a) {
+    if (dims[a] <= 0) throw UsageError("chainmail: box dimensions must be positive");
+    if (!(h[a] > 0.0 && std::isfinite(h[a])))
+      throw UsageError("chainmail: spacing must be positive and finite");
+  }
+  const bool same_layout = dims == dims_;
+  dims_ = dims;
+  h_ = h;
+  for (int c = 0; c < 3; ++c)
+    for (int a = 0; a < 3; ++a) {
+      link_min_[c][a] = c == a ? (params_.min_stretch - 1.0) * h[a] : -params_.max_shear * h[a];
+      link_max_[c][a] = c == a ? (params_.max_stretch - 1.0) * h[a] : params_.max_shear * h[a];
+    }
+  const auto count = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
+  if (same_layout && disp_[0].size() == count) {
+    reset();
+    return;
+  }
+  for (auto& d : disp_) d.assign(count, 0.0);
+  upper_.resize(count);
+  lower_.resize(count);
+  anchored_.assign(count, 0);
+  active_lo_ = active_hi_ = {};
+}
+
+void ChainMail::reset() {
+  zero_box(active_lo_, active_hi_);
+  active_lo_ = active_hi_ = {};
+}
+
+void ChainMail::zero_box(Index3 lo, Index3 hi) {
+  if (lo[0] >= hi[0] || lo[1] >= hi[1] || lo[2] >= hi[2]) return;
+  for (auto& d : disp_)
+    for (std::int64_t k = lo[2]; k < hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+        double* row = d.data() + index(0, j, k);
+        std::fill(row + lo[0], row + hi[0], 0.0);
+      }
+}
+
+Vec3d ChainMail::displacement(std::int64_t i, std::int64_t j, std::int64_t k) const {
+  const auto n = index(i, j, k);
+  return {disp_[0][n], disp_[1][n], disp_[2][n]};
+}
+
+double ChainMail::chain_slack(int c, const Index3& from, const Index3& to) const {
+  double slack = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const auto delta = to[a] - from[a];
+    slack += delta > 0 ? delta * link_max_[c][a] : -delta * -link_min_[c][a];
+  }
+  return slack;
+}
+
+std::int64_t ChainMail::solve(std::span<const ChainMailAnchor> anchors) {
+  reset();
+  hold_anchors(anchors);
+  if (held_.empty()) return 0;
+  const std::int64_t moved = propagate();
+  relax();
+  for (const auto& anchor : held_)
+    anchored_[index(anchor.element[0], anchor.element[1], anchor.element[2])] = 0;
+  return moved;
+}
+
+void ChainMail::hold_anchors(std::span<const ChainMailAnchor> anchors) {
+  held_.clear();
+  held_weight_.clear();
+  for (const auto& anchor : anchors) {
+    bool interior = is_finite(anchor.displacement);
+    for (int a = 0; a < 3; ++a)
+      interior = interior && anchor.element[a] >= 1 && anchor.element[a] <= dims_[a] - 2;
+    if (!interior) continue;
+    std::size_t slot = 0;
+    while (slot < held_.size() && held_[slot].element != anchor.element) ++slot;
+    if (slot == held_.size()) {
+      held_.push_back({anchor.element, {}});
+      held_weight_.push_back(0);
+    }
+    held_[slot].displacement += anchor.displacement;
+    ++held_weight_[slot];
+  }
+  for (std::size_t g = 0; g < held_.size(); ++g) {
+    ChainMailAnchor& anchor = held_[g];
+    if (held_weight_[g] > 1) anchor.displacement *= 1.0 / static_cast<double>(held_weight_[g]);
+    const Index3& e = anchor.element;
+    for (int c = 0; c < 3; ++c) {
+      // The boundary (at 0) allows v <= S(boundary -> e) and v >= -S(e -> boundary).
+      double hi = std::numeric_limits<double>::infinity();
+      double lo = -hi;
+      for (int a = 0; a < 3; ++a) {
+        const auto to_low = static_cast<double>(e[a]);
+        const auto to_high = static_cast<double>(dims_[a] - 1 - e[a]);
+        hi = std::min({hi, to_low * link_max_[c][a], to_high * -link_min_[c][a]});
+        lo = std::max({lo, -to_low * -link_min_[c][a], -to_high * link_max_[c][a]});
+      }
+      for (std::size_t f = 0; f < g; ++f) {
+        const double vf = component(held_[f].displacement, c);
+        hi = std::min(hi, vf + chain_slack(c, held_[f].element, e));
+        lo = std::max(lo, vf - chain_slack(c, e, held_[f].element));
+      }
+      set_component(anchor.displacement, c,
+                    std::min(std::max(component(anchor.displacement, c), lo), hi));
+    }
+    anchored_[index(e[0], e[1], e[2])] = 1;
+  }
+}
+
+std::int64_t ChainMail::propagate() {
+  // The influence box: beyond ceil(max |v_c| / slack) links along an axis no bound reaches 0.
+  Index3 lo{}, hi{};
+  std::array<double, 3> largest{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = dims_[a];
+    hi[a] = 0;
+  }
+  for (const auto& anchor : held_)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], anchor.element[a]);
+      hi[a] = std::max(hi[a], anchor.element[a] + 1);
+      largest[a] = std::max(largest[a], std::abs(component(anchor.displacement, a)));
+    }
+  for (int a = 0; a < 3; ++a) {
+    std::int64_t reach = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double slack = std::min(link_max_[c][a], -link_min_[c][a]);
+      reach = std::max(reach, static_cast<std::int64_t>(std::ceil(largest[c] / slack)));
+    }
+    lo[a] = std::max<std::int64_t>(1, lo[a] - reach);
+    hi[a] = std::min<std::int64_t>(dims_[a] - 1, hi[a] + reach);
+  }
+  const std::int64_t nx = hi[0] - lo[0];
+  const std::int64_t stride_j = dims_[0], stride_k = dims_[0] * dims_[1];
+
+  for (int c = 0; c < 3; ++c) {
+    double* upper = upper_.data();
+    double* lower = lower_.data();
+    for (std::int64_t k = lo[2]; k < hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+        const auto row = index(lo[0], j, k);
+        std::fill(upper + row, upper + row + nx, 0.0);
+        std::fill(lower + row, lower + row + nx, 0.0);
+      }
+    for (const auto& anchor : held_) {
+      const auto n = index(anchor.element[0], anchor.element[1], anchor.element[2]);
+      upper[n] = lower[n] = component(anchor.displacement, c);
+    }
+    // Axis 0: along each row, a dependency chain.
+    const double up0 = link_max_[c][0], down0 = -link_min_[c][0];
+    for (std::int64_t k = lo[2]; k < hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+        double* u = upper + index(0, j, k);
+        double* l = lower + index(0, j, k);
+        for (std::int64_t i = lo[0] + 1; i < hi[0]; ++i) {
+          u[i] = std::min(u[i], u[i - 1] + up0);
+          l[i] = std::max(l[i], l[i - 1] - down0);
+        }
+        for (std::int64_t i = hi[0] - 2; i >= lo[0]; --i) {
+          u[i] = std::min(u[i], u[i + 1] + down0);
+          l[i] = std::max(l[i], l[i + 1] - up0);
+        }
+      }
+    // Axes 1 and 2: whole rows at a time (independent along i, so they vectorise).
+    for (int a = 1; a < 3; ++a) {
+      const double up = link_max_[c][a], down = -link_min_[c][a];
+      const std::int64_t stride = a == 1 ? stride_j : stride_k;
+      const std::int64_t outer_lo = a == 1 ? lo[2] : lo[1], outer_hi = a == 1 ? hi[2] : hi[1];
+      for (std::int64_t outer = outer_lo; outer < outer_hi; ++outer) {
+        const auto base = a == 1 ? index(lo[0], 0, outer) : index(lo[0], outer, 0);
+        for (std::int64_t s = lo[a] + 1; s < hi[a]; ++s) {
+          double* u = upper + base + s * stride;
+          double* l = lower + base + s * stride;
+          const double* up_prev = u - stride;
+          const double* low_prev = l - stride;
+          for (std::int64_t i = 0; i < nx; ++i) {
+            u[i] = std::min(u[i], up_prev[i] + up);
+            l[i] = std::max(l[i], low_prev[i] - down);
+          }
+        }
+        for (std::int64_t s = hi[a] - 2; s >= lo[a]; --s) {
+          double* u = upper + base + s * stride;
+          double* l = lower + base + s * stride;
+          const double* up_next = u + stride;
+          const double* low_next = l + stride;
+          for (std::int64_t i = 0; i < nx; ++i) {
+            u[i] = std::min(u[i], up_next[i] + down);
+            l[i] = std::max(l[i], low_next[i] - up);
+          }
+        }
+      }
+    }
+    // The solution nearest rest: lower where it is above 0, upper where it is below (never both
+    // once the anchors are compatible).
+    double* d = disp_[c].data();
+    for (std::int64_t k = lo[2]; k < hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+        const auto row = index(0, j, k);
+        for (std::int64_t i = lo[0]; i < hi[0]; ++i)
+          d[row + i] = lower[row + i] > 0.0 ? lower[row + i] : upper[row + i];
+      }
+    for (const auto& anchor : held_)
+      d[index(anchor.element[0], anchor.element[1], anchor.element[2])] =
+          component(anchor.displacement, c);
+  }
+
+  // Count what moved and the tight box around it.
+  std::int64_t moved = 0;
+  Index3 moved_lo = hi, moved_hi = lo;
+  for (std::int64_t k = lo[2]; k < hi[2]; ++k)
+    for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+      const auto row = index(0, j, k);
+      for (std::int64_t i = lo[0]; i < hi[0]; ++i)
+        if (disp_[0][row + i] != 0.0 || disp_[1][row + i] != 0.0 || disp_[2][row + i] != 0.0) {
+          ++moved;
+          moved_lo = {std::min(moved_lo[0], i), std::min(moved_lo[1], j), std::min(moved_lo[2], k)};
+          moved_hi = {std::max(moved_hi[0], i + 1), std::max(moved_hi[1], j + 1),
+                      std::max(moved_hi[2], k + 1)};
+        }
+    }
+  if (moved == 0) return 0;
+  active_lo_ = moved_lo;
+  active_hi_ = moved_hi;
+  return moved;
+}
+
+void ChainMail::relax() {
+  if (params_.relax_iterations == 0 || params_.relax_rate == 0.0) return;
+  if (active_lo_[0] >= active_hi_[0]) return;
+  // Relax the moved box grown by one element (clipped to the interior); nothing outside moves.
+  Index3 lo{}, hi{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max<std::int64_t>(1, active_lo_[a] - 1);
+    hi[a] = std::min<std::int64_t>(dims_[a] - 1, active_hi_[a] + 1);
+  }
+  const std::int64_t sj = dims_[0], sk = dims_[0] * dims_[1];
+  const double rate = params_.relax_rate;
+  constexpr double kSixth = 1.0 / 6.0;
+  for (int c = 0; c < 3; ++c) {
+    double* d = disp_[c].data();
+    const double m0 = link_min_[c][0], m1 = link_min_[c][1], m2 = link_min_[c][2];
+    const double x0 = link_max_[c][0], x1 = link_max_[c][1], x2 = link_max_[c][2];
+    auto relax_one = [&](std::int64_t n) {
+      const double xm = d[n - 1], xp = d[n + 1], ym = d[n - sj], yp = d[n + sj];
+      const double zm = d[n - sk], zp = d[n + sk];
+      const double mean = (xm + xp + ym + yp + zm + zp) * kSixth;
+      const double wanted = d[n] + rate * (mean - d[n]);
+      const double low = std::max(std::max(std::max(xm + m0, xp - x0), std::max(ym + m1, yp - x1)),
+                                  std::max(zm + m2, zp - x2));
+      const double high = std::min(std::min(std::min(xm + x0, xp - m0), std::min(ym + x1, yp - m1)),
+                                   std::min(zm + x2, zp - m2));
+      d[n] = std::min(std::max(wanted, low), high);
+    };
+    // Red-black order: the elements of one colour have neighbours of the other colour only,
+    // so they update independently (no dependency chain along a row) and each still clamps
+    // against its neighbours' current values. The colour that goes first alternates.
+    for (int sweep = 0; sweep < params_.relax_iterations; ++sweep)
+      for (int pass = 0; pass < 2; ++pass) {
+        const std::int64_t colour = (sweep + pass) % 2;
+        for (std::int64_t k = lo[2]; k < hi[2]; ++k)
+          for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+            const std::int64_t first = lo[0] + ((lo[0] + j + k + colour) & 1);
+            const auto row = index(0, j, k);
+            for (std::int64_t i = first; i < hi[0]; i += 2)
+              if (!anchored_[row + i]) relax_one(row + i);
+          }
+      }
+  }
+  active_lo_ = lo;
+  active_hi_ = hi;
+}
+
+double ChainMail::max_violation() const {
+  double worst = 0.0;
+  const std::int64_t strides[3] = {1, dims_[0], dims_[0] * dims_[1]};
+  for (int a = 0; a < 3; ++a)
+    for (std::int64_t k = 0; k < dims_[2] - (a == 2); ++k)
+      for (std::int64_t j = 0; j < dims_[1] - (a == 1); ++j)
+        for (std::int64_t i = 0; i < dims_[0] - (a == 0); ++i) {
+          const auto e = index(i, j, k);
+          for (int c = 0; c < 3; ++c) {
+            const double diff = disp_[c][e + strides[a]] - disp_[c][e];
+            worst = std::max({worst, link_min_[c][a] - diff, diff - link_max_[c][a]});
+          }
+        }
+  return worst;
+}
+
+}  // namespace palp

@@ -1,0 +1,232 @@
+// Skin deformation for rendering (see skin_deformation.hpp for the data flow): contacts to
+// ChainMail anchors, the ROI around them, the solve, and the resampling of the render volume
+// through the displacement, written only where the displacement may be nonzero.
+#include "deform/skin_deformation.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "base/errors.hpp"
+
+namespace palp {
+
+namespace {
+
+using Index3 = std::array<std::int64_t, 3>;
+
+bool empty_box(const Index3& lo, const Index3& hi) {
+  return lo[0] >= hi[0] || lo[1] >= hi[1] || lo[2] >= hi[2];
+}
+
+}  // namespace
+
+SkinDeformer::SkinDeformer(std::array<std::int64_t, 3> dims, std::array<double, 3> spacing,
+                           std::vector<float> original, DeformerParams params)
+    : dims_(dims),
+      spacing_(spacing),
+      original_(std::move(original)),
+      params_(params),
+      mail_(params.chainmail) {
+  for (int a = 0; a < 3; ++a) {
+    if (dims[a] <= 0) throw UsageError("skin deformation: volume dimensions must be positive");
+    if (!(spacing[a] > 0.0 && std::isfinite(spacing[a])))
+      throw UsageError("skin deformation: spacing must be positive and finite");
+  }
+  if (static_cast<std::int64_t>(original_.size()) != dims[0] * dims[1] * dims[2])
+    throw UsageError("skin deformation: the original volume has " +
+                     std::to_string(original_.size()) + " values, not dims[0]*dims[1]*dims[2]");
+  if (!(params_.roi_margin_mm >= 0.0 && std::isfinite(params_.roi_margin_mm)))
+    throw UsageError("skin deformation: roi_margin_mm must be finite and non-negative");
+}
+
+Vec3d SkinDeformer::displacement_at(std::int64_t i, std::int64_t j, std::int64_t k) const {
+  if (!roi_active_) return {};
+  if (i < roi_lo_[0] || j < roi_lo_[1] || k < roi_lo_[2] || i >= roi_hi_[0] || j >= roi_hi_[1] ||
+      k >= roi_hi_[2])
+    return {};
+  return mail_.displacement(i - roi_lo_[0], j - roi_lo_[1], k - roi_lo_[2]);
+}
+
+DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::span<float> out) {
+  const auto start = std::chrono::steady_clock::now();
+  if (out.size() != original_.size())
+    throw UsageError("skin deformation: the output volume has " + std::to_string(out.size()) +
+                     " values, the original " + std::to_string(original_.size()));
+  DeformResult result;
+
+  // Anchors, in volume voxels for now: the element nearest each proxy moves by x - p.
+  anchors_.clear();
+  Index3 box_lo{}, box_hi{};
+  std::array<double, 3> largest{};
+  for (int a = 0; a < 3; ++a) {
+    box_lo[a] = std::numeric_limits<std::int64_t>::max();
+    box_hi[a] = std::numeric_limits<std::int64_t>::min();
+  }
+  for (const auto& contact : contacts) {
+    if (!is_finite(contact.x) || !is_finite(contact.p)) continue;
+    const std::array<double, 3> p{contact.p.x, contact.p.y, contact.p.z};
+    Index3 element{};
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      const double index = std::round(p[a] / spacing_[a]);
+      inside = inside && index >= 0.0 && index < static_cast<double>(dims_[a]);
+      element[a] = inside ? static_cast<std::int64_t>(index) : 0;
+    }
+    if (!inside) continue;
+    const Vec3d displacement = contact.x - contact.p;
+    anchors_.push_back({element, displacement});
+    result.mean_anchor_displacement += displacement;
+    const std::array<double, 3> d{displacement.x, displacement.y, displacement.z};
+    for (int a = 0; a < 3; ++a) {
+      box_lo[a] = std::min(box_lo[a], element[a]);
+      box_hi[a] = std::max(box_hi[a], element[a] + 1);
+      largest[a] = std::max(largest[a], std::abs(d[a]));
+    }
+  }
+
+  Index3 new_lo{}, new_hi{};  // the voxels deformed this update
+  if (anchors_.empty()) {
+    roi_active_ = false;
+    mail_.reset();
+  } else {
+    result.anchors = static_cast<std::int64_t>(anchors_.size());
+    result.mean_anchor_displacement *= 1.0 / static_cast<double>(anchors_.size());
+    // The ROI: the margin, and at least the links the largest displacement needs to fade to
+    // 0 (one more for the relaxation's reach, one more so the boundary lies beyond).
+    const ChainMailParams& cm = params_.chainmail;
+    const int relax_reach = cm.relax_iterations > 0 && cm.relax_rate > 0.0 ? 1 : 0;
+    for (int a = 0; a < 3; ++a) {
+      std::int64_t reach = 0;
+      for (int c = 0; c < 3; ++c) {
+        const double slack =
+            (c == a ? std::min(cm.max_stretch - 1.0, 1.0 - cm.min_stretch) : cm.max_shear) *
+            spacing_[a];
+        reach = std::max(reach, static_cast<std::int64_t>(std::ceil(largest[c] / slack)));
+      }
+      const auto margin =
+          std::max(static_cast<std::int64_t>(std::ceil(params_.roi_margin_mm / spacing_[a])),
+                   reach + relax_reach + 1);
+      roi_lo_[a] = std::max<std::int64_t>(0, box_lo[a] - margin);
+      roi_hi_[a] = std::min<std::int64_t>(dims_[a], box_hi[a] + margin);
+    }
+    for (auto& anchor : anchors_)
+      for (int a = 0; a < 3; ++a) anchor.element[a] -= roi_lo_[a];
+    mail_.resize({roi_hi_[0] - roi_lo_[0], roi_hi_[1] - roi_lo_[1], roi_hi_[2] - roi_lo_[2]},
+                 spacing_);
+    mail_.solve(anchors_);
+    roi_active_ = true;
+    result.active = true;
+    result.roi_lo = roi_lo_;
+    result.roi_hi = roi_hi_;
+    result.elements =
+        (roi_hi_[0] - roi_lo_[0]) * (roi_hi_[1] - roi_lo_[1]) * (roi_hi_[2] - roi_lo_[2]);
+    if (!empty_box(mail_.active_lo(), mail_.active_hi()))
+      for (int a = 0; a < 3; ++a) {
+        new_lo[a] = mail_.active_lo()[a] + roi_lo_[a];
+        new_hi[a] = mail_.active_hi()[a] + roi_lo_[a];
+      }
+  }
+
+  // Restore what the last update wrote and this one does not, then write the new box.
+  restore(out, new_lo, new_hi);
+  const bool had_old = !empty_box(written_lo_, written_hi_);
+  const bool has_new = !empty_box(new_lo, new_hi);
+  for (int a = 0; a < 3; ++a) {
+    if (had_old && has_new) {
+      result.lo[a] = std::min(written_lo_[a], new_lo[a]);
+      result.hi[a] = std::max(written_hi_[a], new_hi[a]);
+    } else if (had_old) {
+      result.lo[a] = written_lo_[a];
+      result.hi[a] = written_hi_[a];
+    } else if (has_new) {
+      result.lo[a] = new_lo[a];
+      result.hi[a] = new_hi[a];
+    }
+  }
+  written_lo_ = new_lo;
+  written_hi_ = new_hi;
+  if (has_new) resample(out);
+
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+void SkinDeformer::restore(std::span<float> out, const Index3& keep_lo,
+                           const Index3& keep_hi) const {
+  if (empty_box(written_lo_, written_hi_)) return;
+  const bool keep = !empty_box(keep_lo, keep_hi);
+  for (std::int64_t k = written_lo_[2]; k < written_hi_[2]; ++k)
+    for (std::int64_t j = written_lo_[1]; j < written_hi_[1]; ++j) {
+      const auto row = dims_[0] * (j + dims_[1] * k);
+      const float* from = original_.data() + row;
+      float* to = out.data() + row;
+      const bool row_kept =
+          keep && j >= keep_lo[1] && j < keep_hi[1] && k >= keep_lo[2] && k < keep_hi[2];
+      if (!row_kept) {
+        std::copy(from + written_lo_[0], from + written_hi_[0], to + written_lo_[0]);
+        continue;
+      }
+      // The part of the row the new box covers is rewritten by resample().
+      const auto left_end = std::min(written_hi_[0], keep_lo[0]);
+      if (written_lo_[0] < left_end)
+        std::copy(from + written_lo_[0], from + left_end, to + written_lo_[0]);
+      const auto right_begin = std::max(written_lo_[0], keep_hi[0]);
+      if (right_begin < written_hi_[0])
+        std::copy(from + right_begin, from + written_hi_[0], to + right_begin);
+    }
+}
+
+float SkinDeformer::sample(double i, double j, double k) const {
+  const std::array<double, 3> q{i, j, k};
+  std::array<std::int64_t, 3> base{};
+  std::array<double, 3> frac{};
+  for (int a = 0; a < 3; ++a) {
+    const double upper = static_cast<double>(dims_[a] - 1);
+    const double clamped = std::min(std::max(q[a], 0.0), upper);
+    auto b = static_cast<std::int64_t>(clamped);  // floor: clamped >= 0
+    if (b >= dims_[a] - 1) b = std::max<std::int64_t>(0, dims_[a] - 2);
+    base[a] = b;
+    frac[a] = dims_[a] > 1 ? clamped - static_cast<double>(b) : 0.0;
+  }
+  const std::int64_t step_i = dims_[0] > 1 ? 1 : 0;
+  const std::int64_t step_j = dims_[1] > 1 ? dims_[0] : 0;
+  const std::int64_t step_k = dims_[2] > 1 ? dims_[0] * dims_[1] : 0;
+  const float* v = original_.data() + base[0] + dims_[0] * (base[1] + dims_[1] * base[2]);
+  const double c00 = v[0] + frac[0] * (v[step_i] - v[0]);
+  const double c10 = v[step_j] + frac[0] * (v[step_j + step_i] - v[step_j]);
+  const double c01 = v[step_k] + frac[0] * (v[step_k + step_i] - v[step_k]);
+  const double c11 =
+      v[step_k + step_j] + frac[0] * (v[step_k + step_j + step_i] - v[step_k + step_j]);
+  const double c0 = c00 + frac[1] * (c10 - c00);
+  const double c1 = c01 + frac[1] * (c11 - c01);
+  return static_cast<float>(c0 + frac[2] * (c1 - c0));
+}
+
+void SkinDeformer::resample(std::span<float> out) const {
+  const auto mail_dims = mail_.dims();
+  const double* dx = mail_.displacement_component(0).data();
+  const double* dy = mail_.displacement_component(1).data();
+  const double* dz = mail_.displacement_component(2).data();
+  const double inv_x = 1.0 / spacing_[0], inv_y = 1.0 / spacing_[1], inv_z = 1.0 / spacing_[2];
+  for (std::int64_t k = written_lo_[2]; k < written_hi_[2]; ++k)
+    for (std::int64_t j = written_lo_[1]; j < written_hi_[1]; ++j) {
+      const auto row = dims_[0] * (j + dims_[1] * k);
+      const auto local_row =
+          mail_dims[0] * ((j - roi_lo_[1]) + mail_dims[1] * (k - roi_lo_[2])) - roi_lo_[0];
+      for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
+        const auto n = local_row + i;
+        if (dx[n] == 0.0 && dy[n] == 0.0 && dz[n] == 0.0) {
+          out[row + i] = original_[row + i];
+          continue;
+        }
+        out[row + i] =
+            sample(static_cast<double>(i) - dx[n] * inv_x, static_cast<double>(j) - dy[n] * inv_y,
+                   static_cast<double>(k) - dz[n] * inv_z);
+      }
+    }
+}
+
+}  // namespace palp

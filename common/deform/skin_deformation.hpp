@@ -1,0 +1,92 @@
+// Skin deformation for rendering: the haptic loop's contacts drive a ChainMail (chainmail.hpp)
+// on the voxel elements of a small region of interest (ROI) around the tool, and the render
+// volume is resampled through the resulting displacement inside that ROI only. Pure: no
+// rendering, no threads; palpview owns one and calls update() once per rendered frame.
+//
+// Data flow per update():
+//   contacts in contact (x_i, p_i) -> anchors: the element nearest p_i moves by x_i - p_i
+//   (their mean is -u, paper eq. 13) -> ROI box around the anchors (+ margin, grown so the
+//   displacement can fade to 0 before the boundary) -> ChainMail propagate + elastic
+//   relaxation, ROI boundary held at rest -> displacement d per ROI element -> deformed(v) =
+//   original(v - d(v)) (trilinear, clamped to the volume) for the voxels where d may be nonzero
+//   -> written into the caller's output volume; voxels the last update wrote that this one does
+//   not are restored from the original.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "base/vec.hpp"
+#include "deform/chainmail.hpp"
+
+namespace palp {
+
+struct DeformerParams {
+  // The ROI: the anchors' bounding box grown by this much, and at least by what the largest
+  // anchor displacement needs to fade to 0 through the links (plus the relaxation's reach).
+  double roi_margin_mm = 20.0;
+  ChainMailParams chainmail;
+};
+
+// One contact of the haptic loop, scene frame, mm. Pass only the contacts in contact; one whose
+// proxy lies outside the volume, or with a non-finite coordinate, is skipped.
+struct DeformContact {
+  Vec3d x{};  // the contact point (inside the skin when pressing)
+  Vec3d p{};  // its proxy (on the surface, dragged by friction)
+};
+
+struct DeformResult {
+  bool active = false;  // some contact deformed the volume this update
+  // Voxel box [lo, hi) of `out` written this update: the voxels deformed now together with
+  // those of the last update restored to the original (empty, lo == hi, when nothing changed).
+  // A renderer uploads this box.
+  std::array<std::int64_t, 3> lo{}, hi{};
+  std::array<std::int64_t, 3> roi_lo{}, roi_hi{};  // the ChainMail box (volume voxels)
+  std::int64_t elements = 0;                       // ChainMail elements in the ROI
+  std::int64_t anchors = 0;                        // contacts used as anchors
+  Vec3d mean_anchor_displacement{};                // mean of x_i - p_i over them (= -u)
+  double seconds = 0;                              // time update() took
+};
+
+class SkinDeformer {
+ public:
+  // `original`: the undeformed render scalars, dims[0]*dims[1]*dims[2] values, i fastest;
+  // voxel (i, j, k) at (i, j, k) * spacing (mm). Kept by copy. UsageError for bad dims,
+  // spacing, a size mismatch or a negative margin.
+  SkinDeformer(std::array<std::int64_t, 3> dims, std::array<double, 3> spacing,
+               std::vector<float> original, DeformerParams params = {});
+
+  // Updates `out` (same size as the original; the caller initialises it with the original
+  // once) for these contacts: see the data flow at the top. No contacts: restores the last
+  // written box and returns active = false. UsageError when out has the wrong size.
+  // Allocates nothing once the ROI and the number of contacts have reached their largest size.
+  DeformResult update(std::span<const DeformContact> contacts, std::span<float> out);
+
+  // The displacement (mm) of the voxel (i, j, k) after the last update (0 outside the ROI).
+  Vec3d displacement_at(std::int64_t i, std::int64_t j, std::int64_t k) const;
+
+  const ChainMail& chainmail() const { return mail_; }
+  const std::vector<float>& original() const { return original_; }
+  std::array<std::int64_t, 3> dims() const { return dims_; }
+  std::array<double, 3> spacing() const { return spacing_; }
+
+ private:
+  void restore(std::span<float> out, const std::array<std::int64_t, 3>& keep_lo,
+               const std::array<std::int64_t, 3>& keep_hi) const;
+  void resample(std::span<float> out) const;
+  float sample(double i, double j, double k) const;
+
+  std::array<std::int64_t, 3> dims_;
+  std::array<double, 3> spacing_;
+  std::vector<float> original_;
+  DeformerParams params_;
+  ChainMail mail_;
+  std::vector<ChainMailAnchor> anchors_;  // scratch, reused
+  std::array<std::int64_t, 3> roi_lo_{}, roi_hi_{};
+  std::array<std::int64_t, 3> written_lo_{}, written_hi_{};  // deformed voxels of `out`
+  bool roi_active_ = false;
+};
+
+}  // namespace palp

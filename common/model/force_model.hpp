@@ -1,0 +1,167 @@
+// The multiproxy palpation force model (spec "Force model per contact point", paper eqs. 1-13).
+//
+// Split in the manner of MuJoCo's mjModel / mjData:
+//   Model  constant: the sampled distance maps, the parameters and the tool's contact points.
+//          Built once at setup; may be shared by any number of States and threads.
+//   State  everything that changes from tick to tick, preallocated by make_state(model): per
+//          contact point the position, surface point, previous surface point, proxy, contact
+//          flag and force, and the device outputs.
+//   tick   one haptic step: device pose in, forces out. No allocation, no exceptions, no NaN
+//          or infinity in any output.
+//
+// Choices where the spec leaves room (also in docs):
+//   - alpha(z) is evaluated as (1/z_max) / (1 + (z_stick/z)^8) for z > 0 and 0 for z <= 0: the
+//     same function, free of 0/0 when z_stick = 0 (no pressing force), where it equals 1/z_max.
+//   - |grad D_surf| < grad_epsilon at a point in contact: no skin direction. The point stays in
+//     contact (it is inside the body) but gets no surface force (v_s = 0), and its surface point
+//     is held where it was (or is x itself on entry), so the proxy neither jumps nor creeps.
+//   - |grad D_bone| < grad_epsilon, or |d_bone| < direction_epsilon: no bone force.
+//   - A pose with a non-finite (or |coordinate| >= 1e9 mm) component or a zero quaternion: no
+//     point is in contact, every output is zero (x = s = p = 0 too) and kTickBadPose is set.
+//     A non-unit quaternion is normalised.
+//   - A contact point whose force or proxy came out non-finite (not expected with finite maps)
+//     is dropped from contact for that tick and kTickNonFinite is set.
+//   - Points not in contact report s = p = x, zero force and zero depth.
+//
+// Bone modes (ForceParams::bone_mode):
+//   Printed (default; offline runs follow the spec)  eqs. 4-5 as printed: inside bone
+//          (D_bone > 0) the law gives no force, so a user pushing harder than the cap plus the
+//          skin law ends up inside a rib, and past a thin rib the force may vanish or flip.
+//   Robust  a bone proxy (god-object) per contact point. While a point is outside bone on the
+//          skin side (v_b . v_s > 0) its nearest bone surface point e = x + D_bone v_b and the
+//          outward normal n = v_b are remembered. When the point enters bone - found inside, or
+//          its straight path since the previous tick crosses bone (sampled every half voxel) -
+//          the proxy latches on e: the bone force becomes (bone_fmax + bone_k * pen) n with
+//          pen = (e - x) . n, continuous with the capped law at the surface and growing without
+//          bound, so no finite push tunnels through. The latch lets go when the point is back
+//          above the entry plane (pen <= 0), when it is outside bone with no bone between it and
+//          that plane along n (it slid off the bone sideways), or when contact is lost. A point
+//          that enters bone with no remembered surface (it entered contact inside bone, or
+//          approached from beneath) latches with n = v_s and e = x + D_bone v_s.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "base/vec.hpp"
+#include "model/field_sampler.hpp"
+#include "model/tool.hpp"
+
+namespace palp {
+
+enum class BoneMode { Printed, Robust };
+
+struct ForceParams {
+  double c = 2.0;                   // mm/N: friction stick length per newton of pressing force
+  double k = 0.4;                   // N/mm: proxy spring stiffness
+  double bone_fmax = 40.0;          // N: cap of the bone force law
+  double bone_flip = 4.0;           // eq. 4 factor in d_bone = v_b - flip * v_s (v_b . v_s)
+  bool bone_enabled = true;         // false skips the bone terms
+  double grad_epsilon = 1e-6;       // |grad D| below this (mm/mm): no direction
+  double direction_epsilon = 1e-9;  // |d_bone| below this: no bone force
+  BoneMode bone_mode = BoneMode::Printed;  // Robust: bone proxy, no tunnelling (see above)
+  double bone_k = 10.0;                    // N/mm: Robust mode's spring past the bone surface
+};
+
+// "printed" | "robust"; UsageError otherwise.
+BoneMode parse_bone_mode(std::string_view name);
+const char* to_string(BoneMode mode);
+
+// Parameter sets of the spec: fingertip c = 2.0, k = 0.4 (finger, twofinger); ultrasound probe
+// c = 0.4, k = 0.3.
+ForceParams default_params(ToolKind kind);
+
+// Overrides one parameter by name: c, k, bone_fmax, bone_flip, bone_enabled (0/1),
+// grad_epsilon, direction_epsilon, bone_mode (0 = printed, 1 = robust), bone_k.
+// UsageError for unknown names or unusable values.
+void set_param(ForceParams& params, std::string_view name, double value);
+
+// UsageError unless c, k, bone_fmax, bone_k >= 0, bone_flip, epsilons finite (epsilons > 0).
+void validate(const ForceParams& params);
+
+// f_s(x) = 1.78e-2 x^3 + 3.82e-3 x^2 + 2.28e-4 x for x > 0, else 0 (mm -> N).
+constexpr double surface_force(double depth_mm) {
+  return depth_mm > 0.0 ? ((1.78e-2 * depth_mm + 3.82e-3) * depth_mm + 2.28e-4) * depth_mm : 0.0;
+}
+
+// f_b(x) = 20 (x / 5)^-3 for x > 0, else 0, capped at fmax (N). x = -D_bone (mm outside bone).
+constexpr double bone_force(double distance_mm, double fmax) {
+  if (!(distance_mm > 0.0)) return 0.0;
+  const double f = 2500.0 / (distance_mm * distance_mm * distance_mm);  // 20 * 5^3 / x^3
+  return f < fmax ? f : fmax;  // x^3 underflowing to 0 gives +inf, capped here
+}
+
+class Model {
+ public:
+  // UsageError for unusable parameters or a tool without points.
+  Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params);
+  // Parameters default to the tool kind's set.
+  Model(std::shared_ptr<const FieldSampler> fields, Tool tool);
+
+  const FieldSampler& fields() const { return *fields_; }
+  const std::shared_ptr<const FieldSampler>& fields_ptr() const { return fields_; }
+  const Tool& tool() const { return tool_; }
+  const ForceParams& params() const { return params_; }
+  std::size_t contact_count() const { return tool_.points.size(); }
+
+ private:
+  std::shared_ptr<const FieldSampler> fields_;
+  Tool tool_;
+  ForceParams params_;
+};
+
+// Status bits of the last tick (State::status).
+enum TickStatus : std::uint32_t {
+  kTickOk = 0,
+  kTickBadPose = 1u << 0,          // non-finite pose or zero quaternion: nothing in contact
+  kTickOutsideGrid = 1u << 1,      // some contact point was outside the sampled grid
+  kTickNoSkinDirection = 1u << 2,  // some point in contact had |grad D_surf| < epsilon
+  kTickNonFinite = 1u << 3,        // a non-finite value was caught and zeroed (should not happen)
+  kTickBadState = 1u << 4,         // the State was not made for this Model: nothing computed
+  kTickInsideBone = 1u << 5,       // some point in contact was inside bone (D_bone > 0)
+  kTickBoneLatched = 1u << 6,      // Robust mode: some point was held by its bone proxy
+};
+
+// State::bone_latch values (Robust mode).
+enum BoneLatch : std::uint8_t {
+  kBoneFree = 0,     // no bone surface remembered
+  kBoneAnchor = 1,   // outside bone on the skin side: bone_anchor / bone_normal are current
+  kBoneLatched = 2,  // entered bone: held on bone_anchor, pushed out along bone_normal
+};
+
+struct State {
+  // Per contact point, index-aligned with Model::tool().points.
+  std::vector<Vec3d> x;           // position, scene frame (mm)
+  std::vector<Vec3d> s;           // surface point s = x + D_surf v_s
+  std::vector<Vec3d> s_prev;      // surface point of the previous tick
+  std::vector<Vec3d> p;           // friction proxy
+  std::vector<Vec3d> f;           // total force f_surf + f_friction + f_structures (N)
+  std::vector<Vec3d> f_friction;  // k (p - s), N
+  std::vector<Vec3d> f_bone;      // f_structures (N), zero when none
+  std::vector<double> depth;      // D_surf(x) when in contact, else 0 (mm)
+  std::vector<std::uint8_t> in_contact;
+  // Robust bone mode, per contact point (unused, kBoneFree, in Printed mode).
+  std::vector<Vec3d> bone_anchor;        // remembered / latched bone surface point e
+  std::vector<Vec3d> bone_normal;        // outward bone normal n at e
+  std::vector<std::uint8_t> bone_latch;  // BoneLatch
+
+  // Device outputs: means over the points in contact (zero when none).
+  Vec3d f_device{};    // N
+  Vec3d tau_device{};  // N·mm, about the device point
+  Vec3d u{};           // mean of p - x over points in contact (mm)
+  int n_contact = 0;
+  std::uint32_t status = kTickOk;
+  std::uint64_t ticks = 0;
+};
+
+// A State sized for the model, every point out of contact.
+State make_state(const Model& model);
+// Forgets all contacts and outputs (keeps the allocation).
+void reset(State& state);
+
+// One haptic tick at the given device pose. `state` must come from make_state(model).
+void tick(const Model& model, State& state, const Pose& device_pose);
+
+}  // namespace palp

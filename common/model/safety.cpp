@@ -1,0 +1,121 @@
+#include "model/safety.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "base/errors.hpp"
+
+namespace palp {
+namespace {
+
+// Datasheet-class values:
+//   falcon           Novint Falcon class: rated above 2 lbf (about 8.9 N); driver libraries
+//                    commonly limit it to 8 N and 3 N/mm. 3-DOF force.
+//   phantom-premium  PHANToM Premium 1.5 (6-DOF output) class: 8.5 N peak (1.4 N continuous),
+//                    3.5 N/mm stiffness, 515 N·mm peak torque about the gimbal's x and y axes.
+//   omega            Force Dimension omega.3/.6/.7 class: 12 N continuous, 14.5 N/mm
+//                    closed-loop stiffness. 3-DOF force (the wrist is passive).
+// No datasheet gives a force rate: palp allows the full force within 5 ms (5 ticks at 1 kHz)
+// and lets a stiffness-limited force settle at full force per second.
+constexpr std::array<DeviceProfile, 3> kProfiles{{
+    {"falcon", "Novint Falcon class, 3-DOF", 8.0, 3.0, 1600.0, 8.0, 3, 0.0},
+    {"phantom-premium", "PHANToM Premium 1.5 class, 6-DOF", 8.5, 3.5, 1700.0, 8.5, 6, 515.0},
+    {"omega", "Force Dimension omega.x class, 3-DOF", 12.0, 14.5, 2400.0, 12.0, 3, 0.0},
+}};
+
+}  // namespace
+
+std::span<const DeviceProfile> device_profiles() {
+  return kProfiles;
+}
+
+const DeviceProfile* find_device_profile(std::string_view name) {
+  for (const DeviceProfile& p : kProfiles)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+const DeviceProfile& device_profile(std::string_view name) {
+  if (const DeviceProfile* p = find_device_profile(name)) return *p;
+  std::string known;
+  for (const DeviceProfile& p : kProfiles)
+    known += (known.empty() ? "" : ", ") + std::string(p.name);
+  throw UsageError("device '" + std::string(name) + "' is not one of " + known);
+}
+
+Filtered finite_or_zero(const Vec3d& v) {
+  if (is_finite(v)) return {v, kSafetyOk};
+  return {Vec3d{}, kSafetyNonFinite};
+}
+
+Filtered clamp_magnitude(const Vec3d& v, double max, std::uint32_t flag) {
+  const double m = norm(v);
+  if (!(max > 0.0)) return {Vec3d{}, m > 0.0 ? flag : kSafetyOk};
+  if (m <= max) return {v, kSafetyOk};
+  return {v * (max / m), flag};
+}
+
+Filtered limit_step(const Vec3d& target, const Vec3d& prev, double max_step, std::uint32_t flag) {
+  const Vec3d delta = target - prev;
+  const double m = norm(delta);
+  if (m == 0.0) return {target, kSafetyOk};
+  if (!(max_step > 0.0)) return {prev, flag};
+  if (m <= max_step) return {target, kSafetyOk};
+  return {prev + delta * (max_step / m), flag};
+}
+
+Filtered clamp_force(const Vec3d& f, double max_force_N) {
+  return clamp_magnitude(f, max_force_N, kSafetyForceClamped);
+}
+
+Filtered limit_stiffness(const Vec3d& f, const Vec3d& f_prev, const Vec3d& x, const Vec3d& x_prev,
+                         double max_stiffness_N_per_mm, double slack_N) {
+  double travel = norm(x - x_prev);
+  if (!std::isfinite(travel)) travel = 0.0;
+  const double slack = std::isfinite(slack_N) ? std::max(slack_N, 0.0) : 0.0;
+  return limit_step(f, f_prev, max_stiffness_N_per_mm * travel + slack, kSafetyStiffnessLimited);
+}
+
+Filtered limit_rate(const Vec3d& f, const Vec3d& f_prev, double dt, double max_rate_N_per_s) {
+  const double t = std::isfinite(dt) ? std::clamp(dt, 0.0, kMaxFilterDt) : 0.0;
+  return limit_step(f, f_prev, max_rate_N_per_s * t, kSafetyRateLimited);
+}
+
+SafetyOutput apply_device_limits(const DeviceProfile& profile, const SafetyInput& in) {
+  SafetyOutput out;
+  // Non-finite input: let go at once.
+  if (!is_finite(in.force) || !is_finite(in.torque)) {
+    out.status = kSafetyNonFinite;
+    return out;
+  }
+  Filtered prev = finite_or_zero(in.prev_force);
+  out.status |= prev.status;
+  const double dt = std::isfinite(in.dt) ? std::clamp(in.dt, 0.0, kMaxFilterDt) : 0.0;
+
+  // Force: clamp the target, limit its change per millimetre and per second, clamp again.
+  Filtered f = clamp_force(in.force, profile.max_force_N);
+  out.status |= f.status;
+  f = limit_stiffness(f.value, prev.value, in.position, in.prev_position,
+                      profile.max_stiffness_N_per_mm, profile.settle_rate_N_per_s * dt);
+  out.status |= f.status;
+  f = limit_rate(f.value, prev.value, dt, profile.max_force_rate_N_per_s);
+  out.status |= f.status;
+  f = clamp_force(f.value, profile.max_force_N);
+  out.status |= f.status;
+  out.force = f.value;
+
+  // Torque: none on a 3-DOF device, clamped on a 6-DOF one.
+  if (profile.dof < 6) {
+    if (norm(in.torque) > 0.0) out.status |= kSafetyTorqueDropped;
+    out.torque = Vec3d{};
+  } else {
+    const Filtered t = clamp_magnitude(in.torque, profile.max_torque_Nmm, kSafetyTorqueClamped);
+    out.status |= t.status;
+    out.torque = t.value;
+  }
+  return out;
+}
+
+}  // namespace palp

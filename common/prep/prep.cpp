@@ -1,0 +1,272 @@
+// Preprocessing pipeline (see prep.hpp). Stages and their data flow:
+//   read CT      input file / DICOM dir / phantom -> CtVolume (HU)
+//   body mask    CT -> body (patient only, internal air filled)
+//   bone mask    CT + body -> bone            (the CT is released after this stage)
+//   d_surf       body -> signed distance map, written and released before the next map
+//   d_bone       bone -> signed distance map
+//   prep.json    grid, parameters, counts, timings, peak memory, cache key
+#include "prep/prep.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <system_error>
+
+#include "base/errors.hpp"
+#include "io/ct_io.hpp"
+
+namespace palp {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// Bump when the algorithms change what prep writes, so old caches are not reused.
+constexpr int kPrepAlgorithmVersion = 1;
+
+// A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
+class ContentHash {
+ public:
+  void add(const void* bytes, std::size_t size) {
+    const auto* p = static_cast<const unsigned char*>(bytes);
+    std::size_t i = 0;
+    for (; i + 8 <= size; i += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, p + i, 8);
+      mix(word);
+    }
+    std::uint64_t tail = 0;
+    std::memcpy(&tail, p + i, size - i);
+    mix(tail ^ (static_cast<std::uint64_t>(size - i) << 56));
+    mix(size);
+  }
+  void add(const std::string& text) { add(text.data(), text.size()); }
+  void add_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path.string() + ": cannot be read");
+    std::vector<char> buffer(1 << 20);
+    while (in) {
+      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      add(buffer.data(), static_cast<std::size_t>(in.gcount()));
+    }
+  }
+  std::string hex() const {
+    char text[17];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(state_));
+    return text;
+  }
+
+ private:
+  void mix(std::uint64_t word) {
+    state_ ^= word + 0x9e3779b97f4a7c15ull + (state_ << 6) + (state_ >> 2);
+    state_ *= 0xff51afd7ed558ccdull;
+    state_ ^= state_ >> 33;
+  }
+  std::uint64_t state_ = 0xcbf29ce484222325ull;
+};
+
+void hash_input(ContentHash& hash, const std::string& input) {
+  if (input.rfind("phantom:", 0) == 0) {
+    hash.add(input);
+    return;
+  }
+  const fs::path path(input);
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(path, ec)) {
+      if (entry.is_regular_file()) files.push_back(entry.path());
+    }
+    std::sort(files.begin(), files.end());
+    for (const auto& file : files) {
+      hash.add(file.filename().string());
+      hash.add_file(file);
+    }
+    return;
+  }
+  if (!fs::exists(path, ec)) throw InputError(input + ": no such file or directory");
+  hash.add_file(path);
+  // A detached header (.mhd, .nhdr) names the file with the voxels: the key follows those too.
+  const std::string voxel_file = ct_voxel_file(input);
+  if (voxel_file != input) hash.add_file(voxel_file);
+}
+
+nlohmann::json grid_json(const Grid& grid) {
+  return {{"dimensions", grid.dims},
+          {"spacing_mm", grid.spacing},
+          {"origin_lps_mm", grid.world.origin},
+          {"direction_lps", grid.world.direction}};
+}
+
+// Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
+nlohmann::json params_json(const PrepParams& params) {
+  const SegmentationParams& s = params.segmentation;
+  return {{"body_threshold_hu", s.body_threshold_hu},
+          {"min_body_part_ml", s.min_body_part_ml},
+          {"body_core_radius_mm", s.body_core_radius_mm},
+          {"max_table_thickness_mm", s.max_table_thickness_mm},
+          {"min_table_width_mm", s.min_table_width_mm},
+          {"bone_seed_hu", s.bone_seed_hu},
+          {"bone_grow_hu", s.bone_grow_hu},
+          {"bone_leak_contact_fraction", s.bone_leak_contact_fraction},
+          {"marrow_min_hu", s.marrow_min_hu},
+          {"bone_small_hole_mm2", s.bone_small_hole_mm2},
+          {"bone_max_cavity_ml", s.bone_max_cavity_ml},
+          {"min_bone_island_ml", s.min_bone_island_ml},
+          {"distance_band_mm", params.distance.band_mm}};
+}
+
+// Writes to a temporary name and renames, so an interrupted run never leaves a half file
+// under the final name.
+template <class V>
+void write_atomically(const fs::path& path, const V& volume) {
+  const fs::path partial = path.string() + ".partial.nii.gz";
+  write_nifti(partial.string(), volume);
+  std::error_code ec;
+  fs::rename(partial, path, ec);
+  if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
+}
+
+// True when out_dir holds a complete result of this cache key.
+bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::json* cached) {
+  std::ifstream in(out_dir / kPrepJsonFile);
+  if (!in) return false;
+  const nlohmann::json json = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (json.is_discarded() || json.value("cache_key", "") != key) return false;
+  if (!json.contains("file_bytes") || !json["file_bytes"].is_object()) return false;
+  for (const char* name : {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile}) {
+    std::error_code ec;
+    const auto size = fs::file_size(out_dir / name, ec);
+    if (ec || !json["file_bytes"].contains(name) || json["file_bytes"][name] != size) return false;
+  }
+  *cached = json;
+  return true;
+}
+
+std::uint64_t count_nonzero(const Mask& mask) {
+  return static_cast<std::uint64_t>(
+      std::count_if(mask.data.begin(), mask.data.end(), [](std::uint8_t v) { return v != 0; }));
+}
+
+}  // namespace
+
+std::string prep_cache_key(const std::string& input, const PrepParams& params) {
+  ContentHash hash;
+  hash.add("palp-prep-v" + std::to_string(kPrepAlgorithmVersion));
+  hash.add(params_json(params).dump());
+  hash_input(hash, input);
+  return hash.hex();
+}
+
+PrepResult run_prep(const std::string& input, const std::string& out_dir, const PrepParams& params,
+                    const PrepProgress& progress) {
+  const auto start = Clock::now();
+  PrepResult result;
+  result.input = input;
+  result.out_dir = out_dir;
+  const fs::path dir(out_dir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    throw Error(out_dir + ": cannot create output directory" + (ec ? ": " + ec.message() : ""));
+  }
+
+  result.cache_key = prep_cache_key(input, params);
+  nlohmann::json cached;
+  if (params.use_cache && cache_is_valid(dir, result.cache_key, &cached)) {
+    result.from_cache = true;
+    result.grid.dims = cached["grid"]["dimensions"].get<Index3>();
+    result.grid.spacing = cached["grid"]["spacing_mm"].get<Vec3>();
+    result.stats.body_voxels = cached["voxels"]["body"].get<std::uint64_t>();
+    result.stats.bone_voxels = cached["voxels"]["bone"].get<std::uint64_t>();
+    result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    result.peak_rss_bytes = peak_rss_bytes();
+    return result;
+  }
+  // Remove a previous prep.json first: until the new one is written the directory is not a
+  // valid cache, whatever happens in between.
+  fs::remove(dir / kPrepJsonFile, ec);
+
+  auto stage = [&](const std::string& name, auto&& work) {
+    if (progress) progress(name, false, 0.0);
+    const auto t0 = Clock::now();
+    work();
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    result.stages.push_back({name, seconds, peak_rss_bytes()});
+    if (progress) progress(name, true, seconds);
+  };
+
+  CtVolume ct;
+  Mask body, bone;
+  stage("read CT", [&] { ct = read_ct(input); });
+  result.grid = ct.grid;
+  stage("body mask", [&] { body = segment_body(ct, params.segmentation, &result.stats); });
+  stage("bone mask", [&] { bone = segment_bone(ct, body, params.segmentation, &result.stats); });
+  ct = CtVolume{};  // the HU are not needed past segmentation
+  result.stats.body_voxels = count_nonzero(body);
+  result.stats.bone_voxels = count_nonzero(bone);
+  stage("write masks", [&] {
+    write_atomically(dir / kBodyFile, body);
+    write_atomically(dir / kBoneFile, bone);
+  });
+
+  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
+  DistanceMap map;  // one buffer serves both maps: each is written before the next is computed
+  auto distance_stage = [&](const char* name, const char* file, const Mask& mask, float* range) {
+    stage(name, [&] { signed_distance(mask, params.distance, map); });
+    const auto [lo, hi] = std::minmax_element(map.data.begin(), map.data.end());
+    range[0] = *lo;
+    range[1] = *hi;
+    stage(std::string("write ") + name, [&] { write_atomically(dir / file, map); });
+  };
+  distance_stage("d_surf", kSurfaceDistanceFile, body, surf_range);
+  distance_stage("d_bone", kBoneDistanceFile, bone, bone_range);
+
+  result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.peak_rss_bytes = peak_rss_bytes();
+
+  nlohmann::json json;
+  json["palp_prep_version"] = kPrepAlgorithmVersion;
+  json["input"] = input;
+  json["cache_key"] = result.cache_key;
+  json["grid"] = grid_json(result.grid);
+  json["parameters"] = params_json(params);
+  json["voxels"] = {{"total", result.grid.voxel_count()},
+                    {"body", result.stats.body_voxels},
+                    {"bone", result.stats.bone_voxels},
+                    {"removed_non_patient", result.stats.removed_non_patient_voxels},
+                    {"table", result.stats.table_voxels}};
+  json["distance_range_mm"] = {{"d_surf", {surf_range[0], surf_range[1]}},
+                               {"d_bone", {bone_range[0], bone_range[1]}}};
+  nlohmann::json timings = nlohmann::json::object();
+  for (const auto& s : result.stages) timings[s.name] = s.seconds;
+  timings["total"] = result.total_seconds;
+  json["timings_s"] = timings;
+  json["peak_memory_bytes"] = result.peak_rss_bytes;
+  nlohmann::json stage_peaks = nlohmann::json::object();
+  for (const auto& s : result.stages) stage_peaks[s.name] = s.peak_rss_bytes;
+  json["peak_memory_bytes_after_stage"] = stage_peaks;
+  json["threads"] = params.distance.threads;
+  nlohmann::json sizes = nlohmann::json::object();
+  for (const char* name : {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile}) {
+    sizes[name] = fs::file_size(dir / name);
+  }
+  json["file_bytes"] = sizes;
+  const fs::path json_path = dir / kPrepJsonFile;
+  {
+    std::ofstream out(json_path.string() + ".partial");
+    out << json.dump(2) << '\n';
+    if (!out) throw Error(json_path.string() + ": cannot be written");
+  }
+  fs::rename(json_path.string() + ".partial", json_path, ec);
+  if (ec) throw Error(json_path.string() + ": cannot be written: " + ec.message());
+  return result;
+}
+
+}  // namespace palp

@@ -1,0 +1,60 @@
+// The preprocessing pipeline: CT -> body and bone masks -> signed distance maps, written as
+//   body.nii.gz, bone.nii.gz (uint8 0/1), d_surf.nii.gz, d_bone.nii.gz (float32 mm), prep.json
+// on the input grid voxel for voxel (spec "Files"). Results are cached by input content and
+// parameters: a second run on the same input into the same directory only verifies the cache.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "base/volume.hpp"
+#include "prep/distance_transform.hpp"
+#include "prep/segmentation.hpp"
+
+namespace palp {
+
+struct PrepParams {
+  SegmentationParams segmentation;
+  DistanceParams distance;
+  bool use_cache = true;
+};
+
+struct StageTiming {
+  std::string name;
+  double seconds = 0.0;
+  std::size_t peak_rss_bytes = 0;  // the process's peak resident memory when the stage ended
+};
+
+struct PrepResult {
+  std::string input;
+  std::string out_dir;
+  Grid grid;
+  SegmentationStats stats;
+  std::vector<StageTiming> stages;  // in order; empty when served from the cache
+  double total_seconds = 0.0;
+  std::size_t peak_rss_bytes = 0;
+  bool from_cache = false;
+  std::string cache_key;
+};
+
+// Progress reports: a stage starting ("reading CT", ...) or finishing (with its seconds).
+using PrepProgress = std::function<void(const std::string& stage, bool finished, double seconds)>;
+
+// Runs the pipeline; throws palp::Error subclasses on bad input or I/O failure. Creates out_dir.
+PrepResult run_prep(const std::string& input, const std::string& out_dir, const PrepParams& params,
+                    const PrepProgress& progress = {});
+
+// The cache key of an input under given parameters (hex): hashes the input's bytes (every file
+// of a DICOM directory, in name order), or the phantom's name, and every parameter.
+std::string prep_cache_key(const std::string& input, const PrepParams& params);
+
+// File names inside a prep directory.
+inline constexpr const char* kBodyFile = "body.nii.gz";
+inline constexpr const char* kBoneFile = "bone.nii.gz";
+inline constexpr const char* kSurfaceDistanceFile = "d_surf.nii.gz";
+inline constexpr const char* kBoneDistanceFile = "d_bone.nii.gz";
+inline constexpr const char* kPrepJsonFile = "prep.json";
+
+}  // namespace palp

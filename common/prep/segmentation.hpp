@@ -1,0 +1,78 @@
+// Body (skin) and bone masks from a CT in HU (spec "Masks and distance maps").
+//
+// Orientation: the axial (slice) axis and the posterior axis are taken from Grid::world (LPS);
+// with an identity direction, k is the slice axis and the table lies toward large j.
+//
+// Body: threshold; per axial slice, remove thin wide bands below the patient (table board, pad,
+// mattress, cables lying on them), also where a pad touches the back; keep the 3D parts that are
+// large and have a core deeper than body_core_radius_mm (torso, arms); fill internal air slice by
+// slice (lungs and bowel gas that reach the first or last slice stay inside).
+// Bone: seeds at high HU grown into lower-HU bone inside the body; medium-HU regions that touch
+// bone only across a narrow contact (contrast-filled vessels, enhancing organs) are dropped;
+// marrow filled in axial and coronal slices and in small cavities enclosed in 3D; the surface set
+// at the half-maximum edge between bone and its surroundings; small islands removed.
+#pragma once
+
+#include <cstdint>
+
+#include "base/volume.hpp"
+
+namespace palp {
+
+struct SegmentationParams {
+  // Body: voxels above this HU are "not air".
+  double body_threshold_hu = -500.0;
+  // Connected parts of the body smaller than this are dropped (cables, clothing, table bits).
+  double min_body_part_ml = 50.0;
+  // A body part must hold at least one voxel whose in-slice neighbourhood of this radius is all
+  // "not air" (thin shells and sheets are not patient).
+  double body_core_radius_mm = 5.0;
+  // Table detection: below the patient, bands at most this thick (along the posterior axis) and at
+  // least this wide (and twice as wide as thick) are table, pad, mattress or cables.
+  double max_table_thickness_mm = 50.0;
+  double min_table_width_mm = 40.0;
+
+  // Bone: seeds at or above bone_seed_hu, grown into neighbours at or above bone_grow_hu.
+  double bone_seed_hu = 300.0;
+  double bone_grow_hu = 100.0;
+  // A grown region below bone_seed_hu that touches the seeds' rim with fewer than this fraction of
+  // its voxels is a leak (a contrast-filled vessel or organ resting on bone) and is dropped.
+  double bone_leak_contact_fraction = 0.05;
+  // Marrow: in the holes of the bone (axial and coronal slices, after a 3x3 closing that bridges
+  // thin cortices) the voxels at or above marrow_min_hu are filled, so the spinal canal (CSF, fat)
+  // stays open; holes of at most bone_small_hole_mm2 are filled whole.
+  double marrow_min_hu = 60.0;
+  double bone_small_hole_mm2 = 40.0;
+  // Regions outside the bone that the bone encloses in 3D and that hold at most this are filled.
+  double bone_max_cavity_ml = 30.0;
+  // Bone islands smaller than this are removed.
+  double min_bone_island_ml = 0.5;
+};
+
+struct SegmentationStats {
+  std::uint64_t body_voxels = 0;
+  std::uint64_t bone_voxels = 0;
+  std::uint64_t removed_non_patient_voxels = 0;  // above the body threshold but not body
+  std::uint64_t table_voxels = 0;                // of which recognised as table bands
+};
+
+// Everything that is not outside air, minus objects that are not the patient. 0/1, CT grid.
+// Throws UsageError for unusable parameters.
+Mask segment_body(const CtVolume& ct, const SegmentationParams& params,
+                  SegmentationStats* stats = nullptr);
+
+// Threshold + region growing inside `body`, marrow filled, small islands removed. 0/1.
+// Throws UsageError for unusable parameters or when `body` is not on the CT's grid.
+Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams& params,
+                  SegmentationStats* stats = nullptr);
+
+// The index axes of a grid in patient terms, from its world direction (LPS).
+struct PatientAxes {
+  int slice = 2;      // axis closest to superior
+  int posterior = 1;  // axis closest to posterior (the table side of a supine patient)
+  int lateral = 0;
+  bool posterior_increasing = true;  // index grows toward the back
+};
+PatientAxes patient_axes(const Grid& grid);
+
+}  // namespace palp

@@ -1,0 +1,52 @@
+// A scene: the constant, sampled distance maps the force model runs on, loaded from
+//   - a prep directory (d_surf.nii.gz and d_bone.nii.gz, as `palp prep` writes them), or
+//   - any CT input `palp prep` accepts (a .nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr file, a DICOM series
+//     directory, or phantom:NAME), which is prepped first into a cache directory keyed by
+//     prep_cache_key(input, parameters), so a second load only reads the maps back.
+//
+// Data flow: SCENE -> (run_prep into the cache, if not a prep directory) -> d_surf, d_bone
+// (DistanceMap, float32 mm) -> FieldSampler (the chosen storage and gradient scheme).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "base/volume.hpp"
+#include "model/field_sampler.hpp"
+#include "prep/prep.hpp"
+
+namespace palp {
+
+struct SceneOptions {
+  SamplerConfig sampler;  // storage and gradient scheme of the FieldSampler
+  PrepParams prep;        // used when the scene is a CT input that still has to be prepped
+  std::string cache_dir;  // where CT inputs are prepped; empty = default_scene_cache_dir()
+  PrepProgress progress;  // reports prep stages of a CT input (not called for a cache hit)
+};
+
+struct Scene {
+  std::string source;    // the SCENE as given
+  std::string prep_dir;  // the directory the maps were read from
+  bool prepped = false;  // the CT input was prepped during this load (not served from cache)
+  Grid grid;             // the maps' grid (dims, spacing, the input's world placement)
+  double load_seconds = 0.0;
+  std::shared_ptr<const FieldSampler> fields;
+};
+
+// Loads SCENE (see the top of this file). Throws InputError for a prep directory with missing
+// or unreadable maps, or maps on different grids; UsageError for an input that is neither a prep
+// directory nor a CT input; the errors of run_prep for CT inputs.
+Scene load_scene(const std::string& scene, const SceneOptions& options = {});
+
+// True when `path` is a directory holding a prep result (d_surf.nii.gz or prep.json in it).
+bool is_prep_directory(const std::string& path);
+
+// The scene cache: $PALP_SCENE_CACHE, else $XDG_CACHE_HOME/palp/scenes, else
+// $HOME/.cache/palp/scenes, else <temp>/palp-scenes.
+std::string default_scene_cache_dir();
+
+// Where load_scene preps a CT input: <cache_dir>/<prep_cache_key(input, params)>.
+std::string scene_cache_path(const std::string& input, const PrepParams& params,
+                             const std::string& cache_dir);
+
+}  // namespace palp

@@ -1,0 +1,219 @@
+// palp bench --scene SCENE --tool TOOL --ticks N: times the force model's tick in-process.
+//   poses (a trajectory, or a generated path over the skin, back and forth) -> warm-up ticks
+//   -> timed ticks (steady_clock around each) -> percentiles -> human lines, then one JSON line
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "cli/cli.hpp"
+#include "cli/commands.hpp"
+#include "cli/model_setup.hpp"
+#include "model/force_model.hpp"
+#include "scene/trajectory.hpp"
+#include "scene/trajectory_gen.hpp"
+
+namespace palp::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kBenchUsage =
+    R"(usage: palp bench --scene SCENE --tool TOOL --ticks N [options]
+
+Times the force model's tick in-process: after a warm-up, each tick is timed with steady_clock
+(the clock's own cost, printed, is included). The poses come from --trajectory, or by default
+from the `palp traj ribs` path over the scene's skin (the flat slide-speed path where the scene
+has no body axis), run back and forth so every contact is real. Prints human-readable lines,
+then, last on stdout, one JSON line: tick_ns_p50, tick_ns_p90, tick_ns_p99, tick_ns_p999,
+tick_ns_max, tick_ns_mean, contacts (tool points), in_contact_mean, and the setup.
+Options:
+)";
+
+constexpr const char* kBenchOptions =
+    R"(  --tool TOOL             finger:N (N = 1, 7, 19, 37), twofinger:N or probe:NXxNY (required)
+  --ticks N               timed ticks (default 100000)
+  --warmup N              untimed ticks first (default 2000)
+  --trajectory FILE       poses to tick through (default: the generated path)
+  --param NAME=VALUE      force parameter override, repeatable (as in palp run)
+  -q, --quiet             print only the JSON line
+  -h, --help              show this help
+)";
+
+std::size_t parse_count(const Args& args, const std::string& key, double fallback) {
+  const double n = args.number(key, fallback);
+  if (!(n >= 0.0 && n <= 1e9 && n == std::floor(n)))
+    throw UsageError("--" + key + " needs a whole number from 0 to 1e9");
+  return static_cast<std::size_t>(n);
+}
+
+// The default poses: the ribs path, or the slide-speed path on a flat anchor.
+Trajectory default_path(const FieldSampler& fields, double offset, std::string* name) {
+  try {
+    *name = "ribs";
+    return ribs_slide(fields, offset, RibsSpec{});
+  } catch (const InputError&) {
+    *name = "slide-speed";
+    return slide_speed(find_surface_anchor(fields, ApproachSide::Auto), offset, SlideSpeedSpec{});
+  }
+}
+
+// Index into a path run back and forth: 0, 1, ..., n-1, n-2, ..., 1, 0, 1, ...
+std::size_t ping_pong(std::size_t i, std::size_t n) {
+  if (n < 2) return 0;
+  const std::size_t period = 2 * (n - 1);
+  const std::size_t r = i % period;
+  return r < n ? r : period - r;
+}
+
+// Median cost of one pair of clock reads (ns).
+double clock_pair_ns() {
+  std::vector<std::int64_t> samples(1001);
+  for (auto& s : samples) {
+    const auto t0 = Clock::now();
+    const auto t1 = Clock::now();
+    s = std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
+  }
+  std::nth_element(samples.begin(), samples.begin() + 500, samples.end());
+  return static_cast<double>(samples[500]);
+}
+
+struct Timings {
+  std::vector<std::int64_t> ns;  // per timed tick
+  double in_contact_sum = 0.0;
+  std::size_t ticks_touching = 0;
+};
+
+Timings time_ticks(const Model& model, const Trajectory& path, std::size_t warmup,
+                   std::size_t ticks) {
+  State state = make_state(model);
+  const std::size_t n = path.size();
+  for (std::size_t i = 0; i < warmup; ++i) tick(model, state, path[ping_pong(i, n)].pose);
+  Timings out;
+  out.ns.resize(ticks);
+  for (std::size_t i = 0; i < ticks; ++i) {
+    const Pose& pose = path[ping_pong(warmup + i, n)].pose;
+    const auto t0 = Clock::now();
+    tick(model, state, pose);
+    const auto t1 = Clock::now();
+    out.ns[i] = std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
+    out.in_contact_sum += state.n_contact;
+    out.ticks_touching += state.n_contact > 0;
+  }
+  return out;
+}
+
+struct Summary {
+  double p50 = 0, p90 = 0, p99 = 0, p999 = 0, max = 0, mean = 0;
+};
+
+// Nearest-rank percentiles of the sorted samples.
+Summary summarize(std::vector<std::int64_t> ns) {
+  Summary s;
+  if (ns.empty()) return s;
+  std::sort(ns.begin(), ns.end());
+  auto rank = [&](double p) {
+    const double r = std::ceil(p * static_cast<double>(ns.size()));
+    const std::size_t i = static_cast<std::size_t>(std::max(r, 1.0)) - 1;
+    return static_cast<double>(ns[std::min(i, ns.size() - 1)]);
+  };
+  s.p50 = rank(0.50);
+  s.p90 = rank(0.90);
+  s.p99 = rank(0.99);
+  s.p999 = rank(0.999);
+  s.max = static_cast<double>(ns.back());
+  double sum = 0.0;
+  for (std::int64_t v : ns) sum += static_cast<double>(v);
+  s.mean = sum / static_cast<double>(ns.size());
+  return s;
+}
+
+std::string json_string(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(c));
+      out += escaped;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+int cmd_bench(const Arguments& argv_in) {
+  Arguments argv = argv_in;
+  const std::vector<std::string> assignments = take_repeated(argv, "param");
+  std::vector<std::string> valued = kSceneOptions;
+  valued.insert(valued.end(), {"tool", "ticks", "warmup", "trajectory"});
+  const Args args(argv, {"help", "quiet"}, valued);
+  if (args.has("help")) {
+    std::cout << kBenchUsage << kSceneOptionsHelp << kBenchOptions;
+    return 0;
+  }
+  if (!args.positional().empty())
+    throw UsageError("bench takes no positional arguments, got '" + args.positional()[0] + "'");
+  const auto tool_name = args.get("tool");
+  if (!args.get("scene")) throw UsageError("bench needs --scene SCENE");
+  if (!tool_name) throw UsageError("bench needs --tool TOOL");
+  const std::size_t ticks = parse_count(args, "ticks", 100000);
+  const std::size_t warmup = parse_count(args, "warmup", 2000);
+  if (ticks == 0) throw UsageError("--ticks needs at least 1");
+  const Tool tool = parse_tool(*tool_name);
+  const ForceParams params = force_params(tool, assignments);
+  const bool quiet = args.has("quiet");
+  (void)scene_options(args);
+
+  // Setup: scene, model, poses (not timed).
+  const Scene scene = load_scene_for(args, "bench", quiet);
+  const Model model(scene.fields, tool, params);
+  std::string path_name;
+  const auto trajectory = args.get("trajectory");
+  const Trajectory path = trajectory ? read_trajectory_csv(*trajectory)
+                                     : default_path(*scene.fields, pad_offset(tool), &path_name);
+  if (trajectory) path_name = *trajectory;
+
+  // Timing, then the summary.
+  const double clock_ns = clock_pair_ns();
+  const Timings timings = time_ticks(model, path, warmup, ticks);
+  const Summary s = summarize(timings.ns);
+  const double in_contact_mean = timings.in_contact_sum / static_cast<double>(ticks);
+  const double touching = static_cast<double>(timings.ticks_touching) / static_cast<double>(ticks);
+  const char* scheme = to_string(scene.fields->config().gradient);
+  const char* storage = to_string(scene.fields->config().storage);
+  if (!quiet) {
+    std::printf(
+        "bench %s on %s (%s, %s): %zu ticks after %zu warm-up, path %s (%zu poses, back "
+        "and forth)\n",
+        tool.name.c_str(), scene.source.c_str(), scheme, storage, ticks, warmup, path_name.c_str(),
+        path.size());
+    std::printf("  tick      p50 %.0f ns, p90 %.0f, p99 %.0f, p99.9 %.0f, max %.0f, mean %.1f\n",
+                s.p50, s.p90, s.p99, s.p999, s.max, s.mean);
+    std::printf("  contacts  %zu points, %.2f in contact on average, touching in %.1f%% of ticks\n",
+                tool.points.size(), in_contact_mean, 100.0 * touching);
+    std::printf("  clock     %.0f ns per pair of reads (included in the figures)\n", clock_ns);
+  }
+  std::printf(
+      "{\"scene\":%s,\"tool\":%s,\"scheme\":\"%s\",\"storage\":\"%s\",\"path\":%s,"
+      "\"ticks\":%zu,\"warmup\":%zu,\"tick_ns_p50\":%.0f,\"tick_ns_p90\":%.0f,"
+      "\"tick_ns_p99\":%.0f,\"tick_ns_p999\":%.0f,\"tick_ns_max\":%.0f,\"tick_ns_mean\":%.1f,"
+      "\"contacts\":%zu,\"in_contact_mean\":%.3f,\"touching_fraction\":%.4f,"
+      "\"clock_pair_ns\":%.0f}\n",
+      json_string(scene.source).c_str(), json_string(tool.name).c_str(), scheme, storage,
+      json_string(path_name).c_str(), ticks, warmup, s.p50, s.p90, s.p99, s.p999, s.max, s.mean,
+      tool.points.size(), in_contact_mean, touching, clock_ns);
+  return 0;
+}
+
+}  // namespace palp::cli

@@ -1,0 +1,113 @@
+// palp prep INPUT --out DIR: masks and signed distance maps, with a summary and stage timings.
+#include <cstdio>
+#include <iostream>
+
+#include "base/parallel.hpp"
+#include "cli/cli.hpp"
+#include "cli/commands.hpp"
+#include "prep/prep.hpp"
+
+namespace palp::cli {
+namespace {
+
+// The help text, with the defaults read from the parameter structs so it cannot go stale.
+std::string prep_usage() {
+  const SegmentationParams seg;
+  const DistanceParams dist;
+  char text[2048];
+  std::snprintf(text, sizeof text, R"(usage: palp prep INPUT --out DIR [options]
+
+Segments body and bone and computes the signed distance maps the force model samples.
+INPUT: a .nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr file, a DICOM series directory, or phantom:NAME.
+Writes body.nii.gz, bone.nii.gz, d_surf.nii.gz, d_bone.nii.gz and prep.json into DIR.
+Options:
+  --out DIR               output directory (required; created if missing)
+  --no-cache              recompute even if DIR already holds the result for this input
+  --band MM               clamp |distance| beyond this many mm (default %g)
+  --threads N             worker threads (default: all cores, here %u)
+  --body-threshold HU     voxels above this are not air (default %g)
+  --min-body-part ML      drop separate parts smaller than this, except the patient (default %g)
+  --max-table-thickness MM  thicker horizontal bands below the patient are kept (default %g)
+  --bone-seed HU          bone region-growing seeds at or above (default %g)
+  --bone-grow HU          bone grows into voxels at or above (default %g)
+  --min-bone-island ML    drop bone islands smaller than this (default %g)
+  -q, --quiet             print only errors
+  -h, --help              show this help
+)",
+                dist.band_mm, default_thread_count(), seg.body_threshold_hu, seg.min_body_part_ml,
+                seg.max_table_thickness_mm, seg.bone_seed_hu, seg.bone_grow_hu,
+                seg.min_bone_island_ml);
+  return text;
+}
+
+}  // namespace
+
+int cmd_prep(const Arguments& argv) {
+  const Args args(argv, {"help", "no-cache", "quiet"},
+                  {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
+                   "bone-grow", "min-bone-island", "max-table-thickness"});
+  if (args.has("help")) {
+    std::cout << prep_usage();
+    return 0;
+  }
+  if (args.positional().size() != 1) throw UsageError("prep needs one INPUT");
+  const auto out = args.get("out");
+  if (!out) throw UsageError("prep needs --out DIR");
+  PrepParams params;
+  params.use_cache = !args.has("no-cache");
+  SegmentationParams& seg = params.segmentation;
+  seg.body_threshold_hu = args.number("body-threshold", seg.body_threshold_hu);
+  seg.min_body_part_ml = args.number("min-body-part", seg.min_body_part_ml);
+  seg.bone_seed_hu = args.number("bone-seed", seg.bone_seed_hu);
+  seg.bone_grow_hu = args.number("bone-grow", seg.bone_grow_hu);
+  seg.max_table_thickness_mm = args.number("max-table-thickness", seg.max_table_thickness_mm);
+  seg.min_bone_island_ml = args.number("min-bone-island", seg.min_bone_island_ml);
+  params.distance.band_mm = args.number("band", params.distance.band_mm);
+  const double threads = args.number("threads", default_thread_count());
+  if (threads < 1 || threads > 1024 || threads != static_cast<unsigned>(threads)) {
+    throw UsageError("--threads needs a whole number from 1 to 1024");
+  }
+  params.distance.threads = static_cast<unsigned>(threads);
+  if (seg.bone_grow_hu > seg.bone_seed_hu) {
+    throw UsageError("--bone-grow must not exceed --bone-seed");
+  }
+  const bool quiet = args.has("quiet");
+
+  const std::string& input = args.positional()[0];
+  if (!quiet) std::fprintf(stderr, "palp prep: %s -> %s\n", input.c_str(), out->c_str());
+  PrepProgress progress;
+  if (!quiet) {
+    progress = [](const std::string& stage, bool finished, double seconds) {
+      if (!finished) {
+        std::fprintf(stderr, "  %-14s ...", stage.c_str());
+      } else {
+        std::fprintf(stderr, " %7.3f s\n", seconds);
+      }
+      std::fflush(stderr);
+    };
+  }
+  const PrepResult r = run_prep(input, *out, params, progress);
+  if (quiet) return 0;
+  const Index3& d = r.grid.dims;
+  const double voxel_ml = r.grid.spacing[0] * r.grid.spacing[1] * r.grid.spacing[2] / 1000.0;
+  std::printf("prep %s%s\n", r.out_dir.c_str(),
+              r.from_cache ? " (cached: input and parameters unchanged)" : "");
+  std::printf("  grid      %lld x %lld x %lld voxels of %s mm\n", static_cast<long long>(d[0]),
+              static_cast<long long>(d[1]), static_cast<long long>(d[2]),
+              format_triple(r.grid.spacing).c_str());
+  std::printf("  body      %llu voxels (%.0f ml)\n",
+              static_cast<unsigned long long>(r.stats.body_voxels),
+              static_cast<double>(r.stats.body_voxels) * voxel_ml);
+  std::printf("  bone      %llu voxels (%.0f ml)\n",
+              static_cast<unsigned long long>(r.stats.bone_voxels),
+              static_cast<double>(r.stats.bone_voxels) * voxel_ml);
+  if (!r.from_cache) {
+    std::printf("  removed   %llu voxels that are not the patient (table, pad, cables)\n",
+                static_cast<unsigned long long>(r.stats.removed_non_patient_voxels));
+  }
+  std::printf("  total     %.3f s, peak memory %.0f MiB, %u threads\n", r.total_seconds,
+              static_cast<double>(r.peak_rss_bytes) / 1048576.0, params.distance.threads);
+  return 0;
+}
+
+}  // namespace palp::cli

@@ -1,0 +1,158 @@
+// palp run --scene SCENE --tool TOOL --trajectory FILE --out FILE: the offline, deterministic
+// run of the spec: one tick per trajectory row, one force CSV row per tick.
+//   trajectory row (t, pose) -> tick (force model) -> [device profile filters] -> force CSV row
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <optional>
+
+#include "cli/cli.hpp"
+#include "cli/commands.hpp"
+#include "cli/model_setup.hpp"
+#include "model/force_model.hpp"
+#include "model/safety.hpp"
+#include "scene/trajectory.hpp"
+
+namespace palp::cli {
+namespace {
+
+constexpr const char* kRunUsage =
+    R"(usage: palp run --scene SCENE --tool TOOL --trajectory FILE --out FILE [options]
+
+Runs the force model offline: one tick per trajectory row, in order, deterministically (the same
+inputs give a byte-identical output). Writes a force CSV with the columns
+  t,fx,fy,fz,tx,ty,tz,n_contact,ux,uy,uz,f_normal,f_lateral,depth,status,safety
+(N, N·mm about the device point, mm; f_normal and f_lateral are means over the points in contact
+of the pressing force and of the friction force in the skin's tangent plane; depth the mean
+D_surf; status the tick's bits, safety the device filters' bits).
+Options:
+)";
+
+constexpr const char* kRunOptions =
+    R"(  --tool TOOL             finger:N (N = 1, 7, 19, 37), twofinger:N or probe:NXxNY (required)
+  --trajectory FILE       trajectory CSV: t,px,py,pz,qw,qx,qy,qz (s, mm, scene frame)
+  --out FILE              force CSV to write
+  --param NAME=VALUE      force parameter override, repeatable: c, k, bone_fmax, bone_flip,
+                          bone_enabled, grad_epsilon, direction_epsilon
+  --device-profile NAME   apply a device's limits after the model: falcon, phantom-premium,
+                          omega (default: none, the model's own output)
+  -q, --quiet             print only errors
+  -h, --help              show this help
+)";
+
+void print_usage() {
+  std::cout << kRunUsage << kSceneOptionsHelp << kRunOptions;
+}
+
+// Device limits between ticks: the previous output and device position (spec: after the model).
+struct DeviceFilter {
+  const DeviceProfile* profile = nullptr;
+  Vec3d prev_force{};
+  Vec3d prev_position{};
+  double prev_t = 0.0;
+  bool started = false;
+
+  // Filters `record` in place; dt from the trajectory's times (the first tick: `first_dt`).
+  void apply(ForceRecord& record, const Vec3d& position, double first_dt) {
+    if (!profile) return;
+    SafetyInput in;
+    in.force = record.force;
+    in.torque = record.torque;
+    in.prev_force = prev_force;
+    in.position = position;
+    in.prev_position = started ? prev_position : position;
+    in.dt = started ? record.t - prev_t : first_dt;
+    const SafetyOutput out = apply_device_limits(*profile, in);
+    record.force = out.force;
+    record.torque = out.torque;
+    record.safety = out.status;
+    prev_force = out.force;
+    prev_position = position;
+    prev_t = record.t;
+    started = true;
+  }
+};
+
+struct RunSummary {
+  std::size_t ticks_in_contact = 0;
+  double contact_points_sum = 0.0;
+  double max_force = 0.0;
+  double max_force_t = 0.0;
+  std::uint32_t status_seen = 0;
+};
+
+void print_summary(const RunSummary& s, std::size_t ticks, const std::string& out, double seconds) {
+  std::printf("run %s: %zu ticks\n", out.c_str(), ticks);
+  std::printf(
+      "  contact   %zu of %zu ticks, %.2f points on average when touching\n", s.ticks_in_contact,
+      ticks,
+      s.ticks_in_contact ? s.contact_points_sum / static_cast<double>(s.ticks_in_contact) : 0.0);
+  std::printf("  force     max |f| %.4g N at t = %.6g s\n", s.max_force, s.max_force_t);
+  if (s.status_seen & kTickOutsideGrid) std::printf("  note      some points left the grid\n");
+  std::printf("  time      %.3f s (%.2f us a tick, with file output)\n", seconds,
+              ticks ? 1e6 * seconds / static_cast<double>(ticks) : 0.0);
+}
+
+}  // namespace
+
+int cmd_run(const Arguments& argv_in) {
+  Arguments argv = argv_in;
+  const std::vector<std::string> assignments = take_repeated(argv, "param");
+  std::vector<std::string> valued = kSceneOptions;
+  valued.insert(valued.end(), {"tool", "trajectory", "out", "device-profile"});
+  const Args args(argv, {"help", "quiet"}, valued);
+  if (args.has("help")) {
+    print_usage();
+    return 0;
+  }
+  if (!args.positional().empty())
+    throw UsageError("run takes no positional arguments, got '" + args.positional()[0] + "'");
+  const auto tool_name = args.get("tool");
+  const auto trajectory_path = args.get("trajectory");
+  const auto out = args.get("out");
+  if (!args.get("scene")) throw UsageError("run needs --scene SCENE");
+  if (!tool_name) throw UsageError("run needs --tool TOOL");
+  if (!trajectory_path) throw UsageError("run needs --trajectory FILE");
+  if (!out) throw UsageError("run needs --out FILE");
+  const bool quiet = args.has("quiet");
+  // Everything a usage mistake can be is checked before the (slower) scene load.
+  const Tool tool = parse_tool(*tool_name);
+  const ForceParams params = force_params(tool, assignments);
+  DeviceFilter filter;
+  if (const auto profile = args.get("device-profile")) filter.profile = &device_profile(*profile);
+  (void)scene_options(args);
+
+  const Trajectory trajectory = read_trajectory_csv(*trajectory_path);
+  const Scene scene = load_scene_for(args, "run", quiet);
+  const Model model(scene.fields, tool, params);
+  State state = make_state(model);
+  ForceCsvWriter writer(*out);
+
+  const auto start = std::chrono::steady_clock::now();
+  const double first_dt = trajectory.size() > 1 ? trajectory[1].t - trajectory[0].t : 0.001;
+  RunSummary summary;
+  for (const TrajectorySample& row : trajectory) {
+    // Row -> tick -> record (contact summary) -> device limits -> CSV.
+    tick(model, state, row.pose);
+    ForceRecord record = force_record(row.t, state);
+    filter.apply(record, row.pose.position, first_dt);
+    writer.write(record);
+    summary.status_seen |= state.status;
+    if (record.n_contact > 0) {
+      ++summary.ticks_in_contact;
+      summary.contact_points_sum += record.n_contact;
+    }
+    if (const double f = norm(record.force); f > summary.max_force) {
+      summary.max_force = f;
+      summary.max_force_t = row.t;
+    }
+  }
+  writer.finish();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!quiet) print_summary(summary, trajectory.size(), *out, seconds);
+  return 0;
+}
+
+}  // namespace palp::cli

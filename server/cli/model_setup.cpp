@@ -1,0 +1,84 @@
+// Shared setup of the model commands (see model_setup.hpp).
+#include "cli/model_setup.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+#include "base/errors.hpp"
+#include "model/field_sampler.hpp"
+
+namespace palp::cli {
+
+std::vector<std::string> take_repeated(Arguments& argv, const std::string& key) {
+  std::vector<std::string> values;
+  Arguments rest;
+  const std::string flag = "--" + key;
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    const std::string& arg = argv[i];
+    if (arg == flag) {
+      if (i + 1 >= argv.size()) throw UsageError("option " + flag + " needs a value");
+      values.push_back(argv[++i]);
+    } else if (arg.rfind(flag + "=", 0) == 0) {
+      values.push_back(arg.substr(flag.size() + 1));
+    } else {
+      rest.push_back(arg);
+    }
+  }
+  argv = std::move(rest);
+  return values;
+}
+
+SceneOptions scene_options(const Args& args) {
+  SceneOptions options;
+  if (const auto scheme = args.get("scheme"))
+    options.sampler.gradient = parse_gradient_scheme(*scheme);
+  if (const auto storage = args.get("storage")) options.sampler.storage = parse_storage(*storage);
+  if (const auto dir = args.get("cache-dir")) {
+    if (dir->empty()) throw UsageError("--cache-dir needs a directory");
+    options.cache_dir = *dir;
+  }
+  return options;
+}
+
+Scene load_scene_for(const Args& args, const std::string& command, bool quiet) {
+  const auto scene_name = args.get("scene");
+  if (!scene_name) throw UsageError(command + " needs --scene SCENE");
+  SceneOptions options = scene_options(args);
+  if (!quiet) {
+    options.progress = [](const std::string& stage, bool finished, double seconds) {
+      if (!finished) std::fprintf(stderr, "  prep %-14s ...", stage.c_str());
+      if (finished) std::fprintf(stderr, " %7.3f s\n", seconds);
+      std::fflush(stderr);
+    };
+  }
+  Scene scene = load_scene(*scene_name, options);
+  if (!quiet) {
+    std::fprintf(stderr, "scene %s: %s%s, %.3f s (%s, %s)\n", scene_name->c_str(),
+                 scene.prep_dir.c_str(), scene.prepped ? " (prepped now)" : "", scene.load_seconds,
+                 to_string(scene.fields->config().gradient),
+                 to_string(scene.fields->config().storage));
+  }
+  return scene;
+}
+
+ForceParams force_params(const Tool& tool, const std::vector<std::string>& assignments) {
+  ForceParams params = default_params(tool.kind);
+  for (const std::string& assignment : assignments) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw UsageError("--param needs NAME=VALUE, got '" + assignment + "'");
+    const std::string name = assignment.substr(0, eq);
+    const std::string text = assignment.substr(eq + 1);
+    double value = 0.0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (text.empty() || ec != std::errc() || end != text.data() + text.size() ||
+        !std::isfinite(value)) {
+      throw UsageError("--param " + name + " needs a number, got '" + text + "'");
+    }
+    set_param(params, name, value);
+  }
+  return params;
+}
+
+}  // namespace palp::cli

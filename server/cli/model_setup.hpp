@@ -1,0 +1,43 @@
+// Options shared by the commands that run the force model (run, bench, traj): the scene, the
+// sampler's scheme and storage, the tool and --param overrides.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "cli/cli.hpp"
+#include "cli/commands.hpp"
+#include "model/force_model.hpp"
+#include "model/tool.hpp"
+#include "scene/scene.hpp"
+
+namespace palp::cli {
+
+// Valued options every model command accepts (besides its own).
+inline const std::vector<std::string> kSceneOptions = {"scene", "scheme", "storage", "cache-dir"};
+
+// Help text of those options.
+inline constexpr const char* kSceneOptionsHelp =
+    R"(  --scene SCENE           a prep directory, a CT (.nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr, DICOM
+                          directory) or phantom:NAME; CTs are prepped once into the cache
+  --scheme NAME           gradient: analytic (default), central, precomputed
+  --storage NAME          maps in memory: float32 (default), int16, interleaved
+  --cache-dir DIR         scene cache (default $PALP_SCENE_CACHE, else
+                          $XDG_CACHE_HOME/palp/scenes, else ~/.cache/palp/scenes)
+)";
+
+// Removes every "--KEY VALUE" / "--KEY=VALUE" from argv (for repeatable options the parser
+// would otherwise overwrite) and returns the values in order. UsageError for a missing value.
+std::vector<std::string> take_repeated(Arguments& argv, const std::string& key);
+
+// The scene options of parsed arguments (--scheme, --storage, --cache-dir).
+SceneOptions scene_options(const Args& args);
+
+// Loads --scene (required: UsageError naming `command` otherwise), reporting on stderr unless
+// quiet: where the maps came from and how long it took.
+Scene load_scene_for(const Args& args, const std::string& command, bool quiet);
+
+// The tool kind's default parameters with NAME=VALUE overrides applied in order.
+ForceParams force_params(const Tool& tool, const std::vector<std::string>& assignments);
+
+}  // namespace palp::cli

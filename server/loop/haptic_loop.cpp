@@ -1,0 +1,338 @@
+// The haptic loop: see haptic_loop.hpp.
+#include "loop/haptic_loop.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <system_error>
+
+#include "base/errors.hpp"
+
+namespace palp::rt {
+namespace {
+
+std::size_t contact_capacity_for(const LoopConfig& config, const Model& model) {
+  if (config.contact_capacity > 0) return config.contact_capacity;
+  return std::max<std::size_t>(model.contact_count(), 64);
+}
+
+void store_max(std::atomic<std::int64_t>& target, std::int64_t value) {
+  // Single writer (the loop): a plain load-compare-store is enough.
+  if (value > target.load(std::memory_order_relaxed))
+    target.store(value, std::memory_order_relaxed);
+}
+
+}  // namespace
+
+std::int64_t monotonic_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::size_t jitter_bucket(std::int64_t late_ns) noexcept {
+  const double us = late_ns > 0 ? static_cast<double>(late_ns) * 1e-3 : 0.0;
+  for (std::size_t b = 0; b < kJitterBucketUpperUs.size(); ++b)
+    if (us < kJitterBucketUpperUs[b]) return b;
+  return kJitterBucketUpperUs.size();
+}
+
+HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopConfig config)
+    : config_(config),
+      device_(device),
+      period_ns_(0),
+      dt_s_(0.0),
+      net_ring_(config.net_slots, model ? contact_capacity_for(config, *model) : 64),
+      record_ring_(config.record_slots, 0) {
+  if (!model) throw UsageError("haptic loop: no model");
+  if (!(config.rate_hz >= 1.0 && config.rate_hz <= 100000.0))
+    throw UsageError("--rate must be between 1 and 100000 Hz");
+  period_ns_ = static_cast<std::int64_t>(1e9 / config.rate_hz + 0.5);
+  dt_s_ = static_cast<double>(period_ns_) * 1e-9;
+  current_ = std::make_unique<Bundle>(Bundle{model, make_state(*model)});
+  requested_ = std::move(model);
+  device_state_.store(static_cast<std::uint8_t>(device_.state()), std::memory_order_relaxed);
+}
+
+HapticLoop::~HapticLoop() {
+  stop();
+  delete pending_.exchange(nullptr);
+  delete retired_.exchange(nullptr);
+}
+
+void HapticLoop::start() {
+  if (thread_.joinable()) return;
+  stop_.store(false);
+  try {
+    thread_ = std::thread([this] { run(); });
+  } catch (const std::system_error& e) {
+    throw ResourceError(std::string("cannot start the haptic thread: ") + e.what());
+  }
+  if (!config_.realtime) {
+    realtime_report_ = "real-time scheduling not requested (--no-realtime)";
+    return;
+  }
+  sched_param param{};
+  param.sched_priority = config_.priority;
+  const int sched_rc = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &param);
+  const int lock_rc = mlockall(MCL_CURRENT) == 0 ? 0 : errno;
+  realtime_ = sched_rc == 0 && lock_rc == 0;
+  if (realtime_) {
+    realtime_report_ =
+        "real time: SCHED_FIFO priority " + std::to_string(config_.priority) + ", memory locked";
+    return;
+  }
+  realtime_report_ = "warning: running without real-time guarantees:";
+  if (sched_rc != 0)
+    realtime_report_ += " SCHED_FIFO refused (" + std::string(std::strerror(sched_rc)) +
+                        "; needs CAP_SYS_NICE or an rtprio limit);";
+  if (lock_rc != 0)
+    realtime_report_ += " mlockall refused (" + std::string(std::strerror(lock_rc)) +
+                        "; needs CAP_IPC_LOCK or a memlock limit);";
+  realtime_report_ += " expect more jitter";
+}
+
+void HapticLoop::stop() {
+  stop_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();
+  device_.write(DeviceCommand{});
+  collect_retired();
+}
+
+void HapticLoop::run() {
+  const std::int64_t start = monotonic_ns() + period_ns_;
+  std::int64_t n = 0;
+  while (!stop_.load(std::memory_order_acquire)) {
+    const std::int64_t deadline = start + n * period_ns_;
+    timespec ts{};
+    ts.tv_sec = static_cast<time_t>(deadline / 1'000'000'000);
+    ts.tv_nsec = static_cast<long>(deadline % 1'000'000'000);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    step(deadline, monotonic_ns());
+    ++n;
+    const std::int64_t end = monotonic_ns();
+    const std::int64_t next = start + n * period_ns_;
+    if (end > next) {
+      const std::int64_t missed = (end - next) / period_ns_ + 1;
+      overruns_.fetch_add(static_cast<std::uint64_t>(missed), std::memory_order_relaxed);
+      n += missed;
+    }
+  }
+}
+
+void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
+  const std::int64_t begin = monotonic_ns();
+  if (retired_.load(std::memory_order_acquire) == nullptr) {
+    if (Bundle* fresh = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
+      retired_.store(current_.release(), std::memory_order_release);
+      current_.reset(fresh);
+    }
+  }
+  Bundle& bundle = *current_;
+  // A recording starts from a clean state (as a replay does): contacts restart at its first tick.
+  if (const int request = record_request_.exchange(0, std::memory_order_acq_rel)) {
+    recording_on_ = request == 1;
+    if (recording_on_) {
+      reset(bundle.state);
+      prev_force_ = Vec3d{};
+      prev_valid_ = false;
+    }
+  }
+  const std::int64_t late = now_ns - deadline_ns;
+  jitter_[jitter_bucket(late)].fetch_add(1, std::memory_order_relaxed);
+  store_max(max_late_ns_, late);
+
+  std::uint32_t zero = 0;
+  const auto watchdog_ns = static_cast<std::int64_t>(config_.watchdog_late_s * 1e9);
+  if (watchdog_ns > 0 && late > watchdog_ns) {
+    zero |= kFaultDeadline;
+    device_.write(DeviceCommand{});  // force to zero before anything else
+  }
+
+  DeviceSample sample;
+  switch (device_.read(deadline_ns, sample)) {
+    case DeviceStatus::Ok:
+      last_pose_ = sample.pose;
+      have_pose_ = true;
+      last_sample_ns_ = deadline_ns;
+      zero |= sample.forced_fault;
+      break;
+    case DeviceStatus::NoData: {
+      const auto timeout_ns = static_cast<std::int64_t>(config_.device_timeout_s * 1e9);
+      if (have_pose_ && timeout_ns > 0 && deadline_ns - last_sample_ns_ > timeout_ns)
+        zero |= kFaultDeviceTimeout;
+      break;
+    }
+    case DeviceStatus::Timeout:
+      zero |= kFaultDeviceTimeout;
+      break;
+    case DeviceStatus::Finished:
+      device_.write(DeviceCommand{});
+      finished_.store(true, std::memory_order_release);
+      stop_.store(true, std::memory_order_release);
+      return;
+    case DeviceStatus::Disconnected:
+    case DeviceStatus::Error:
+      zero |= kFaultDeviceLost;
+      break;
+    case DeviceStatus::Absent:
+      zero |= kZeroDeviceAbsent;
+      have_pose_ = false;  // after a replug, wait for a fresh pose
+      break;
+  }
+  DeviceState device_state = device_.state();
+  if ((zero & kZeroDeviceAbsent) && device_state == DeviceState::Present)
+    device_state = DeviceState::Absent;
+  const bool absent = (zero & kZeroDeviceAbsent) != 0;
+  if (absent && !absent_) absent_events_.fetch_add(1, std::memory_order_relaxed);
+  absent_ = absent;
+  device_state_.store(static_cast<std::uint8_t>(device_state), std::memory_order_relaxed);
+  if (!have_pose_) zero |= kZeroNoPose;
+  if (paused_.load(std::memory_order_relaxed)) zero |= kZeroPaused;
+
+  TickRecord rec;
+  rec.seq = seq_++;
+  rec.t_ns = deadline_ns;
+  rec.late_ns = late;
+  rec.pose = last_pose_;
+  const auto points = static_cast<std::uint32_t>(bundle.model->contact_count());
+  const State* published_state = nullptr;
+  if (zero == 0) {
+    tick(*bundle.model, bundle.state, last_pose_);
+    const Vec3d position = last_pose_.position;
+    Vec3d force = bundle.state.f_device, torque = bundle.state.tau_device;
+    std::uint32_t safety = kSafetyOk;
+    if (config_.profile) {
+      SafetyInput in;
+      in.force = force;
+      in.torque = torque;
+      in.prev_force = prev_force_;
+      in.position = position;
+      in.prev_position = prev_valid_ ? prev_position_ : position;
+      in.dt = dt_s_;
+      const SafetyOutput out = apply_device_limits(*config_.profile, in);
+      force = out.force, torque = out.torque, safety = out.status;
+    }
+    const DeviceStatus written = device_.write(DeviceCommand{force, torque});
+    if (written == DeviceStatus::Ok || written == DeviceStatus::NoData) {
+      prev_force_ = force;
+      prev_position_ = position;
+      prev_valid_ = true;
+      rec.force = force;
+      rec.torque = torque;
+      rec.u = bundle.state.u;
+      rec.n_contact = bundle.state.n_contact;
+      rec.tick_status = bundle.state.status;
+      rec.safety_status = safety;
+      published_state = &bundle.state;
+    } else {
+      zero |= kFaultDeviceWrite;
+    }
+  }
+  if (zero != 0) {
+    device_.write(DeviceCommand{});  // zero first, then report
+    reset(bundle.state);
+    prev_force_ = Vec3d{};
+    prev_position_ = last_pose_.position;
+    prev_valid_ = have_pose_;
+    rec.fault = zero;
+    if (zero & kFaultMask) {
+      faults_.fetch_add(1, std::memory_order_relaxed);
+      last_fault_.store(zero & kFaultMask, std::memory_order_relaxed);
+    }
+  }
+  publish(rec, published_state, points, device_state);
+  ticks_.fetch_add(1, std::memory_order_release);
+  const std::int64_t spent = monotonic_ns() - begin;
+  tick_ns_sum_.fetch_add(static_cast<std::uint64_t>(spent), std::memory_order_relaxed);
+  store_max(tick_ns_max_, spent);
+}
+
+void HapticLoop::publish(const TickRecord& record, const State* state, std::uint32_t points,
+                         DeviceState device_state) noexcept {
+  if (Snapshot* s = net_ring_.claim()) {
+    s->tick = record;
+    s->device_state = device_state;
+    s->contact_points = points;
+    s->contact_count = 0;
+    if (state) {
+      const std::size_t n = std::min<std::size_t>(points, s->contacts.size());
+      for (std::size_t i = 0; i < n; ++i) {
+        ContactSnapshot& c = s->contacts[i];
+        c.x = state->x[i];
+        c.s = state->s[i];
+        c.p = state->p[i];
+        c.f = state->f[i];
+        c.in_contact = state->in_contact[i];
+      }
+      s->contact_count = static_cast<std::uint32_t>(n);
+    }
+    net_ring_.commit();
+  }
+  if (recording_on_) {
+    if (Snapshot* r = record_ring_.claim()) {
+      r->tick = record;
+      r->device_state = device_state;
+      r->contact_points = points;
+      r->contact_count = 0;
+      record_ring_.commit();
+    }
+  }
+}
+
+void HapticLoop::collect_retired() {
+  delete retired_.exchange(nullptr, std::memory_order_acq_rel);
+}
+
+void HapticLoop::swap_model(std::shared_ptr<const Model> model) {
+  if (!model) throw UsageError("haptic loop: no model");
+  auto fresh = std::make_unique<Bundle>(Bundle{model, make_state(*model)});
+  collect_retired();
+  delete pending_.exchange(fresh.release(), std::memory_order_acq_rel);
+  const std::lock_guard lock(model_mutex_);
+  requested_ = std::move(model);
+}
+
+std::shared_ptr<const Model> HapticLoop::model() const {
+  const std::lock_guard lock(model_mutex_);
+  return requested_;
+}
+
+std::uint64_t HapticLoop::set_recording(bool on) {
+  const std::uint64_t first = ticks_.load(std::memory_order_acquire);
+  recording_.store(on, std::memory_order_relaxed);
+  record_request_.store(on ? 1 : 2, std::memory_order_release);
+  return first;
+}
+
+LoopStats HapticLoop::stats() const {
+  LoopStats s;
+  s.ticks = ticks_.load(std::memory_order_relaxed);
+  s.overruns = overruns_.load(std::memory_order_relaxed);
+  s.faults = faults_.load(std::memory_order_relaxed);
+  s.last_fault = last_fault_.load(std::memory_order_relaxed);
+  for (std::size_t b = 0; b < kJitterBuckets; ++b)
+    s.jitter[b] = jitter_[b].load(std::memory_order_relaxed);
+  s.max_late_ns = max_late_ns_.load(std::memory_order_relaxed);
+  s.tick_ns_sum = tick_ns_sum_.load(std::memory_order_relaxed);
+  s.tick_ns_max = tick_ns_max_.load(std::memory_order_relaxed);
+  s.realtime = realtime_;
+  s.paused = paused();
+  s.recording = recording_.load(std::memory_order_relaxed);
+  s.finished = finished();
+  s.device_state = device_state();
+  s.absent_events = absent_events_.load(std::memory_order_relaxed);
+  s.net_published = net_ring_.published();
+  s.net_dropped = net_ring_.dropped();
+  s.record_published = record_ring_.published();
+  s.record_dropped = record_ring_.dropped();
+  return s;
+}
+
+}  // namespace palp::rt

@@ -1,0 +1,194 @@
+// The real-time haptic loop: a dedicated thread ticking at a fixed rate on absolute deadlines.
+//
+// Every tick (step()):
+//   watchdog (deadline) -> read device -> tick (force model) -> safety filters (device profile)
+//   -> write device -> publish a snapshot (network ring) and a record (record ring, when on)
+// and never allocates, locks, logs, serializes or throws. Deadlines are absolute
+// (clock_nanosleep TIMER_ABSTIME on CLOCK_MONOTONIC): tick n is due at start + n * period. When a
+// tick ends after the next deadline, the deadlines already passed are skipped (phase kept) and
+// counted as overruns. The wake-up lateness of every tick goes into a fixed histogram.
+//
+// Watchdog: a tick that starts more than `watchdog_late_s` after its deadline, or a device that
+// answers Timeout / Disconnected / Error (or NoData for longer than `device_timeout_s`), zeroes
+// the force first - the device is written zero before anything else happens - and then the
+// fault is reported: counted, its bits kept in LoopStats::last_fault and in the tick's snapshot.
+// The model state is reset (proxies forgotten), so contact restarts cleanly when the fault
+// clears; with a device profile the rate limit then ramps the force back in.
+//
+// Zeroed ticks that are not faults (paused, no pose yet, device absent) carry their own bits too,
+// so a replay reproduces them (DeviceSample::forced_fault).
+//
+// Hot-plug: a device answering Absent is not a fault. The force is zeroed that very tick, the
+// model state resets, the loop keeps ticking, and every snapshot carries the device's state
+// (Device::state(): Present / Absent / Fault). Each unplug counts once (LoopStats::absent_events);
+// after a replug the loop waits for the first pose again (kZeroNoPose), so the NoData timeout does
+// not fire on the stale pose from before.
+//
+// Parameters change without the loop allocating: the new Model and its State are built by the
+// caller and handed over through an atomic pointer; the loop swaps them in at the start of a
+// tick and hands the old one back to be freed outside the loop.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "devices/device.hpp"
+#include "model/force_model.hpp"
+#include "model/safety.hpp"
+#include "rt/snapshot.hpp"
+
+namespace palp::rt {
+
+// Why a tick's force was zeroed (TickRecord::fault). The low byte are faults.
+enum LoopFault : std::uint32_t {
+  kFaultNone = 0,
+  kFaultDeadline = 1u << 0,       // the tick started too late (watchdog bound)
+  kFaultDeviceTimeout = 1u << 1,  // the device did not answer in time
+  kFaultDeviceLost = 1u << 2,     // the device is disconnected or failed
+  kFaultDeviceWrite = 1u << 3,    // writing the force failed
+  kFaultMask = 0xffu,
+  kZeroPaused = 1u << 8,         // paused by a command: zero force, model not ticked
+  kZeroNoPose = 1u << 9,         // no pose from the device yet
+  kZeroDeviceAbsent = 1u << 10,  // the device is not plugged in (hot-plug; not a fault)
+};
+
+// CLOCK_MONOTONIC in nanoseconds (the time base of every snapshot and message).
+std::int64_t monotonic_ns() noexcept;
+
+// Upper bounds (µs) of the lateness histogram; one more bucket counts everything beyond.
+inline constexpr std::array<double, 12> kJitterBucketUpperUs = {1,   2,   5,   10,   20,   50,
+                                                                100, 200, 500, 1000, 2000, 5000};
+inline constexpr std::size_t kJitterBuckets = kJitterBucketUpperUs.size() + 1;
+// The bucket of a lateness (ns; negative counts as 0).
+std::size_t jitter_bucket(std::int64_t late_ns) noexcept;
+
+struct LoopConfig {
+  double rate_hz = 1000.0;
+  bool realtime = true;            // try SCHED_FIFO and mlockall; a warning when not permitted
+  int priority = 80;               // SCHED_FIFO priority
+  double watchdog_late_s = 0.005;  // a tick starting later than this: fault (0 = off)
+  double device_timeout_s = 0.1;   // device NoData for longer than this: fault (0 = off)
+  const DeviceProfile* profile = nullptr;  // safety filters after the model (nullptr: none)
+  std::size_t net_slots = 1024;            // snapshot ring toward the network
+  std::size_t record_slots = 16384;        // record ring toward the recorder
+  std::size_t contact_capacity = 0;        // contacts per snapshot; 0 = the tool's, at least 64
+};
+
+struct LoopStats {
+  std::uint64_t ticks = 0;
+  std::uint64_t overruns = 0;  // deadlines skipped because a tick ended past the next one
+  std::uint64_t faults = 0;    // ticks zeroed by the watchdog
+  std::uint32_t last_fault = 0;
+  std::array<std::uint64_t, kJitterBuckets> jitter{};  // wake-up lateness histogram
+  std::int64_t max_late_ns = 0;
+  std::uint64_t tick_ns_sum = 0;  // compute time of the ticks (step() only)
+  std::int64_t tick_ns_max = 0;
+  bool realtime = false;  // SCHED_FIFO and locked memory both in effect
+  bool paused = false;
+  bool recording = false;
+  bool finished = false;  // the device reported Finished and the loop stopped
+  DeviceState device_state = DeviceState::Present;  // as of the last tick
+  std::uint64_t absent_events = 0;                  // present -> absent transitions (unplugs)
+  std::uint64_t net_published = 0, net_dropped = 0;
+  std::uint64_t record_published = 0, record_dropped = 0;
+};
+
+class HapticLoop {
+ public:
+  // `device` must be configured and activated by the caller and outlive the loop. UsageError
+  // for a rate outside [1, 100000] Hz.
+  HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopConfig config);
+  ~HapticLoop();  // stop()
+  HapticLoop(const HapticLoop&) = delete;
+  HapticLoop& operator=(const HapticLoop&) = delete;
+
+  // Starts the thread (ResourceError if it cannot). The real-time setup's outcome is in
+  // realtime_report() once start() returns.
+  void start();
+  // Stops and joins the thread, then writes zero force to the device. Idempotent.
+  void stop();
+  bool running() const { return thread_.joinable() && !finished_.load(); }
+  bool finished() const { return finished_.load(std::memory_order_acquire); }
+  const std::string& realtime_report() const { return realtime_report_; }
+
+  // One tick without the thread (tests, offline replays): deadline and actual start time.
+  void step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept;
+
+  // Not real time: the next tick runs `model` (tool or parameters changed). The loop's state
+  // restarts (no contacts). The previous model is freed here or at the next call.
+  void swap_model(std::shared_ptr<const Model> model);
+  std::shared_ptr<const Model> model() const;
+
+  void set_paused(bool paused) { paused_.store(paused, std::memory_order_relaxed); }
+  bool paused() const { return paused_.load(std::memory_order_relaxed); }
+  // From the next tick on, records go to record_ring() (or stop going there); a recording starts
+  // with the model state reset, so a replay from a fresh state reproduces it. Returns a seq no
+  // later than the first recorded tick (older ring leftovers have smaller seqs).
+  std::uint64_t set_recording(bool on);
+
+  SnapshotRing& net_ring() { return net_ring_; }
+  SnapshotRing& record_ring() { return record_ring_; }
+  LoopStats stats() const;
+  const LoopConfig& config() const { return config_; }
+  std::int64_t period_ns() const { return period_ns_; }
+  const Device& device() const { return device_; }
+  DeviceState device_state() const {
+    return static_cast<DeviceState>(device_state_.load(std::memory_order_relaxed));
+  }
+
+ private:
+  struct Bundle {
+    std::shared_ptr<const Model> model;
+    State state;
+  };
+  void run();
+  void collect_retired();
+  void publish(const TickRecord& record, const State* state, std::uint32_t points,
+               DeviceState device_state) noexcept;
+
+  LoopConfig config_;
+  Device& device_;
+  std::int64_t period_ns_;
+  double dt_s_;
+
+  // Real-time side.
+  std::unique_ptr<Bundle> current_;
+  std::atomic<Bundle*> pending_{nullptr};
+  std::atomic<Bundle*> retired_{nullptr};
+  std::uint64_t seq_ = 0;
+  Pose last_pose_{};
+  bool have_pose_ = false;
+  std::int64_t last_sample_ns_ = 0;
+  Vec3d prev_force_{};
+  Vec3d prev_position_{};
+  bool prev_valid_ = false;
+  bool absent_ = false;  // the last tick found the device absent
+
+  // Shared counters (relaxed atomics: written by the loop, read by anyone).
+  std::atomic<std::uint64_t> ticks_{0}, overruns_{0}, faults_{0};
+  std::atomic<std::uint32_t> last_fault_{0};
+  std::array<std::atomic<std::uint64_t>, kJitterBuckets> jitter_{};
+  std::atomic<std::int64_t> max_late_ns_{0}, tick_ns_max_{0};
+  std::atomic<std::uint64_t> tick_ns_sum_{0};
+  std::atomic<std::uint64_t> absent_events_{0};
+  std::atomic<std::uint8_t> device_state_{static_cast<std::uint8_t>(DeviceState::Present)};
+  std::atomic<bool> paused_{false}, recording_{false}, stop_{false}, finished_{false};
+  std::atomic<int> record_request_{0};  // 1: start recording (reset state), 2: stop
+  bool recording_on_ = false;           // loop side
+  bool realtime_ = false;
+
+  SnapshotRing net_ring_;
+  SnapshotRing record_ring_;
+
+  mutable std::mutex model_mutex_;  // guards requested_ (never taken by the loop)
+  std::shared_ptr<const Model> requested_;
+  std::string realtime_report_;
+  std::thread thread_;
+};
+
+}  // namespace palp::rt

@@ -1,0 +1,212 @@
+// palpview's command line end to end: help and usage errors; an unreachable server in screenshot
+// mode (exit 1 after --timeout); a screenshot of palpd's sphere scene (the PNG has the asked size
+// and is not uniform); and a controller run whose scripted poses drive palpd's `remote` device
+// (palpd reports the pose back and finds the pad in contact). Rendering needs an X display
+// (CTest runs this under xvfb-run -a where DISPLAY is unset); without one those tests skip.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
+#include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <regex>
+#include <set>
+#include <thread>
+
+#include "scene/trajectory.hpp"
+#include "support/cli_test_util.hpp"
+
+namespace palp {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::read_text;
+using testing::shared_cli_dir;
+
+bool display_available() {
+  const char* display = std::getenv("DISPLAY");
+  return display && *display;
+}
+
+testing::CliOutcome run_palpview(const std::string& args) {
+  const std::string command = std::string(PALPVIEW_PATH) + " " + args + " 2>&1 </dev/null";
+  testing::CliOutcome outcome;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return outcome;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
+  const int status = pclose(pipe);
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return outcome;
+}
+
+// palpd in the background, stopped (SIGTERM) when this goes out of scope.
+class Palpd {
+ public:
+  Palpd(const std::string& args, const fs::path& dir) : log_(dir / "palpd.log") {
+    const fs::path pid_file = dir / "palpd.pid";
+    const std::string command = "PALP_SCENE_CACHE='" + (shared_cli_dir() / "cache").string() +
+                                "' " + PALPD_PATH + " " + args + " >'" + log_.string() +
+                                "' 2>&1 </dev/null & echo $! >'" + pid_file.string() + "'";
+    if (std::system(command.c_str()) != 0) return;
+    pid_ = std::atoi(read_text(pid_file).c_str());
+    const std::regex listening("listening on 127\\.0\\.0\\.1:([0-9]+)");
+    for (int i = 0; i < 1200 && port_ == 0; ++i) {  // up to 2 min (first scene prep)
+      std::smatch match;
+      const std::string text = read_text(log_);
+      if (std::regex_search(text, match, listening)) port_ = std::stoi(match[1]);
+      if (text.find("error") != std::string::npos) break;
+      if (port_ == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  }
+  ~Palpd() {
+    if (pid_ > 0) ::kill(pid_, SIGTERM);
+  }
+  int port() const { return port_; }
+  std::string log() const { return read_text(log_); }
+
+ private:
+  fs::path log_;
+  int pid_ = 0;
+  int port_ = 0;
+};
+
+fs::path test_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = shared_cli_dir() / info->name();
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct Png {
+  int width = 0, height = 0;
+  std::size_t distinct_colours = 0;
+};
+
+Png read_png(const fs::path& path) {
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(path.string().c_str());
+  reader->Update();
+  vtkImageData* image = reader->GetOutput();
+  int dims[3] = {0, 0, 0};
+  image->GetDimensions(dims);
+  Png out{dims[0], dims[1], 0};
+  auto* pixels = vtkUnsignedCharArray::SafeDownCast(image->GetPointData()->GetScalars());
+  if (!pixels) return out;
+  const int nc = pixels->GetNumberOfComponents();
+  std::set<std::uint32_t> colours;
+  for (vtkIdType i = 0; i < pixels->GetNumberOfTuples(); ++i) {
+    std::uint32_t c = 0;
+    for (int k = 0; k < std::min(nc, 3); ++k) c = (c << 8) | pixels->GetValue(i * nc + k);
+    colours.insert(c);
+  }
+  out.distinct_colours = colours.size();
+  return out;
+}
+
+TEST(Palpview, HelpAndUsageErrors) {
+  auto r = run_palpview("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--connect HOST:PORT"), std::string::npos);
+  EXPECT_NE(r.output.find("--screenshot FILE"), std::string::npos);
+  r = run_palpview("");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--connect HOST:PORT is required"), std::string::npos) << r.output;
+  r = run_palpview("--connect 127.0.0.1:7400 --bogus");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("unknown option '--bogus'"), std::string::npos) << r.output;
+  EXPECT_EQ(run_palpview("--connect nocolon").exit_code, 2);
+  EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --preset lung").exit_code, 2);
+  EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --frames 3").exit_code, 2);
+  EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --width 10").exit_code, 2);
+  EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --camera 1,2").exit_code, 2);
+  EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --rate").exit_code, 2);
+  EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --script x.csv").exit_code, 2);
+}
+
+TEST(Palpview, UnreachableServerFailsAfterTheTimeout) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  const fs::path dir = test_dir();
+  // Port 1 on the loopback: nothing listens there.
+  const auto started = std::chrono::steady_clock::now();
+  const auto r = run_palpview("--connect 127.0.0.1:1 --screenshot " + (dir / "x.png").string() +
+                              " --timeout 1.5 --width 160 --height 120");
+  const double took =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("no scene from 127.0.0.1:1 within 1.5 s"), std::string::npos) << r.output;
+  EXPECT_GE(took, 1.5);
+  EXPECT_FALSE(fs::exists(dir / "x.png"));
+}
+
+TEST(Palpview, ScreenshotOfTheLiveStream) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  const fs::path dir = test_dir();
+  Palpd palpd("--scene phantom:sphere --device sim --port 0 --no-realtime --duration 300", dir);
+  ASSERT_GT(palpd.port(), 0) << palpd.log();
+  const fs::path png = dir / "out.png", stats = dir / "stats.json";
+  const auto r = run_palpview(
+      "--connect 127.0.0.1:" + std::to_string(palpd.port()) + " --screenshot " + png.string() +
+      " --frames 5 --width 320 --height 240 --timeout 120 --stats-json " + stats.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("receive"), std::string::npos) << r.output;
+  ASSERT_TRUE(fs::exists(png));
+  const Png image = read_png(png);
+  EXPECT_EQ(image.width, 320);
+  EXPECT_EQ(image.height, 240);
+  EXPECT_GE(image.distinct_colours, 16u);  // volume, shading, HUD text: far from uniform
+  const auto j = nlohmann::json::parse(read_text(stats));
+  EXPECT_EQ(j.at("live_frames").get<int>(), 5);
+  EXPECT_EQ(j.at("render_ms").at("n").get<int>(), 5);
+  EXPECT_EQ(j.at("width").get<int>(), 320);
+  EXPECT_TRUE(j.at("last_frame_valid").get<bool>());
+}
+
+TEST(Palpview, ControllerScriptDrivesTheRemoteDevice) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  const fs::path dir = test_dir();
+  Palpd palpd("--scene phantom:sphere --device remote --port 0 --no-realtime --duration 300", dir);
+  ASSERT_GT(palpd.port(), 0) << palpd.log();
+  // The sphere phantom: radius 30 mm about the centre of its 100^3 grid of 1 mm (49.5 mm). The
+  // finger comes from the front (-y) along +y and ends with its pad 4 mm into the ball.
+  Trajectory script(2);
+  for (auto& row : script) row.pose.orientation = axis_angle({1, 0, 0}, 0.5 * std::numbers::pi);
+  script[0].t = 0.0;
+  script[0].pose.position = {49.5, 49.5 - 30.0 - 20.0 - 8.0, 49.5};
+  script[1].t = 0.1;
+  script[1].pose.position = {49.5, 49.5 - 30.0 + 4.0 - 8.0, 49.5};
+  const fs::path csv = dir / "script.csv", png = dir / "press.png", stats = dir / "stats.json";
+  write_trajectory_csv(csv.string(), script);
+  const auto r =
+      run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) +
+                   " --controller --script " + csv.string() + " --screenshot " + png.string() +
+                   " --frames 40 --width 240 --height 180 --timeout 120 "
+                   "--stats-json " +
+                   stats.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(read_text(stats));
+  ASSERT_TRUE(j.at("last_frame_valid").get<bool>());
+  // palpd ticked with the scripted pose and found the pad in contact.
+  const auto pose = j.at("last_pose").get<std::vector<double>>();
+  ASSERT_EQ(pose.size(), 7u);
+  EXPECT_NEAR(pose[0], script[1].pose.position.x, 1e-6);
+  EXPECT_NEAR(pose[1], script[1].pose.position.y, 1e-6);
+  EXPECT_NEAR(pose[2], script[1].pose.position.z, 1e-6);
+  EXPECT_NEAR(pose[3], script[1].pose.orientation.w, 1e-6);
+  EXPECT_NEAR(pose[4], script[1].pose.orientation.x, 1e-6);
+  EXPECT_GT(j.at("max_contacts").get<int>(), 0);
+  EXPECT_GT(j.at("deformation_active_frames").get<int>(), 0);
+}
+
+}  // namespace
+}  // namespace palp

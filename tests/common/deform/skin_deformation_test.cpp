@@ -1,0 +1,228 @@
+// Tests for common/deform/skin_deformation.cpp: a fingertip pad pressed into a small synthetic
+// volume. The anchored voxels hold exactly x_i - p_i and their mean is -u (paper eq. 13); the
+// displacement is 0 outside the ROI and on its boundary, and the volume outside the written box
+// is bit-identical to the original; inside, deformed(v) = original(v - d(v)) on a linear field
+// (trilinear sampling reproduces it); releasing or moving the tool restores what it left bit for
+// bit; update() allocates nothing after warm-up.
+#include "deform/skin_deformation.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "support/heap_allocation_counter.hpp"
+
+namespace palp {
+namespace {
+
+using Index3 = std::array<std::int64_t, 3>;
+
+constexpr Index3 kDims{48, 44, 40};
+constexpr std::array<double, 3> kSpacing{1.0, 1.0, 1.0};
+
+std::int64_t voxel_index(std::int64_t i, std::int64_t j, std::int64_t k) {
+  return i + kDims[0] * (j + kDims[1] * k);
+}
+
+// A linear field (exact for trilinear sampling) plus nothing else: value = 3i + 5j + 7k.
+std::vector<float> linear_volume() {
+  std::vector<float> v(static_cast<std::size_t>(kDims[0] * kDims[1] * kDims[2]));
+  for (std::int64_t k = 0; k < kDims[2]; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 0; i < kDims[0]; ++i)
+        v[voxel_index(i, j, k)] = static_cast<float>(3 * i + 5 * j + 7 * k);
+  return v;
+}
+
+// A finger:7 pad (centre + ring of 6 at 2.5 mm) with its proxies on the plane z = z_skin,
+// pressed `depth` mm along -z with a small friction drag that differs per point.
+std::vector<DeformContact> pad(double cx, double cy, double z_skin, double depth) {
+  std::vector<DeformContact> contacts;
+  for (int n = 0; n < 7; ++n) {
+    const double angle = 2.0 * std::numbers::pi * (n - 1) / 6.0;
+    const double r = n == 0 ? 0.0 : 2.5;
+    const Vec3d p{cx + r * std::cos(angle), cy + r * std::sin(angle), z_skin};
+    const Vec3d drag{0.25 * std::cos(n), -0.125 * std::sin(n), 0.0625 * n};
+    contacts.push_back({p + Vec3d{0, 0, -depth} + drag, p});
+  }
+  return contacts;
+}
+
+Index3 nearest_voxel(const Vec3d& p) {
+  return {std::llround(p.x / kSpacing[0]), std::llround(p.y / kSpacing[1]),
+          std::llround(p.z / kSpacing[2])};
+}
+
+bool bit_identical(float a, float b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+bool inside(const Index3& lo, const Index3& hi, std::int64_t i, std::int64_t j, std::int64_t k) {
+  return i >= lo[0] && i < hi[0] && j >= lo[1] && j < hi[1] && k >= lo[2] && k < hi[2];
+}
+
+TEST(SkinDeformer, RejectsBadInput) {
+  EXPECT_THROW(SkinDeformer({4, 4, 0}, {1, 1, 1}, {}), UsageError);
+  EXPECT_THROW(SkinDeformer({4, 4, 4}, {1, 0, 1}, std::vector<float>(64)), UsageError);
+  EXPECT_THROW(SkinDeformer({4, 4, 4}, {1, 1, 1}, std::vector<float>(63)), UsageError);
+  DeformerParams bad;
+  bad.roi_margin_mm = -1;
+  EXPECT_THROW(SkinDeformer({4, 4, 4}, {1, 1, 1}, std::vector<float>(64), bad), UsageError);
+  SkinDeformer deformer({4, 4, 4}, {1, 1, 1}, std::vector<float>(64));
+  std::vector<float> out(63);
+  EXPECT_THROW(deformer.update({}, out), UsageError);
+}
+
+TEST(SkinDeformer, AnchorsHoldTheContactDisplacementsAndTheirMeanIsMinusU) {
+  SkinDeformer deformer(kDims, kSpacing, linear_volume());
+  std::vector<float> out = deformer.original();
+  const auto contacts = pad(24.0, 22.0, 20.0, 4.0);
+  const DeformResult result = deformer.update(contacts, out);
+  ASSERT_TRUE(result.active);
+  EXPECT_EQ(result.anchors, 7);
+
+  Vec3d u{}, mean_anchor{};
+  for (const auto& contact : contacts) {
+    u += contact.p - contact.x;
+    const Index3 v = nearest_voxel(contact.p);
+    const Vec3d held = deformer.displacement_at(v[0], v[1], v[2]);
+    EXPECT_EQ(held, contact.x - contact.p);  // exactly
+    mean_anchor += held;
+  }
+  u *= 1.0 / 7.0;
+  mean_anchor *= 1.0 / 7.0;
+  EXPECT_EQ(mean_anchor, -u);
+  EXPECT_EQ(result.mean_anchor_displacement, -u);
+  EXPECT_LE(deformer.chainmail().max_violation(), 1e-9);
+}
+
+TEST(SkinDeformer, DeformationIsLocal) {
+  SkinDeformer deformer(kDims, kSpacing, linear_volume());
+  std::vector<float> out = deformer.original();
+  const DeformResult result = deformer.update(pad(24.0, 22.0, 20.0, 5.0), out);
+  ASSERT_TRUE(result.active);
+  // The ROI reaches the margin (20 mm) around the pad, clipped to the volume.
+  EXPECT_EQ(result.roi_lo, (Index3{2, 0, 0}));
+  EXPECT_EQ(result.roi_hi, (Index3{48, 44, 40}));
+  EXPECT_EQ(result.elements, 46 * 44 * 40);
+  std::int64_t changed = 0;
+  for (std::int64_t k = 0; k < kDims[2]; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 0; i < kDims[0]; ++i) {
+        const Vec3d d = deformer.displacement_at(i, j, k);
+        const bool in_roi = inside(result.roi_lo, result.roi_hi, i, j, k);
+        const bool on_roi_boundary =
+            in_roi &&
+            (i == result.roi_lo[0] || j == result.roi_lo[1] || k == result.roi_lo[2] ||
+             i == result.roi_hi[0] - 1 || j == result.roi_hi[1] - 1 || k == result.roi_hi[2] - 1);
+        if (!in_roi || on_roi_boundary) {
+          ASSERT_EQ(d, Vec3d{}) << i << " " << j << " " << k;
+        }
+        const float original = deformer.original()[voxel_index(i, j, k)];
+        if (!inside(result.lo, result.hi, i, j, k) || d == Vec3d{}) {
+          ASSERT_TRUE(bit_identical(out[voxel_index(i, j, k)], original))
+              << i << " " << j << " " << k;
+        }
+        changed += !bit_identical(out[voxel_index(i, j, k)], original);
+      }
+  EXPECT_GT(changed, 100);
+  // The written box lies inside the ROI, off its boundary.
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GT(result.lo[a], result.roi_lo[a]);
+    EXPECT_LT(result.hi[a], result.roi_hi[a]);
+  }
+}
+
+TEST(SkinDeformer, ResamplesThroughTheDisplacement) {
+  SkinDeformer deformer(kDims, kSpacing, linear_volume());
+  std::vector<float> out = deformer.original();
+  const DeformResult result = deformer.update(pad(24.0, 22.0, 20.0, 6.0), out);
+  ASSERT_TRUE(result.active);
+  double worst = 0.0;
+  std::int64_t checked = 0;
+  for (std::int64_t k = result.lo[2]; k < result.hi[2]; ++k)
+    for (std::int64_t j = result.lo[1]; j < result.hi[1]; ++j)
+      for (std::int64_t i = result.lo[0]; i < result.hi[0]; ++i) {
+        const Vec3d d = deformer.displacement_at(i, j, k);
+        const Vec3d source{i - d.x, j - d.y, k - d.z};  // spacing 1
+        if (source.x < 0 || source.y < 0 || source.z < 0 || source.x > kDims[0] - 1 ||
+            source.y > kDims[1] - 1 || source.z > kDims[2] - 1)
+          continue;
+        const double expected = 3 * source.x + 5 * source.y + 7 * source.z;
+        // float storage: values up to ~600, rounding a few 1e-5 relative
+        worst = std::max(worst, std::abs(out[voxel_index(i, j, k)] - expected));
+        ++checked;
+      }
+  EXPECT_GT(checked, 1000);
+  EXPECT_LE(worst, 2e-3);
+  // At the centre anchor: the voxel shows what lay 6 mm (+ drag) above it.
+  const Index3 centre = nearest_voxel({24.0, 22.0, 20.0});
+  const Vec3d d = deformer.displacement_at(centre[0], centre[1], centre[2]);
+  EXPECT_NEAR(d.z, -6.0, 1e-12);
+  EXPECT_NEAR(out[voxel_index(centre[0], centre[1], centre[2])],
+              3 * (24 - d.x) + 5 * (22 - d.y) + 7 * (20 - d.z), 2e-3);
+}
+
+TEST(SkinDeformer, ReleasingAndMovingRestoreBitForBit) {
+  SkinDeformer deformer(kDims, kSpacing, linear_volume());
+  std::vector<float> out = deformer.original();
+  const DeformResult first = deformer.update(pad(16.0, 16.0, 20.0, 5.0), out);
+  ASSERT_TRUE(first.active);
+  // Slide far enough that the two written boxes only partly overlap.
+  const DeformResult moved = deformer.update(pad(30.0, 26.0, 20.0, 3.0), out);
+  ASSERT_TRUE(moved.active);
+  for (int a = 0; a < 3; ++a) {  // the reported box covers both the old and the new one
+    EXPECT_LE(moved.lo[a], first.lo[a]);
+    EXPECT_GE(moved.hi[a], first.hi[a]);
+  }
+  std::int64_t differs_outside = 0;
+  for (std::int64_t k = 0; k < kDims[2]; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 0; i < kDims[0]; ++i)
+        if (deformer.displacement_at(i, j, k) == Vec3d{})
+          differs_outside +=
+              !bit_identical(out[voxel_index(i, j, k)], deformer.original()[voxel_index(i, j, k)]);
+  EXPECT_EQ(differs_outside, 0);
+
+  const DeformResult released = deformer.update({}, out);
+  EXPECT_FALSE(released.active);
+  EXPECT_EQ(released.anchors, 0);
+  EXPECT_EQ(std::memcmp(out.data(), deformer.original().data(), out.size() * sizeof(float)), 0);
+  EXPECT_EQ(deformer.displacement_at(30, 26, 20), Vec3d{});
+  // Released twice: nothing left to write.
+  const DeformResult again = deformer.update({}, out);
+  EXPECT_EQ(again.lo, again.hi);
+  EXPECT_EQ(std::memcmp(out.data(), deformer.original().data(), out.size() * sizeof(float)), 0);
+}
+
+TEST(SkinDeformer, SkipsContactsOutsideTheVolume) {
+  SkinDeformer deformer(kDims, kSpacing, linear_volume());
+  std::vector<float> out = deformer.original();
+  const std::vector<DeformContact> outside = {
+      {{-5, 3, 3}, {-3, 3, 3}}, {{3, 3, 100}, {3, 3, 90}}, {{std::nan(""), 3, 3}, {3, 3, 3}}};
+  const DeformResult result = deformer.update(outside, out);
+  EXPECT_FALSE(result.active);
+  EXPECT_EQ(std::memcmp(out.data(), deformer.original().data(), out.size() * sizeof(float)), 0);
+}
+
+TEST(SkinDeformer, NoAllocationPerUpdateAfterWarmUp) {
+  SkinDeformer deformer(kDims, kSpacing, linear_volume());
+  std::vector<float> out = deformer.original();
+  std::vector<std::vector<DeformContact>> frames;
+  for (int f = 0; f < 8; ++f) frames.push_back(pad(20.0 + 0.5 * f, 20.0 + 0.25 * f, 20.0, 5.0));
+  for (const auto& frame : frames) deformer.update(frame, out);  // warm-up: the largest ROI
+  g_allocations = 0;
+  g_count_allocations = true;
+  for (const auto& frame : frames) deformer.update(frame, out);
+  deformer.update({}, out);
+  g_count_allocations = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(std::memcmp(out.data(), deformer.original().data(), out.size() * sizeof(float)), 0);
+}
+
+}  // namespace
+}  // namespace palp

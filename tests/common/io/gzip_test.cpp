@@ -1,0 +1,204 @@
+// Tests for gzip.hpp: streaming inflate (multi-member, truncated, corrupt, limits), zlib
+// streams, and the parallel multi-member gzip writer checked against zlib itself.
+#include "io/gzip.hpp"
+
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cstring>
+#include <numeric>
+
+#include "base/errors.hpp"
+#include "support/io_test_util.hpp"
+
+namespace palp {
+namespace {
+
+using testing::read_bytes;
+using testing::TempDir;
+using testing::write_bytes;
+
+// Compressible but not trivial test data.
+std::vector<std::uint8_t> sample_bytes(std::size_t n) {
+  std::vector<std::uint8_t> out(n);
+  std::uint32_t state = 12345;
+  for (std::size_t i = 0; i < n; ++i) {
+    state = state * 1664525u + 1013904223u;
+    out[i] = static_cast<std::uint8_t>((i / 97) % 13 + ((state >> 24) & 3));
+  }
+  return out;
+}
+
+// One gzip member made by zlib (not by the code under test).
+std::vector<std::uint8_t> zlib_gzip_member(const std::vector<std::uint8_t>& data) {
+  z_stream zs{};
+  EXPECT_EQ(deflateInit2(&zs, 6, Z_DEFLATED, 16 + 15, 8, Z_DEFAULT_STRATEGY), Z_OK);
+  std::vector<std::uint8_t> out(deflateBound(&zs, data.size()) + 64);
+  zs.next_in = const_cast<Bytef*>(data.data());
+  zs.avail_in = static_cast<uInt>(data.size());
+  zs.next_out = out.data();
+  zs.avail_out = static_cast<uInt>(out.size());
+  EXPECT_EQ(deflate(&zs, Z_FINISH), Z_STREAM_END);
+  out.resize(zs.total_out);
+  deflateEnd(&zs);
+  return out;
+}
+
+// Decompresses a whole (multi-member) gzip file with zlib's gz* API.
+std::vector<std::uint8_t> zlib_gunzip_file(const std::string& path) {
+  gzFile file = gzopen(path.c_str(), "rb");
+  EXPECT_NE(file, nullptr);
+  std::vector<std::uint8_t> out;
+  std::uint8_t buffer[1 << 16];
+  int n = 0;
+  while ((n = gzread(file, buffer, sizeof buffer)) > 0) out.insert(out.end(), buffer, buffer + n);
+  EXPECT_EQ(n, 0);
+  gzclose(file);
+  return out;
+}
+
+TEST(Gzip, ParallelMultiMemberOutputIsReadByZlibAndByTheReader) {
+  TempDir dir;
+  const auto data = sample_bytes(10'000'000);
+  const std::string path = dir.file("data.gz");
+  GzipOptions options;
+  options.member_bytes = 1 << 20;
+  options.threads = 2;
+  const ByteSpan piece(data);
+  write_file(path, std::span<const ByteSpan>(&piece, 1), true, options);
+
+  EXPECT_EQ(zlib_gunzip_file(path), data);
+  EXPECT_TRUE(file_is_gzip(path));
+  EXPECT_EQ(read_file(path, data.size()), data);
+  // No temporary file is left behind.
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);
+}
+
+TEST(Gzip, PiecesStartNewMembersAndConcatenate) {
+  const auto a = sample_bytes(1000);
+  const auto b = sample_bytes(3000);
+  const ByteSpan pieces[2] = {ByteSpan(a), ByteSpan(b)};
+  const auto packed = gzip_compress(pieces);
+  auto expected = a;
+  expected.insert(expected.end(), b.begin(), b.end());
+  EXPECT_EQ(decompress(packed, Compression::gzip, expected.size(), "mem"), expected);
+}
+
+TEST(Gzip, EmptyInputIsAValidGzipStream) {
+  const std::vector<std::uint8_t> empty;
+  const auto packed = gzip_compress(ByteSpan(empty));
+  EXPECT_GE(packed.size(), 18u);
+  EXPECT_TRUE(decompress(packed, Compression::gzip, 10, "mem").empty());
+}
+
+TEST(Gzip, ReadsMultiMemberFilesWrittenByZlib) {
+  TempDir dir;
+  const auto a = sample_bytes(200'000);
+  const auto b = sample_bytes(50'000);
+  auto file = zlib_gzip_member(a);
+  const auto second = zlib_gzip_member(b);
+  file.insert(file.end(), second.begin(), second.end());
+  write_bytes(dir.file("two.gz"), file);
+  auto expected = a;
+  expected.insert(expected.end(), b.begin(), b.end());
+  EXPECT_EQ(read_file(dir.file("two.gz"), 1 << 20), expected);
+}
+
+TEST(Gzip, TrailingZeroPaddingIsIgnored) {
+  TempDir dir;
+  const auto a = sample_bytes(5000);
+  auto file = zlib_gzip_member(a);
+  file.insert(file.end(), 100, 0);
+  write_bytes(dir.file("padded.gz"), file);
+  EXPECT_EQ(read_file(dir.file("padded.gz"), 1 << 20), a);
+}
+
+TEST(Gzip, StreamingReaderDeliversExactChunksAndSkips) {
+  TempDir dir;
+  const auto data = sample_bytes(3'000'000);
+  write_bytes(dir.file("d.gz"), zlib_gzip_member(data));
+  DecodedReader reader(dir.file("d.gz"), 0, Compression::gzip);
+  EXPECT_EQ(reader.skip(1000), 1000u);
+  std::vector<std::uint8_t> part(777);
+  ASSERT_EQ(reader.read(part.data(), part.size()), part.size());
+  EXPECT_TRUE(std::equal(part.begin(), part.end(), data.begin() + 1000));
+  EXPECT_EQ(reader.position(), 1777u);
+  std::vector<std::uint8_t> rest(data.size());
+  EXPECT_EQ(reader.read(rest.data(), rest.size()), data.size() - 1777);
+}
+
+TEST(Gzip, RawReaderFromOffset) {
+  TempDir dir;
+  const auto data = sample_bytes(5000);
+  write_bytes(dir.file("raw.bin"), data);
+  DecodedReader reader(dir.file("raw.bin"), 100, Compression::none);
+  EXPECT_EQ(reader.skip(50), 50u);
+  std::vector<std::uint8_t> out(10000);
+  ASSERT_EQ(reader.read(out.data(), out.size()), 4850u);
+  EXPECT_TRUE(std::equal(data.begin() + 150, data.end(), out.begin()));
+  EXPECT_FALSE(file_is_gzip(dir.file("raw.bin")));
+  EXPECT_EQ(read_file(dir.file("raw.bin"), 5000), data);
+}
+
+TEST(Gzip, TruncatedStreamIsAClearInputError) {
+  TempDir dir;
+  auto file = zlib_gzip_member(sample_bytes(400'000));
+  file.resize(file.size() / 2);
+  write_bytes(dir.file("cut.gz"), file);
+  EXPECT_PALP_ERROR(read_file(dir.file("cut.gz"), 1 << 20), InputError,
+                    "cut.gz: truncated gzip stream (file ends before the compressed data does)");
+}
+
+TEST(Gzip, CorruptDataReportsZlibsMessage) {
+  TempDir dir;
+  auto file = zlib_gzip_member(sample_bytes(400'000));
+  for (std::size_t i = 40; i < 60; ++i) file[i] ^= 0x5a;
+  write_bytes(dir.file("bad.gz"), file);
+  EXPECT_PALP_ERROR(read_file(dir.file("bad.gz"), 1 << 20), InputError,
+                    "bad.gz: corrupt gzip data (zlib: ");
+}
+
+TEST(Gzip, CorruptChecksumIsDetected) {
+  TempDir dir;
+  auto file = zlib_gzip_member(sample_bytes(10'000));
+  file[file.size() - 6] ^= 0xff;  // inside the CRC-32 of the trailer
+  write_bytes(dir.file("crc.gz"), file);
+  EXPECT_PALP_ERROR(read_file(dir.file("crc.gz"), 1 << 20), InputError, "incorrect data check");
+}
+
+TEST(Gzip, DecompressionBombIsRefusedAtTheLimit) {
+  TempDir dir;
+  const std::vector<std::uint8_t> zeros(50'000'000, 0);
+  write_bytes(dir.file("bomb.gz"), zlib_gzip_member(zeros));
+  EXPECT_LT(std::filesystem::file_size(dir.file("bomb.gz")), 100'000u);
+  EXPECT_PALP_ERROR(read_file(dir.file("bomb.gz"), 1'000'000), InputError,
+                    "decompressed content exceeds the limit of 1000000 bytes");
+}
+
+TEST(Gzip, ZlibStreamsAsInMetaImageCompressedData) {
+  const auto data = sample_bytes(123'456);
+  uLongf size = compressBound(data.size());
+  std::vector<std::uint8_t> packed(size);
+  ASSERT_EQ(compress2(packed.data(), &size, data.data(), data.size(), 6), Z_OK);
+  packed.resize(size);
+  EXPECT_EQ(decompress(packed, Compression::zlib, data.size(), "mem"), data);
+  packed.resize(packed.size() - 10);
+  EXPECT_PALP_ERROR(decompress(packed, Compression::zlib, data.size(), "img.zraw"), InputError,
+                    "img.zraw: truncated zlib stream");
+}
+
+TEST(Gzip, MissingFileIsNamed) {
+  EXPECT_PALP_ERROR(read_file("/nonexistent/x.gz", 100), InputError,
+                    "/nonexistent/x.gz: no such file or directory");
+}
+
+TEST(Gzip, UnwritableDestinationIsAResourceError) {
+  const std::vector<std::uint8_t> data(10, 1);
+  const ByteSpan piece(data);
+  EXPECT_PALP_ERROR(
+      write_file("/nonexistent/dir/out.gz", std::span<const ByteSpan>(&piece, 1), true),
+      ResourceError, "cannot write /nonexistent/dir/out.gz");
+}
+
+}  // namespace
+}  // namespace palp

@@ -1,0 +1,147 @@
+// The preprocessing pipeline end to end on small phantoms: outputs on the input grid voxel for
+// voxel with the input's world placement, prep.json contents, and the content cache.
+#include "prep/prep.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "base/errors.hpp"
+#include "io/ct_io.hpp"
+#include "io/phantom.hpp"
+#include "prep/distance_transform.hpp"
+#include "prep/segmentation.hpp"
+
+namespace palp {
+namespace {
+
+namespace fs = std::filesystem;
+
+class PrepTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("palp_prep_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+// A small sphere phantom written with a non-trivial world placement.
+std::string write_small_ct(const fs::path& dir, CtVolume* ct_out = nullptr) {
+  PhantomOptions options;
+  options.dims = Index3{50, 48, 46};
+  options.spacing = Vec3{2.0, 2.0, 2.5};
+  CtVolume ct = make_phantom("sphere", options);
+  ct.grid.world.origin = {-41.5, 12.25, 100.0};
+  ct.grid.world.direction = {0, 1, 0, -1, 0, 0, 0, 0, 1};  // i along -y, j along +x (LPS)
+  const std::string path = (dir / "ct.nii.gz").string();
+  write_nifti(path, ct);
+  if (ct_out) *ct_out = read_ct(path);
+  return path;
+}
+
+TEST_F(PrepTest, WritesAllOutputsOnTheInputGridWithItsWorldPlacement) {
+  CtVolume ct;
+  const std::string input = write_small_ct(dir_, &ct);
+  PrepParams params;
+  params.distance.threads = 2;
+  const PrepResult result = run_prep(input, (dir_ / "out").string(), params);
+  EXPECT_FALSE(result.from_cache);
+  EXPECT_EQ(result.grid.dims, ct.grid.dims);
+
+  const Mask body = read_nifti_mask((dir_ / "out" / kBodyFile).string());
+  const Mask bone = read_nifti_mask((dir_ / "out" / kBoneFile).string());
+  const DistanceMap d_surf = read_nifti_float((dir_ / "out" / kSurfaceDistanceFile).string());
+  const DistanceMap d_bone = read_nifti_float((dir_ / "out" / kBoneDistanceFile).string());
+  for (const Grid* g : {&body.grid, &bone.grid, &d_surf.grid, &d_bone.grid}) {
+    EXPECT_EQ(g->dims, ct.grid.dims);
+    EXPECT_EQ(g->spacing, ct.grid.spacing);
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(g->world.origin[a], ct.grid.world.origin[a], 1e-4);
+    for (int a = 0; a < 9; ++a)
+      EXPECT_NEAR(g->world.direction[a], ct.grid.world.direction[a], 1e-6);
+  }
+  // The written maps are exactly the maps of the written masks, voxel for voxel.
+  const DistanceMap expected_surf = signed_distance(body, params.distance);
+  const DistanceMap expected_bone = signed_distance(bone, params.distance);
+  EXPECT_EQ(d_surf.data, expected_surf.data);
+  EXPECT_EQ(d_bone.data, expected_bone.data);
+  // A sphere has a body and no bone: D_bone is clamped to -band everywhere.
+  EXPECT_GT(result.stats.body_voxels, 0u);
+  EXPECT_EQ(result.stats.bone_voxels, 0u);
+  for (float v : d_bone.data) ASSERT_EQ(v, -60.0f);
+
+  std::ifstream json_file(dir_ / "out" / kPrepJsonFile);
+  const auto json = nlohmann::json::parse(json_file);
+  EXPECT_EQ(json["grid"]["dimensions"], nlohmann::json({50, 48, 46}));
+  EXPECT_EQ(json["grid"]["spacing_mm"], nlohmann::json({2.0, 2.0, 2.5}));
+  EXPECT_EQ(json["voxels"]["body"].get<std::uint64_t>(), result.stats.body_voxels);
+  EXPECT_EQ(json["parameters"]["bone_seed_hu"], params.segmentation.bone_seed_hu);
+  for (const char* stage : {"read CT", "body mask", "bone mask", "d_surf", "d_bone", "total"}) {
+    ASSERT_TRUE(json["timings_s"].contains(stage)) << stage;
+    EXPECT_GE(json["timings_s"][stage].get<double>(), 0.0);
+  }
+  EXPECT_GT(json["peak_memory_bytes"].get<std::uint64_t>(), 0u);
+}
+
+TEST_F(PrepTest, SecondRunIsServedFromTheCacheUntilInputOrParametersChange) {
+  const std::string input = write_small_ct(dir_);
+  const std::string out = (dir_ / "out").string();
+  PrepParams params;
+  EXPECT_FALSE(run_prep(input, out, params).from_cache);
+  const PrepResult second = run_prep(input, out, params);
+  EXPECT_TRUE(second.from_cache);
+  EXPECT_TRUE(second.stages.empty());
+
+  PrepParams no_cache = params;
+  no_cache.use_cache = false;
+  EXPECT_FALSE(run_prep(input, out, no_cache).from_cache);
+
+  PrepParams other_band = params;
+  other_band.distance.band_mm = 30.0;
+  EXPECT_FALSE(run_prep(input, out, other_band).from_cache);
+  EXPECT_TRUE(run_prep(input, out, other_band).from_cache);
+
+  // Same name, different content: the cache follows the bytes, not the file name.
+  PhantomOptions options;
+  options.dims = Index3{30, 30, 30};
+  write_nifti(input, make_phantom("sphere", options));
+  EXPECT_FALSE(run_prep(input, out, other_band).from_cache);
+
+  // A damaged output invalidates the cache.
+  fs::resize_file(fs::path(out) / kSurfaceDistanceFile, 10);
+  EXPECT_FALSE(run_prep(input, out, other_band).from_cache);
+}
+
+TEST_F(PrepTest, CacheKeyFollowsTheVoxelsOfADetachedHeader) {
+  const std::string header = (dir_ / "ct.mhd").string();
+  std::ofstream(header) << "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\n"
+                           "ElementSpacing = 1 1 1\nElementType = MET_SHORT\n"
+                           "ElementDataFile = ct.raw\n";
+  std::ofstream(dir_ / "ct.raw", std::ios::binary) << std::string(16, '\0');
+  const std::string before = prep_cache_key(header, {});
+  EXPECT_EQ(prep_cache_key(header, {}), before);
+  std::ofstream(dir_ / "ct.raw", std::ios::binary) << std::string(15, '\0') << 'x';
+  EXPECT_NE(prep_cache_key(header, {}), before);  // same header, other voxels
+}
+
+TEST_F(PrepTest, AcceptsPhantomInputs) {
+  EXPECT_NE(prep_cache_key("phantom:cube", {}), prep_cache_key("phantom:sphere", {}));
+  EXPECT_THROW(run_prep("phantom:nonexistent", (dir_ / "out").string(), {}), UsageError);
+}
+
+TEST_F(PrepTest, BadInputThrowsAndLeavesNoPrepJson) {
+  const fs::path bad = dir_ / "broken.nii.gz";
+  std::ofstream(bad) << "this is not gzip";
+  EXPECT_THROW(run_prep(bad.string(), (dir_ / "out").string(), {}), InputError);
+  EXPECT_FALSE(fs::exists(dir_ / "out" / kPrepJsonFile));
+  EXPECT_THROW(run_prep((dir_ / "missing.nii").string(), (dir_ / "out").string(), {}), InputError);
+}
+
+}  // namespace
+}  // namespace palp

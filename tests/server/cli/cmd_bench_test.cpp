@@ -1,0 +1,74 @@
+// palp bench: human lines, then one JSON line last on stdout with the promised keys; usage
+// mistakes are one-line errors with exit code 2.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "support/cli_test_util.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using palp::testing::count_lines;
+using palp::testing::last_line;
+using palp::testing::run_palp_cli;
+using palp::testing::shared_cli_dir;
+
+fs::path cache() {
+  return shared_cli_dir() / "cache";
+}
+
+TEST(CmdBench, PrintsAJsonLineLast) {
+  for (const char* args : {"bench --scene phantom:cube --tool finger:37 --ticks 3000",
+                           "bench --scene phantom:torso --tool finger:7 --ticks 2000 --warmup 10 "
+                           "--scheme precomputed --storage interleaved --param k=0.3"}) {
+    const auto r = run_palp_cli(args, cache(), /*stdout_only=*/true);
+    ASSERT_EQ(r.exit_code, 0) << args << ": " << r.output;
+    EXPECT_GE(count_lines(r.output), 2) << "human lines first: " << r.output;
+    const auto json = nlohmann::json::parse(last_line(r.output));
+    for (const char* key : {"tick_ns_p50", "tick_ns_p90", "tick_ns_p99", "tick_ns_p999",
+                            "tick_ns_max", "tick_ns_mean", "contacts", "in_contact_mean", "ticks",
+                            "scene", "tool", "scheme", "storage", "path"}) {
+      EXPECT_TRUE(json.contains(key)) << key << " in " << r.output;
+    }
+    EXPECT_LE(json["tick_ns_p50"].get<double>(), json["tick_ns_p99"].get<double>());
+    EXPECT_LE(json["tick_ns_p99"].get<double>(), json["tick_ns_max"].get<double>());
+    EXPECT_GT(json["tick_ns_p50"].get<double>(), 0.0);
+    EXPECT_GT(json["in_contact_mean"].get<double>(), 0.5) << "the default path touches the skin";
+  }
+}
+
+TEST(CmdBench, TimesAGivenTrajectory) {
+  const fs::path traj = shared_cli_dir() / "hold.csv";
+  ASSERT_EQ(run_palp_cli("traj press-hold --scene phantom:cube --out " + traj.string(), cache())
+                .exit_code,
+            0);
+  const auto r = run_palp_cli(
+      "bench --scene phantom:cube --tool probe:3x3 --ticks 1000 -q --trajectory " + traj.string(),
+      cache(), true);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(count_lines(r.output), 1) << "--quiet: only the JSON line";
+  const auto json = nlohmann::json::parse(last_line(r.output));
+  EXPECT_EQ(json["contacts"], 9);
+  EXPECT_EQ(json["ticks"], 1000);
+}
+
+TEST(CmdBench, HelpAndUsageMistakes) {
+  const auto help = run_palp_cli("bench --help", cache());
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("usage: palp bench"), std::string::npos);
+  for (const char* args : {"bench", "bench --scene phantom:cube", "bench --tool finger:37",
+                           "bench --scene phantom:cube --tool finger:37 --ticks 0",
+                           "bench --scene phantom:cube --tool finger:37 --ticks 1.5",
+                           "bench --scene phantom:cube --tool finger:37 --warmup -1",
+                           "bench --scene phantom:cube --tool finger:37 --storage fp8",
+                           "bench --scene phantom:cube --tool finger:37 --param c=abc"}) {
+    const auto r = run_palp_cli(args, cache());
+    EXPECT_EQ(r.exit_code, 2) << args << ": " << r.output;
+    EXPECT_EQ(count_lines(r.output), 1) << args << ": " << r.output;
+  }
+}
+
+}  // namespace

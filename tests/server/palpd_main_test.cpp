@@ -1,0 +1,322 @@
+// palpd's command line end to end: help and usage errors, the TOML config, and a session on the
+// sphere phantom observed by `palp probe`, recorded, and replayed into an identical recording.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <thread>
+
+#include "rt/recording.hpp"
+#include "support/cli_test_util.hpp"
+#include "support/net_test_client.hpp"
+
+namespace palp {
+namespace {
+
+namespace fs = std::filesystem;
+using asio::ip::tcp;
+using testing::read_text;
+using testing::run_palp_cli;
+using testing::shared_cli_dir;
+namespace v1 = palp::v1;
+
+testing::CliOutcome run_palpd(const std::string& args) {
+  const std::string command = "PALP_SCENE_CACHE='" + (shared_cli_dir() / "cache").string() + "' " +
+                              PALPD_PATH + " " + args + " 2>&1 </dev/null";
+  testing::CliOutcome outcome;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return outcome;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
+  const int status = pclose(pipe);
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return outcome;
+}
+
+// Starts palpd in the background with its output in `log`; returns the port it listens on
+// (0 when it did not come up within the timeout).
+int start_palpd(const std::string& args, const fs::path& log) {
+  const std::string command = "PALP_SCENE_CACHE='" + (shared_cli_dir() / "cache").string() + "' " +
+                              PALPD_PATH + " " + args + " >'" + log.string() +
+                              "' 2>&1 </dev/null &";
+  if (std::system(command.c_str()) != 0) return 0;
+  const std::regex listening("listening on 127\\.0\\.0\\.1:([0-9]+)");
+  for (int i = 0; i < 600; ++i) {
+    std::smatch match;
+    const std::string text = read_text(log);
+    if (std::regex_search(text, match, listening)) return std::stoi(match[1]);
+    if (text.find("error") != std::string::npos) return 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return 0;
+}
+
+// Waits for palpd's closing summary line in `log`.
+bool wait_palpd_exit(const fs::path& log) {
+  for (int i = 0; i < 600; ++i) {
+    if (read_text(log).find(" ticks, ") != std::string::npos) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return false;
+}
+
+TEST(Palpd, HelpAndUsageErrors) {
+  auto r = run_palpd("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--device DEVICE"), std::string::npos);
+  EXPECT_NE(r.output.find("replay:FILE"), std::string::npos);
+  EXPECT_NE(r.output.find("--config FILE"), std::string::npos);
+  r = run_palpd("--scene phantom:sphere");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--device"), std::string::npos);
+  r = run_palpd("--scene phantom:sphere --device usb");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("unknown device 'usb'"), std::string::npos);
+  r = run_palpd("--scene phantom:sphere --device sim --rate 0");
+  EXPECT_EQ(r.exit_code, 2);
+  r = run_palpd("--scene phantom:sphere --device sim --bogus 1");
+  EXPECT_EQ(r.exit_code, 2);
+  r = run_palpd("--scene phantom:sphere --device replay:/nonexistent.palprec");
+  EXPECT_EQ(r.exit_code, 1);
+  r = run_palpd("--device sim --bind 10.1.2.3.4 --scene phantom:sphere --no-realtime");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(Palpd, ConfigFileSetsOptionsAndCommandLineWins) {
+  const fs::path config = shared_cli_dir() / "palpd.toml";
+  std::ofstream(config) << "scene = \"phantom:sphere\"\ndevice = \"sim\"\nrate = 500\n"
+                           "port = 0\nduration = 0.5\nrealtime = false\nparam = [\"k=0.3\"]\n"
+                           "tool = \"finger:7\"\n";
+  auto r = run_palpd("--config " + config.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("finger:7, 500 Hz"), std::string::npos) << r.output;
+  r = run_palpd("--config " + config.string() + " --rate 2000");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2000 Hz"), std::string::npos) << r.output;
+  std::ofstream(config) << "scene = \"phantom:sphere\"\nfrobnicate = 1\n";
+  r = run_palpd("--config " + config.string() + " --device sim");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("unknown key 'frobnicate'"), std::string::npos) << r.output;
+  std::ofstream(config) << "scene = [\n";
+  r = run_palpd("--config " + config.string() + " --device sim");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(Palpd, ProbeObservesARecordedSessionThatReplaysExactly) {
+  const fs::path dir = shared_cli_dir();
+  const fs::path rec = dir / "session.palprec", again = dir / "again.palprec";
+  const fs::path log = dir / "palpd.log", log2 = dir / "palpd2.log";
+  const int port = start_palpd(
+      "--scene phantom:sphere --device sim --tool finger:7 --port 0 "
+      "--rate 1000 --duration 2.5 --no-realtime --device-profile falcon "
+      "--record " +
+          rec.string(),
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  const auto probe =
+      run_palp_cli("probe 127.0.0.1:" + std::to_string(port) + " --duration 1", dir / "cache");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  EXPECT_NE(probe.output.find("frames/s"), std::string::npos);
+  EXPECT_NE(probe.output.find("latency   p50"), std::string::npos);
+  EXPECT_NE(testing::last_line(probe.output).find("\"ok\":true"), std::string::npos);
+  ASSERT_TRUE(wait_palpd_exit(log)) << read_text(log);
+  // Nothing listens any more: the probe fails.
+  const auto refused =
+      run_palp_cli("probe 127.0.0.1:" + std::to_string(port) + " --duration 1", dir / "cache");
+  EXPECT_EQ(refused.exit_code, 1);
+
+  const rt::Recording first = rt::read_recording(rec.string());
+  ASSERT_GT(first.records.size(), 1000u);
+  EXPECT_EQ(first.metadata.at("tool"), "finger:7");
+  EXPECT_EQ(first.metadata.at("device-profile"), "falcon");
+  EXPECT_TRUE(fs::exists(rt::csv_path_for(rec.string())));
+
+  // The replay takes scene, tool, rate and profile from the recording.
+  const int port2 =
+      start_palpd("--device replay:" + rec.string() +
+                      " --port 0 --no-realtime --watchdog-ms 0 --record " + again.string(),
+                  log2);
+  ASSERT_GT(port2, 0) << read_text(log2);
+  ASSERT_TRUE(wait_palpd_exit(log2)) << read_text(log2);
+  const rt::Recording second = rt::read_recording(again.string());
+  ASSERT_EQ(second.records.size(), first.records.size());
+  std::size_t mismatches = 0, touching = 0;
+  for (std::size_t i = 0; i < first.records.size(); ++i) {
+    const rt::TickRecord& a = first.records[i];
+    const rt::TickRecord& b = second.records[i];
+    touching += a.n_contact > 0;
+    if (!(a.pose.position == b.pose.position && a.force == b.force && a.torque == b.torque &&
+          a.u == b.u && a.n_contact == b.n_contact && a.tick_status == b.tick_status &&
+          a.safety_status == b.safety_status && a.fault == b.fault))
+      ++mismatches;
+  }
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_GT(touching, 100u);
+}
+
+// The controller side through palpd itself: the token from the config file, the remote device
+// driven by DevicePose, tool and parameter commands, and a recording started and stopped by
+// command into --record-dir.
+TEST(Palpd, ControllerDrivesRemoteDeviceAndRecords) {
+  const fs::path dir = shared_cli_dir() / "controller";
+  fs::create_directories(dir);
+  const fs::path config = dir / "palpd.toml";
+  std::ofstream(config) << "token = \"letmein\"\nrealtime = false\nrecord-dir = \"" << dir.string()
+                        << "\"\n";
+  const fs::path log = dir / "palpd.log";
+  const int port = start_palpd(
+      "--scene phantom:sphere --device remote --port 0 --duration 4 "
+      "--config " +
+          config.string(),
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  testing::TestClient observer(static_cast<std::uint16_t>(port));
+  observer.hello();
+  testing::TestClient c(static_cast<std::uint16_t>(port));
+  c.hello(v1::CONTROLLER, "letmein");
+  v1::ServerMessage m;
+  ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kScene, m));
+  // Above the sphere phantom's centre, coming down until the pad touches.
+  const auto& g = m.scene().grid();
+  const double cx = 0.5 * double(g.dims(0) - 1) * g.spacing(0);
+  const double cy = 0.5 * double(g.dims(1) - 1) * g.spacing(1);
+  const double top = double(g.dims(2) - 1) * g.spacing(2);
+  const auto command = [&](std::uint64_t id, auto&& fill) {
+    v1::ClientMessage cm;
+    cm.mutable_command()->set_request_id(id);
+    fill(*cm.mutable_command());
+    c.send(cm);
+    EXPECT_TRUE(c.wait_for(
+        [id](const v1::ServerMessage& s) {
+          return s.has_result() && s.result().request_id() == id;
+        },
+        m));
+    return m.result();
+  };
+  EXPECT_TRUE(command(1, [](v1::Command& k) {
+                k.mutable_start_recording()->set_name("cmd.palprec");
+              }).ok());
+  EXPECT_FALSE(
+      command(2, [](v1::Command& k) { k.mutable_start_recording()->set_name("../x"); }).ok());
+  bool touched = false;
+  for (double z = top; z > 0 && !touched; z -= 0.5) {
+    v1::ClientMessage pose;
+    Pose p;
+    p.position = {cx, cy, z};
+    wire::to_proto(p, pose.mutable_device_pose()->mutable_pose());
+    c.send(pose);
+    ASSERT_TRUE(c.wait_for(
+        [z](const v1::ServerMessage& s) {
+          return s.has_frame() && s.frame().device_pose().position().z() == z;
+        },
+        m));
+    touched = m.frame().n_contact() > 0;
+  }
+  EXPECT_TRUE(touched);
+  EXPECT_GT(m.frame().force().z(), 0.0);
+  // Tool and parameters are fixed while recording, so the replay reproduces every force.
+  const v1::CommandResult refused =
+      command(3, [](v1::Command& k) { k.mutable_set_tool()->set_tool("finger:19"); });
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("stop the recording first"), std::string::npos)
+      << refused.message();
+  EXPECT_FALSE(command(6, [](v1::Command& k) {
+                 k.mutable_set_parameter()->set_name("c");
+                 k.mutable_set_parameter()->set_value(1.0);
+               }).ok());
+  EXPECT_TRUE(command(4, [](v1::Command& k) { k.mutable_stop_recording(); }).ok());
+  EXPECT_FALSE(command(5, [](v1::Command& k) { k.mutable_stop_recording(); }).ok());
+  EXPECT_TRUE(command(7, [](v1::Command& k) { k.mutable_set_tool()->set_tool("finger:19"); }).ok());
+  ASSERT_TRUE(observer.wait_for(
+      [](const v1::ServerMessage& s) {
+        return s.has_scene() && s.scene().tool().name() == "finger:19";
+      },
+      m));
+  ASSERT_TRUE(wait_palpd_exit(log)) << read_text(log);
+  const rt::Recording rec = rt::read_recording((dir / "cmd.palprec").string());
+  EXPECT_GT(rec.records.size(), 10u);
+  EXPECT_EQ(rec.metadata.at("tool"), "finger:37");  // palpd's default, at the start
+  EXPECT_EQ(rec.metadata.at("device"), "remote");
+}
+
+// A server that says Welcome, sends a few frames and goes quiet: the probe reports a stall.
+TEST(Probe, ExitsNonZeroWhenTheStreamStalls) {
+  asio::io_context io;
+  tcp::acceptor acceptor(io, tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
+  const int port = acceptor.local_endpoint().port();
+  std::thread server([&] {
+    tcp::socket s(io);
+    acceptor.accept(s);
+    std::string out;
+    v1::ServerMessage m;
+    m.mutable_welcome()->set_protocol_version(1);
+    out += wire::encode_frame(m);
+    for (int i = 0; i < 5; ++i) {
+      m.Clear();
+      m.mutable_frame()->set_seq(i);
+      out += wire::encode_frame(m);
+    }
+    asio::write(s, asio::buffer(out));
+    std::array<char, 256> sink{};
+    asio::error_code ec;
+    while (!ec) s.read_some(asio::buffer(sink), ec);  // until the probe hangs up
+  });
+  const auto r =
+      run_palp_cli("probe 127.0.0.1:" + std::to_string(port) + " --duration 10 --stall 0.3",
+                   shared_cli_dir() / "cache");
+  server.join();
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("stream stalled"), std::string::npos) << r.output;
+  EXPECT_NE(testing::last_line(r.output).find("\"ok\":false"), std::string::npos) << r.output;
+}
+
+TEST(Probe, UsageErrors) {
+  const fs::path cache = shared_cli_dir() / "cache";
+  EXPECT_EQ(run_palp_cli("probe", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("probe localhost", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("probe 127.0.0.1:1 --duration 0", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("probe 127.0.0.1:1 --role king", cache).exit_code, 2);
+  const auto help = run_palp_cli("probe --help", cache);
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("--stall S"), std::string::npos);
+}
+
+// --stats-json writes the final counters; the probe's JSON has the arrival figures, and
+// --same-host keeps latency for a server it trusts to share the clock.
+TEST(Palpd, StatsJsonAndProbeArrivals) {
+  const fs::path dir = shared_cli_dir() / "stats";
+  fs::create_directories(dir);
+  const fs::path log = dir / "palpd.log", stats = dir / "stats.json";
+  const int port = start_palpd(
+      "--scene phantom:sphere --device sim --tool finger:7 --port 0 "
+      "--rate 1000 --duration 2 --no-realtime --stats-json " +
+          stats.string(),
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  const auto probe = run_palp_cli(
+      "probe 127.0.0.1:" + std::to_string(port) + " --duration 1 --same-host", dir / "cache");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  const std::string json = testing::last_line(probe.output);
+  for (const char* key :
+       {"\"gap_frames\":", "\"max_gap\":", "\"max_interval_ms\":", "\"intervals_over_50ms\":"})
+    EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+  EXPECT_EQ(json.find("\"p50\":null"), std::string::npos) << json;
+  EXPECT_NE(probe.output.find("longest silence"), std::string::npos);
+  ASSERT_TRUE(wait_palpd_exit(log)) << read_text(log);
+  const std::string text = read_text(stats);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(text, m, std::regex("\"ticks\":([0-9]+)"))) << text;
+  EXPECT_GT(std::stoull(m[1]), 1000u);
+  EXPECT_TRUE(std::regex_search(text, m, std::regex("\"clients_accepted\":([0-9]+)")));
+  EXPECT_EQ(m[1], "1");
+  for (const char* key : {"\"overruns\":", "\"deadline_miss_fraction\":", "\"p99_at_most\":",
+                          "\"counts\":[", "\"frames_sent\":"})
+    EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
+  EXPECT_EQ(text.back(), '\n');
+}
+
+}  // namespace
+}  // namespace palp
