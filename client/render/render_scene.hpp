@@ -13,8 +13,13 @@
 //     the scalar array (which points at that buffer, no copy) is marked Modified, so the mapper
 //     re-uploads the volume texture at the next render                ("deformation" time)
 //   -> render(): the window's Render()                                   ("render" time)
-// The HUD strings come from the pure functions hud_text / banner_text / force_text so they are
-// testable without a display.
+// The HUD strings come from the pure functions hud_text / banner_text / force_text (hud_text.hpp,
+// included here) so they are testable without a display.
+//
+// The parts, each in its own file here: volume_layer (volume, transfer functions, deformed
+// texture), tool_layer (tool, contacts, proxies, springs, arrow), shadow (the fingertip's
+// shadow), hud_layer (the HUD's text actors), force_chart (the chart and its renderer); this
+// class composes them, owns the scene renderer and its camera.
 #pragma once
 
 #include <array>
@@ -25,6 +30,7 @@
 
 #include "base/vec.hpp"
 #include "deform/skin_deformation.hpp"
+#include "render/hud_text.hpp"
 #include "render/transfer_presets.hpp"
 #include "stream/stream_client.hpp"
 
@@ -33,24 +39,6 @@ class vtkRenderWindow;
 namespace palp::view {
 
 struct CameraAxes;
-
-// What the HUD shows besides the stream's own state.
-struct HudInputs {
-  double view_fps = 0;  // frames/s rendered by palpview
-  PresetId preset = PresetId::Skin;
-  Window window;
-  bool controller = false;
-  bool deformation = true;
-};
-
-// The banner (empty when all is well): connection problems, a stalled stream, an absent or
-// faulty device, a paused loop. One line per problem.
-std::string banner_text(const LatestState& state);
-// The HUD's text block: link, rates, latency, delivered fraction, tick rate, tool, contacts.
-std::string hud_text(const LatestState& state, const HudInputs& inputs);
-// The force line next to the chart, with "force not rendered by the device" when the device does
-// not render force (SceneDescription::device_renders_force false).
-std::string force_text(const LatestState& state);
 
 struct SceneSettings {
   PresetId preset = PresetId::Skin;

@@ -1,5 +1,5 @@
 // palpview's render scalar and its transfer-function presets. Pure: no VTK, no rendering; the
-// scene (render_scene.cpp) turns a Preset into VTK colour and opacity functions.
+// scene (volume_layer.cpp) turns a Preset into VTK colour and opacity functions.
 //
 // Data flow: RenderVolume {d_surf, d_bone} (mm, positive inside) -> compose_render_scalar ->
 // one pseudo-density per voxel (HU-like: air -1000, skin 0, soft tissue 0..+60 rising with depth

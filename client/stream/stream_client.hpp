@@ -3,9 +3,9 @@
 // thread reads the newest state with latest(); nothing it calls waits on the network.
 //
 // Data flow: socket -> frame decoder (palp::net) -> palp.v1 message -> plain structs below (no
-// protobuf types leave stream_client.cpp) -> one mutex-guarded "latest" state -> latest() copies
-// it. The other way: send_pose / set_* -> a bounded send queue (the newest pose replaces an unsent
-// one) -> the network thread writes it.
+// protobuf types leave client/stream/'s .cpp files and internal headers) -> one mutex-guarded
+// "latest" state -> latest() copies it. The other way: send_pose / set_* -> a bounded send queue
+// (the newest pose replaces an unsent one) -> the network thread writes it.
 //
 // Figures in LinkStats:
 //   latency_ms  frame age on arrival: (arrival + clock offset) - the frame's server_time_ns (the

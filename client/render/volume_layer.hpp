@@ -1,0 +1,82 @@
+// The volume layer: the ray-cast CT volume, its transfer functions and its deformed texture.
+//
+// The volume palpd sent is GPU ray cast through one composed render scalar (transfer_presets.hpp).
+//
+// The ray caster's sample distance is fixed (half the smallest voxel spacing) and its automatic
+// adjustment off, so equal inputs give equal images. The deformation writes into
+// render_scalars_, which the vtkFloatArray wraps without a copy (SetArray with save = 1);
+// Modified() on the array makes the mapper re-upload the texture.
+#pragma once
+
+#include <vtkColorTransferFunction.h>
+#include <vtkFloatArray.h>
+#include <vtkGPUVolumeRayCastMapper.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPiecewiseFunction.h>
+#include <vtkRenderer.h>
+#include <vtkVolume.h>
+#include <vtkVolumeProperty.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "deform/skin_deformation.hpp"
+#include "render/transfer_presets.hpp"
+#include "stream/stream_client.hpp"
+
+namespace palp::view {
+
+class VolumeLayer {
+ public:
+  // Adds the (hidden until a volume arrives) volume to `renderer`. `deformation` false: no
+  // SkinDeformer, the volume stays undeformed.
+  VolumeLayer(vtkRenderer* renderer, PresetId preset, bool deformation,
+              const DeformerParams& deformer);
+
+  // True when `state` brings a volume other than the one shown (a new one, or a new connection).
+  bool is_new(const LatestState& state) const;
+  // Takes `state`'s volume as the source: composes the render scalar into the mapper's buffer
+  // and makes a SkinDeformer over it. False (nothing built, though it is the source now) when
+  // the volume's maps do not match its dimensions.
+  bool load(const LatestState& state);
+  // The volume last taken (null before the first).
+  const RenderVolume* source() const { return source_.get(); }
+
+  // The in-contact contacts of `frame` (none when it is not valid), for the next deform().
+  void set_contacts(const FrameState& frame);
+  // Runs SkinDeformer over the buffer (no-op when disabled or no volume) and marks the texture
+  // for re-upload when anything was written. Returns what SkinDeformer reported.
+  DeformResult deform();
+  // The render scalars in the mapper's buffer (deformed when pressing).
+  const std::vector<float>& render_scalars() const { return render_scalars_; }
+
+  void set_preset(PresetId id);  // resets the window to the preset's default
+  const Preset& preset() const { return preset_; }
+  void adjust_window(double dlevel, double width_factor);
+  Window window() const { return window_level_; }
+
+ private:
+  void apply_preset();
+
+  bool deformation_;
+  DeformerParams deformer_params_;
+  std::shared_ptr<const RenderVolume> source_;  // the volume the image was built from
+  std::uint64_t connection_ = 0;
+  std::vector<float> render_scalars_;  // the mapper's buffer
+  vtkNew<vtkImageData> image_;
+  vtkNew<vtkFloatArray> scalar_array_;
+  vtkNew<vtkGPUVolumeRayCastMapper> mapper_;
+  vtkNew<vtkVolumeProperty> property_;
+  vtkNew<vtkColorTransferFunction> colour_;
+  vtkNew<vtkPiecewiseFunction> opacity_;
+  vtkNew<vtkVolume> volume_;
+  Preset preset_;
+  Window window_level_;
+  std::unique_ptr<SkinDeformer> deformer_;
+  std::vector<DeformContact> deform_contacts_;
+  bool deform_was_active_ = false;  // the last update wrote a ROI (the next one restores it)
+};
+
+}  // namespace palp::view

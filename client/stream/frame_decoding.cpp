@@ -1,0 +1,87 @@
+// palp.v1 -> plain structs: see frame_decoding.hpp.
+#include "stream/frame_decoding.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "stream/protocol_checks.hpp"
+#include "wire/messages.hpp"
+
+namespace palp::view::net {
+
+DeviceState device_state_of(v1::DeviceState s) {
+  switch (s) {
+    case v1::DEVICE_PRESENT:
+      return DeviceState::Present;
+    case v1::DEVICE_ABSENT:
+      return DeviceState::Absent;
+    case v1::DEVICE_FAULT:
+      return DeviceState::Fault;
+    default:
+      return DeviceState::Unknown;
+  }
+}
+
+std::shared_ptr<SceneDescription> decode_scene(const v1::SceneInfo& s) {
+  const v1::Grid& g = s.grid();
+  if (g.dims_size() != 3 || g.spacing_size() != 3)
+    throw ProtocolViolation("SceneInfo: the grid needs 3 dims and 3 spacings");
+  auto scene = std::make_shared<SceneDescription>();
+  for (int a = 0; a < 3; ++a) {
+    if (g.dims(a) < 1 || g.dims(a) > (std::int64_t{1} << 31))
+      throw ProtocolViolation("SceneInfo: grid dimension " + std::to_string(g.dims(a)));
+    if (!positive_finite(g.spacing(a)))
+      throw ProtocolViolation("SceneInfo: grid spacing must be finite and > 0");
+    scene->dims[a] = g.dims(a);
+    scene->spacing[a] = g.spacing(a);
+    if (g.origin_size() == 3) scene->origin[a] = g.origin(a);
+  }
+  if (g.direction_size() == 9)
+    for (int i = 0; i < 9; ++i) scene->direction[i] = g.direction(i);
+  scene->source = s.source();
+  for (const auto& [key, value] : s.metadata()) scene->metadata[key] = value;
+  scene->tool = s.tool().name();
+  scene->tool_points.reserve(static_cast<std::size_t>(s.tool().points_size()));
+  for (const v1::Vec3& p : s.tool().points())
+    scene->tool_points.push_back(palp::wire::from_proto(p));
+  scene->c = s.parameters().c();
+  scene->k = s.parameters().k();
+  scene->bone_fmax = s.parameters().bone_fmax();
+  scene->bone_enabled = s.parameters().bone_enabled();
+  scene->device = s.device();
+  scene->device_profile = s.device_profile();
+  scene->tick_rate_hz = s.tick_rate_hz();
+  scene->device_renders_force = s.device_renders_force();
+  return scene;
+}
+
+FrameState decode_frame(const v1::HapticFrame& f) {
+  FrameState frame;
+  frame.valid = true;
+  frame.seq = f.seq();
+  frame.server_time_ns = f.server_time_ns();
+  frame.pose = palp::wire::from_proto(f.device_pose());
+  frame.force = palp::wire::from_proto(f.force());
+  frame.torque = palp::wire::from_proto(f.torque());
+  frame.u = palp::wire::from_proto(f.displacement());
+  frame.n_contact = f.n_contact();
+  frame.contact_points = f.contact_points();
+  frame.contacts.reserve(static_cast<std::size_t>(f.contacts_size()));
+  for (const v1::Contact& pc : f.contacts()) {
+    ContactState cs;
+    cs.x = palp::wire::from_proto(pc.position());
+    cs.s = palp::wire::from_proto(pc.surface());
+    cs.p = palp::wire::from_proto(pc.proxy());
+    cs.f = palp::wire::from_proto(pc.force());
+    cs.in_contact = pc.in_contact();
+    frame.contacts.push_back(cs);
+  }
+  frame.tick_status = f.tick_status();
+  frame.safety_status = f.safety_status();
+  frame.fault = f.fault();
+  frame.device_state = device_state_of(f.device_state());
+  return frame;
+}
+
+}  // namespace palp::view::net

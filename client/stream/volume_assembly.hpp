@@ -1,0 +1,41 @@
+// Render-volume assembly (pure, no Asio): VolumeChunks checked and copied into a RenderVolume.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+
+#include "palp.pb.h"
+#include "stream/stream_client.hpp"
+
+namespace palp::view::net {
+
+// The scene's grid (SceneInfo), which the render volume must match at its step.
+struct SceneGrid {
+  std::array<std::int64_t, 3> dims{};
+  std::array<double, 3> spacing{};  // mm
+};
+
+class VolumeAssembly {
+ public:
+  struct Added {
+    double progress = 0;                   // slices received / slices in the volume
+    std::shared_ptr<RenderVolume> volume;  // the complete volume after its last chunk, else null
+  };
+
+  // Validates a chunk against the first one, the scene and the bytes present, then copies it in.
+  // `requested`: this client asked for a render volume; `scene`: null before SceneInfo. Throws
+  // ProtocolViolation, or ResourceError when the volume does not fit in memory.
+  Added add(const v1::VolumeChunk& chunk, bool requested, const SceneGrid* scene);
+
+  bool active() const { return active_; }  // chunk 0 received, the last chunk not yet
+
+ private:
+  bool active_ = false, done_ = false;
+  std::uint32_t step_ = 0, chunk_count_ = 0, next_chunk_ = 0;
+  std::int64_t next_k_ = 0;
+  bool has_bone_ = false;
+  std::shared_ptr<RenderVolume> volume_;
+};
+
+}  // namespace palp::view::net

@@ -1,0 +1,91 @@
+// Run extraction and 3D labelling of masks (see components.hpp): a union-find over runs along i.
+#include "prep/components.hpp"
+
+namespace palp::segmentation {
+namespace {
+
+// Runs of nonzero (or zero) bytes of one row; returns how many, writing them to `out` if given.
+std::int64_t scan_row(const std::uint8_t* row, std::int64_t n, bool zeros, Run* out) {
+  std::int64_t count = 0;
+  for (std::int64_t i = next_byte(row, 0, n, !zeros); i < n; i = next_byte(row, i, n, !zeros)) {
+    const std::int64_t end = next_byte(row, i, n, zeros);
+    if (out) out[count] = {i, end};
+    ++count;
+    i = end;
+  }
+  return count;
+}
+
+}  // namespace
+
+void unite_touching(const std::vector<Run>& runs, std::int64_t a, std::int64_t a_end,
+                    std::int64_t b, std::int64_t b_end, std::int64_t gap, DisjointSets& sets) {
+  while (a < a_end && b < b_end) {
+    if (runs[a].begin < runs[b].end + gap && runs[b].begin < runs[a].end + gap) sets.unite(a, b);
+    if (runs[a].end < runs[b].end) {
+      ++a;
+    } else {
+      ++b;
+    }
+  }
+}
+
+RunTable extract_runs(const Mask& mask, bool zeros) {
+  const Grid& g = mask.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::uint8_t* data = mask.data.data();
+  RunTable t;
+  t.row_start.assign(static_cast<std::size_t>(ny * nz + 1), 0);
+  parallel_for_chunks(nz, 4, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r)
+      t.row_start[r + 1] = scan_row(data + r * nx, nx, zeros, nullptr);
+  });
+  std::partial_sum(t.row_start.begin(), t.row_start.end(), t.row_start.begin());
+  t.runs.resize(static_cast<std::size_t>(t.row_start.back()));
+  parallel_for_chunks(nz, 4, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r)
+      scan_row(data + r * nx, nx, zeros, t.runs.data() + t.row_start[r]);
+  });
+  return t;
+}
+
+RunLabels label_runs(const Grid& g, const RunTable& t) {
+  const std::int64_t ny = g.dims[1], nz = g.dims[2];
+  const auto& start = t.row_start;
+  DisjointSets sets;
+  sets.reset(t.runs.size());
+  const auto unite_rows = [&](std::int64_t ra, std::int64_t rb) {
+    unite_touching(t.runs, start[ra], start[ra + 1], start[rb], start[rb + 1], 0, sets);
+  };
+  // Within a slice only that slice's runs are touched, so slices unite in parallel.
+  parallel_for_chunks(nz, 4, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 1; j < ny; ++j) unite_rows(j - 1 + ny * k, j + ny * k);
+  });
+  for (std::int64_t k = 1; k < nz; ++k)
+    for (std::int64_t j = 0; j < ny; ++j) unite_rows(j + ny * (k - 1), j + ny * k);
+  RunLabels labels;
+  labels.of_run.resize(t.runs.size());
+  for (std::size_t r = 0; r < t.runs.size(); ++r) {
+    const auto root = static_cast<std::size_t>(sets.find(static_cast<std::int64_t>(r)));
+    if (root == r) {
+      labels.of_run[r] = static_cast<std::int64_t>(labels.voxels.size());
+      labels.voxels.push_back(0);
+    } else {
+      labels.of_run[r] = labels.of_run[root];
+    }
+    labels.voxels[labels.of_run[r]] += t.runs[r].end - t.runs[r].begin;
+  }
+  return labels;
+}
+
+double voxel_ml(const Grid& g) {
+  return g.spacing[0] * g.spacing[1] * g.spacing[2] / 1000.0;
+}
+
+std::uint64_t count_nonzero(const Mask& mask) {
+  return static_cast<std::uint64_t>(mask.data.size() - static_cast<std::size_t>(std::count(
+                                                           mask.data.begin(), mask.data.end(), 0)));
+}
+
+}  // namespace palp::segmentation

@@ -1,0 +1,149 @@
+// Runs of mask voxels along i, their 3D connected components, and row scans over masks.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <numeric>
+#include <vector>
+
+#include "base/parallel.hpp"
+#include "base/volume.hpp"
+
+namespace palp::segmentation {
+
+// Union-find over run indices. Roots are the smallest index of their set, so labels come out in
+// a deterministic order.
+class DisjointSets {
+ public:
+  void reset(std::size_t n) {
+    parent_.resize(n);
+    std::iota(parent_.begin(), parent_.end(), std::int64_t{0});
+  }
+  std::int64_t find(std::int64_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  void unite(std::int64_t a, std::int64_t b) {
+    a = find(a);
+    b = find(b);
+    if (a < b) parent_[b] = a;
+    if (b < a) parent_[a] = b;
+  }
+
+ private:
+  std::vector<std::int64_t> parent_;
+};
+
+struct Run {
+  std::int64_t begin;  // first voxel along the row
+  std::int64_t end;    // one past the last
+};
+
+// Unites the runs of two neighbouring rows that touch: across a face (gap = 0) or also across an
+// edge (gap = 1).
+void unite_touching(const std::vector<Run>& runs, std::int64_t a, std::int64_t a_end,
+                    std::int64_t b, std::int64_t b_end, std::int64_t gap, DisjointSets& sets);
+
+// Byte scanning: the first position at or after i in row[0, n) whose byte is nonzero (or zero).
+// Rows are read eight bytes at a time while no byte can match.
+
+inline bool has_zero_byte(std::uint64_t w) {
+  return ((w - 0x0101010101010101ull) & ~w & 0x8080808080808080ull) != 0;
+}
+
+inline std::int64_t next_byte(const std::uint8_t* row, std::int64_t i, std::int64_t n,
+                              bool nonzero) {
+  std::uint64_t w = 0;
+  for (; i + 8 <= n; i += 8) {
+    std::memcpy(&w, row + i, 8);
+    if (nonzero ? w != 0 : has_zero_byte(w)) break;
+  }
+  while (i < n && (row[i] != 0) != nonzero) ++i;
+  return i;
+}
+
+// 3D connected components (6-connected) of a mask's nonzero (or zero) voxels, as runs along i.
+
+struct RunTable {
+  std::vector<Run> runs;
+  std::vector<std::int64_t>
+      row_start;  // row r = j + ny*k holds runs [row_start[r], row_start[r+1])
+};
+
+// The runs of `mask`'s nonzero (or zero) voxels, row by row.
+RunTable extract_runs(const Mask& mask, bool zeros);
+
+struct RunLabels {
+  std::vector<std::int64_t> of_run;  // component of each run
+  std::vector<std::int64_t> voxels;  // voxel count of each component
+};
+
+// Labels the runs' 6-connected components, numbered in order of their first run.
+RunLabels label_runs(const Grid& g, const RunTable& t);
+
+// Calls visit(run index, row index j + ny*k, linear index of its first voxel) for every run, in
+// parallel over slices.
+template <class Visit>
+void for_each_run(const Grid& g, const RunTable& t, Visit visit) {
+  const std::int64_t nx = g.dims[0], ny = g.dims[1];
+  parallel_for_chunks(g.dims[2], 4, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r)
+      for (std::int64_t n = t.row_start[r]; n < t.row_start[r + 1]; ++n)
+        visit(n, r, static_cast<std::size_t>(r * nx + t.runs[n].begin));
+  });
+}
+
+// Per component: whether any of its voxels satisfies `marked`.
+template <class Marked>
+std::vector<std::uint8_t> components_with(const Grid& g, const RunTable& t, const RunLabels& l,
+                                          Marked marked) {
+  std::vector<std::uint8_t> per_run(t.runs.size(), 0);
+  for_each_run(g, t, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    for (std::int64_t i = 0; i < t.runs[r].end - t.runs[r].begin; ++i) {
+      if (marked(first + static_cast<std::size_t>(i))) {
+        per_run[r] = 1;
+        break;
+      }
+    }
+  });
+  std::vector<std::uint8_t> result(l.voxels.size(), 0);
+  for (std::size_t r = 0; r < per_run.size(); ++r)
+    if (per_run[r]) result[l.of_run[r]] = 1;
+  return result;
+}
+
+// Writes `value(label)` over every run of the table.
+template <class Value>
+void rewrite_runs(const Grid& g, const RunTable& t, const RunLabels& l, Value value, Mask& mask) {
+  for_each_run(g, t, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    std::fill_n(mask.data.begin() + static_cast<std::ptrdiff_t>(first),
+                t.runs[r].end - t.runs[r].begin, static_cast<std::uint8_t>(value(l.of_run[r])));
+  });
+}
+
+// Volume of one voxel in ml.
+double voxel_ml(const Grid& g);
+
+// Number of nonzero voxels.
+std::uint64_t count_nonzero(const Mask& mask);
+
+// Calls visit(linear index) for every nonzero voxel, in parallel over slices.
+template <class Visit>
+void for_each_nonzero(const Mask& mask, Visit visit) {
+  const std::int64_t nx = mask.grid.dims[0], ny = mask.grid.dims[1];
+  parallel_for_chunks(mask.grid.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r) {
+      const std::uint8_t* row = mask.data.data() + r * nx;
+      for (std::int64_t i = next_byte(row, 0, nx, true); i < nx;
+           i = next_byte(row, i + 1, nx, true))
+        visit(static_cast<std::size_t>(r * nx + i));
+    }
+  });
+}
+
+}  // namespace palp::segmentation
