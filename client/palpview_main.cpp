@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "base/errors.hpp"
+#include "render/patient_view.hpp"
 #include "render/render_scene.hpp"
 #include "scene/trajectory.hpp"
 #include "stream/stream_client.hpp"
@@ -55,8 +56,14 @@ and deforms the skin where the tool presses.
   --preset skin|bone|soft transfer-function preset (default skin)
   --no-deformation        do not deform the skin
   --width W --height H    window size (default 1280x800)
-  --camera AZ,EL,DIST     camera azimuth and elevation (degrees) from the anterior view and
+  --view SIDE             the camera's starting view: the patient's anterior (default),
+                          posterior, left, right, superior or inferior, taken from the CT's
+                          direction matrix (not the voxel order)
+  --camera AZ,EL,DIST     camera azimuth and elevation (degrees) from that view and
                           distance (mm, 0 = fit)
+  --no-orientation-marker hide the patient-axes cube (bottom left)
+  --no-overlays           hide the HUD, the chart and the orientation marker
+  --no-tool               hide the tool, contacts, proxies, springs, arrow and shadow
   --screenshot FILE       render --frames N frames from the live stream, write a PNG, exit
   --frames N              frames before the screenshot (default 5)
   --timeout S             how long --screenshot waits for the scene (default 60)
@@ -69,7 +76,8 @@ and deforms the skin where the tool presses.
 
 Mouse: left drag orbits (controller: slides the tool; shift: rotates it), middle drag orbits,
 right drag windows (x: level, y: width), scroll zooms (controller: presses; ctrl: zooms).
-Keys: P next preset, [ ] level, - = width, Home camera reset, Esc quit; controller: arrows
+Keys: P next preset, [ ] level, - = width, V next view (anterior, left, posterior, right,
+superior, inferior), Home camera reset, Esc quit; controller: arrows
 slide, W/S press, Q/E R/F Z/C rotate, 1/2/3 finger:37/twofinger:19/probe:9x3, space pause,
 backspace start pose.
 )";
@@ -86,6 +94,10 @@ struct Options {
   bool deformation = true;
   int width = 1280, height = 800;
   double az = 0, el = 0, dist = 0;
+  Anatomy view = Anatomy::Anterior;
+  bool orientation_marker = true;
+  bool overlays = true;
+  bool tool_glyphs = true;
   std::string screenshot;
   int frames = 5;
   double timeout_s = 60.0;
@@ -148,6 +160,17 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.width = parse_int(arg, value(), 64, 8192);
     } else if (arg == "--height") {
       o.height = parse_int(arg, value(), 64, 8192);
+    } else if (arg == "--view") {
+      const std::string text = value();
+      if (!parse_anatomy(text, &o.view))
+        throw UsageError("--view: anterior, posterior, left, right, superior or inferior, got '" +
+                         text + "'");
+    } else if (arg == "--no-orientation-marker") {
+      o.orientation_marker = false;
+    } else if (arg == "--no-overlays") {
+      o.overlays = false;
+    } else if (arg == "--no-tool") {
+      o.tool_glyphs = false;
     } else if (arg == "--camera") {
       const std::string text = value();
       const auto c1 = text.find(','), c2 = text.find(',', c1 == std::string::npos ? 0 : c1 + 1);
@@ -235,6 +258,10 @@ int run(const Options& o) {
   SceneSettings settings;
   settings.preset = o.preset;
   settings.deformation = o.deformation;
+  settings.view = o.view;
+  settings.orientation_marker = o.orientation_marker;
+  settings.overlays = o.overlays;
+  settings.tool_glyphs = o.tool_glyphs;
   settings.camera_azimuth_deg = o.az;
   settings.camera_elevation_deg = o.el;
   settings.camera_distance_mm = o.dist;
@@ -294,6 +321,12 @@ int run(const Options& o) {
       case GLFW_KEY_HOME:
         scene.reset_camera();
         return;
+      case GLFW_KEY_V: {
+        const auto at = std::find(kViewCycle.begin(), kViewCycle.end(), scene.view());
+        scene.set_view(at == kViewCycle.end() || at + 1 == kViewCycle.end() ? kViewCycle[0]
+                                                                            : *(at + 1));
+        return;
+      }
       default:
         break;
     }

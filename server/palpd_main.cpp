@@ -20,6 +20,7 @@
 #include <toml++/toml.h>
 
 #include "base/errors.hpp"
+#include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/model_setup.hpp"
 #include "devices/device.hpp"
@@ -481,6 +482,11 @@ int run(const cli::Arguments& argv_in) {
                 server_config.bind.c_str(), static_cast<unsigned>(server.port()),
                 device_spec->c_str(), tool.name.c_str(), loop_config.rate_hz,
                 profile ? (std::string(", profile ") + std::string(profile->name)).c_str() : "");
+    const PatientFrame frame = patient_frame(scene.grid);
+    const SignedAxis anterior = frame.nearest_axis(Anatomy::Anterior);
+    std::printf("palpd: patient stored %s: anterior is %c%c in the scene frame\n",
+                frame.orientation_code().c_str(), anterior.sign > 0 ? '+' : '-',
+                "xyz"[anterior.axis]);
     std::fflush(stdout);
   }
 

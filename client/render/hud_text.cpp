@@ -104,6 +104,10 @@ std::string hud_text(const LatestState& state, const HudInputs& inputs) {
   out << "   deformation " << (inputs.deformation ? "on" : "off") << "\n";
   out << "preset " << to_string(inputs.preset) << "  level " << fixed(inputs.window.level, 0)
       << " width " << fixed(inputs.window.width, 0);
+  if (!inputs.view.empty()) {
+    out << "\ncamera " << inputs.view << " view";
+    if (!inputs.orientation.empty()) out << "   CT stored " << inputs.orientation;
+  }
   return out.str();
 }
 

@@ -18,6 +18,8 @@ struct HudInputs {
   Window window;
   bool controller = false;
   bool deformation = true;
+  std::string view;         // the camera's view in patient terms ("anterior"); empty: not shown
+  std::string orientation;  // the CT's stored orientation code ("LPS", "RAS")
 };
 
 // The banner (empty when all is well): connection problems, a stalled stream, an absent or

@@ -25,6 +25,8 @@
 #include "base/errors.hpp"
 #include "render/force_chart.hpp"
 #include "render/hud_layer.hpp"
+#include "render/orientation_marker.hpp"
+#include "render/patient_view.hpp"
 #include "render/shadow.hpp"
 #include "render/tool_layer.hpp"
 #include "render/volume_layer.hpp"
@@ -44,6 +46,10 @@ struct RenderScene::Impl {
   FingertipShadow shadow;
   HudLayer hud;
   ForceChart chart;
+  OrientationMarker marker;
+  PatientFrame frame;  // of the current scene (its direction matrix)
+  std::string orientation = "LPS";
+  const SceneDescription* framed_scene = nullptr;
   bool camera_placed = false;
   bool tool_glyphs = true;
   bool overlays = true;
@@ -71,6 +77,7 @@ RenderScene::RenderScene(vtkRenderWindow* window, SceneSettings settings)
   window->SetNumberOfLayers(2);
   window->AddRenderer(s.renderer);
   window->AddRenderer(s.chart.renderer());
+  window->AddRenderer(s.marker.renderer());
   s.apply_visibility();
 }
 
@@ -78,6 +85,7 @@ RenderScene::~RenderScene() {
   if (impl_ && impl_->window) {
     impl_->window->RemoveRenderer(impl_->renderer);
     impl_->window->RemoveRenderer(impl_->chart.renderer());
+    impl_->window->RemoveRenderer(impl_->marker.renderer());
   }
 }
 
@@ -99,10 +107,11 @@ void RenderScene::Impl::place_camera() {
   const double distance = settings.camera_distance_mm > 0
                               ? settings.camera_distance_mm
                               : std::max(radius, 1.0) / std::sin(std::numbers::pi / 12.0);
-  // Anterior view: from -y looking +y, head (+z) up; then azimuth and elevation.
-  camera->SetFocalPoint(centre.x, centre.y, centre.z);
-  camera->SetPosition(centre.x, centre.y - distance, centre.z);
-  camera->SetViewUp(0, 0, 1);
+  // From the patient's side (anterior by default), head up; then azimuth and elevation.
+  const CameraPlacement c = patient_view(frame, settings.view, centre, distance);
+  camera->SetFocalPoint(c.focal.x, c.focal.y, c.focal.z);
+  camera->SetPosition(c.position.x, c.position.y, c.position.z);
+  camera->SetViewUp(c.up.x, c.up.y, c.up.z);
   camera->Azimuth(settings.camera_azimuth_deg);
   camera->Elevation(settings.camera_elevation_deg);
   camera->OrthogonalizeViewUp();
@@ -112,10 +121,20 @@ void RenderScene::Impl::place_camera() {
 void RenderScene::Impl::apply_visibility() {
   hud.set_visible(overlays);
   chart.set_visible(overlays);
+  marker.set_visible(overlays && settings.orientation_marker);
 }
 
 void RenderScene::update_state(const LatestState& state, const HudInputs& inputs) {
   Impl& s = *impl_;
+  if (state.scene && state.scene.get() != s.framed_scene) {  // a new scene: its patient frame
+    s.framed_scene = state.scene.get();
+    WorldPlacement world;
+    world.origin = state.scene->origin;
+    world.direction = state.scene->direction;
+    s.frame = patient_frame(world);
+    s.orientation = s.frame.orientation_code();
+    s.marker.set_frame(s.frame);
+  }
   if (s.volume.is_new(state) && s.volume.load(state) && !s.camera_placed) {
     s.place_camera();
     s.camera_placed = true;
@@ -129,6 +148,10 @@ void RenderScene::update_state(const LatestState& state, const HudInputs& inputs
     shown.preset = s.volume.preset().id;
     shown.window = s.volume.window();
     shown.deformation = s.settings.deformation;
+    double dop[3];
+    s.renderer->GetActiveCamera()->GetDirectionOfProjection(dop);
+    shown.view = palp::view::view_name(s.frame, {dop[0], dop[1], dop[2]});
+    shown.orientation = s.orientation;
     s.hud.update(state, shown);
     s.chart.update(state.force_history);
   }
@@ -140,6 +163,7 @@ DeformResult RenderScene::update_deformation() {
 }
 
 void RenderScene::render() {
+  impl_->marker.follow(impl_->renderer->GetActiveCamera());
   impl_->window->Render();
 }
 
@@ -162,6 +186,25 @@ void RenderScene::zoom(double factor) {
 
 void RenderScene::reset_camera() {
   impl_->place_camera();
+}
+
+void RenderScene::set_view(Anatomy from) {
+  impl_->settings.view = from;
+  impl_->place_camera();
+}
+
+Anatomy RenderScene::view() const {
+  return impl_->settings.view;
+}
+
+std::string RenderScene::view_name() const {
+  double dop[3];
+  impl_->renderer->GetActiveCamera()->GetDirectionOfProjection(dop);
+  return palp::view::view_name(impl_->frame, {dop[0], dop[1], dop[2]});
+}
+
+std::string RenderScene::orientation_code() const {
+  return impl_->orientation;
 }
 
 CameraAxes RenderScene::camera_axes() const {

@@ -18,8 +18,9 @@
 //
 // The parts, each in its own file here: volume_layer (volume, transfer functions, deformed
 // texture), tool_layer (tool, contacts, proxies, springs, arrow), shadow (the fingertip's
-// shadow), hud_layer (the HUD's text actors), force_chart (the chart and its renderer); this
-// class composes them, owns the scene renderer and its camera.
+// shadow), hud_layer (the HUD's text actors), force_chart (the chart and its renderer),
+// orientation_marker (the patient-axes cube); patient_view places the camera in patient terms.
+// This class composes them, owns the scene renderer and its camera.
 #pragma once
 
 #include <array>
@@ -28,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "base/patient_frame.hpp"
 #include "base/vec.hpp"
 #include "deform/skin_deformation.hpp"
 #include "render/hud_text.hpp"
@@ -43,9 +45,12 @@ struct CameraAxes;
 struct SceneSettings {
   PresetId preset = PresetId::Skin;
   bool deformation = true;
-  // Camera about the volume's centre: azimuth about +z and elevation from the anterior view
-  // (looking along +y, up +z); distance in mm, 0 = fit the volume.
+  // Camera about the volume's centre, from the patient's `view` side (patient_view.hpp: through
+  // the scene's direction matrix, whatever the voxel order), then turned by azimuth (about the
+  // view's up) and elevation; distance in mm, 0 = fit the volume.
+  Anatomy view = Anatomy::Anterior;
   double camera_azimuth_deg = 0, camera_elevation_deg = 0, camera_distance_mm = 0;
+  bool orientation_marker = true;  // the patient-axes cube in the bottom-left corner
   double arrow_mm_per_newton = 4.0;
   double chart_seconds = 5.0;  // force plot span
   bool overlays = true;        // HUD text, banner and chart
@@ -80,6 +85,13 @@ class RenderScene {
   void orbit(double azimuth_deg, double elevation_deg);
   void zoom(double factor);
   void reset_camera();
+  // Places the camera on the patient's `from` side (azimuth and elevation of the settings kept).
+  void set_view(Anatomy from);
+  Anatomy view() const;
+  // The view the camera shows now ("anterior", "anterior-left", ...) and the CT's stored
+  // orientation code ("LPS", "RAS", ...).
+  std::string view_name() const;
+  std::string orientation_code() const;
   CameraAxes camera_axes() const;
 
   void set_preset(PresetId id);  // resets the window to the preset's default

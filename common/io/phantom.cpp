@@ -520,6 +520,12 @@ Grid phantom_grid(const std::string& name, const PhantomOptions& options) {
   }
   const Vec3 e = grid.extent_mm();
   grid.world.origin = {-e[0] / 2.0, -e[1] / 2.0, -e[2] / 2.0};
+  if (name == "cube") {
+    // "ILA": i toward inferior, j toward the left, k toward anterior (the top face). Columns of
+    // the row-major direction are the i, j, k directions in LPS; origin = -D (extent / 2).
+    grid.world.direction = {0, 1, 0, 0, 0, -1, -1, 0, 0};
+    grid.world.origin = {-e[1] / 2.0, e[2] / 2.0, e[0] / 2.0};
+  }
   return grid;
 }
 

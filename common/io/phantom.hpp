@@ -14,11 +14,14 @@
 //            width, and a cable lying on the pad. Edges carry partial-volume blending and a
 //            deterministic +-10 HU noise. Default grid 384 x 256 x 96 at 1.25 x 1.25 x 2 mm.
 //
-// Orientation (all phantoms): i = patient right -> left, j = anterior -> posterior (the table
-// is at large j), k = inferior -> superior. Grid::world has the identity direction (LPS) and an
-// origin that centres the volume on the scanner isocentre. Anatomy is defined in mm; when the
-// grid's field of view is smaller than the default one the anatomy is scaled down uniformly to
-// fit (never up), so any dims/spacing override still shows the whole phantom.
+// Orientation: sphere and torso are stored LPS: i = patient right -> left, j = anterior ->
+// posterior (the table is at large j), k = inferior -> superior; Grid::world has the identity
+// direction. The cube lies like a supine patient with its top face up: it is stored "ILA" (i =
+// superior -> inferior, j = right -> left, k = posterior -> anterior), so its top face (+z) is
+// its anterior and --side auto presses it. Every origin centres the volume on the isocentre.
+// Anatomy is defined in mm; when the grid's field of view is smaller than the default one the
+// anatomy is scaled down uniformly to fit (never up), so any dims/spacing override still shows the
+// whole phantom.
 #pragma once
 
 #include <optional>

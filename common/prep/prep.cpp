@@ -19,7 +19,10 @@
 #include <system_error>
 
 #include "base/errors.hpp"
+#include "base/patient_frame.hpp"
 #include "io/ct_io.hpp"
+#include "prep/ct_check.hpp"
+#include "prep/reorient.hpp"
 
 namespace palp {
 namespace {
@@ -28,7 +31,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // Bump when the algorithms change what prep writes, so old caches are not reused.
-constexpr int kPrepAlgorithmVersion = 1;
+constexpr int kPrepAlgorithmVersion = 2;  // 2: oblique inputs reoriented, cube phantom ILA
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
@@ -205,8 +208,28 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   CtVolume ct;
   Mask body, bone;
   stage("read CT", [&] { ct = read_ct(input); });
+  stage("check CT", [&] {
+    const CtCheck check = check_hu(ct);
+    if (!check.plausible && !params.not_hu_ok) throw InputError(not_a_ct_message(input, check));
+    if (!check.plausible) result.hu_warning = check.finding;
+  });
+  const PatientFrame frame = patient_frame(ct.grid);
+  result.orientation = frame.orientation_code();
+  result.obliquity_deg = frame.obliquity_deg();
+  if (result.obliquity_deg > kAxisAlignedToleranceDeg) {
+    stage("reorient", [&] { ct = resample_axis_aligned(ct); });
+    result.reoriented = true;
+  }
   result.grid = ct.grid;
   stage("body mask", [&] { body = segment_body(ct, params.segmentation, &result.stats); });
+  if (!params.not_hu_ok) {
+    const std::string finding = check_body_fraction(count_nonzero(body), ct.grid);
+    if (!finding.empty())
+      throw InputError(
+          input + ": does not look like a CT in Hounsfield units: " + finding +
+          ". To prep it anyway: palp prep --not-hu-ok INPUT --out DIR (then use DIR as the "
+          "scene)");
+  }
   stage("bone mask", [&] { bone = segment_bone(ct, body, params.segmentation, &result.stats); });
   ct = CtVolume{};  // the HU are not needed past segmentation
   result.stats.body_voxels = count_nonzero(body);
@@ -236,6 +259,11 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   json["input"] = input;
   json["cache_key"] = result.cache_key;
   json["grid"] = grid_json(result.grid);
+  json["patient"] = {{"input_orientation", result.orientation},
+                     {"input_obliquity_deg", result.obliquity_deg},
+                     {"reoriented", result.reoriented},
+                     {"orientation", patient_frame(result.grid).orientation_code()}};
+  if (!result.hu_warning.empty()) json["not_hu_ok"] = result.hu_warning;
   json["parameters"] = params_json(params);
   json["voxels"] = {{"total", result.grid.voxel_count()},
                     {"body", result.stats.body_voxels},

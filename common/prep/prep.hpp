@@ -19,6 +19,9 @@ struct PrepParams {
   SegmentationParams segmentation;
   DistanceParams distance;
   bool use_cache = true;
+  // Prep a volume that does not look like a CT in HU (prep/ct_check.hpp) instead of refusing it.
+  // Not part of the cache key: it changes whether prep runs, never what it writes.
+  bool not_hu_ok = false;
 };
 
 struct StageTiming {
@@ -37,12 +40,19 @@ struct PrepResult {
   std::size_t peak_rss_bytes = 0;
   bool from_cache = false;
   std::string cache_key;
+  std::string orientation;     // the input's patient orientation code ("LPS", "RAS", ...)
+  double obliquity_deg = 0.0;  // of the input's direction matrix
+  bool reoriented = false;     // resampled onto the nearest axis-aligned frame
+  std::string hu_warning;      // what the CT check found when not_hu_ok let it through
 };
 
 // Progress reports: a stage starting ("reading CT", ...) or finishing (with its seconds).
 using PrepProgress = std::function<void(const std::string& stage, bool finished, double seconds)>;
 
 // Runs the pipeline; throws palp::Error subclasses on bad input or I/O failure. Creates out_dir.
+// Before segmenting: an input that does not look like a CT in HU is refused (InputError, unless
+// not_hu_ok), and an oblique one is resampled onto the nearest axis-aligned frame
+// (prep/reorient.hpp), the maps then lying on that grid.
 PrepResult run_prep(const std::string& input, const std::string& out_dir, const PrepParams& params,
                     const PrepProgress& progress = {});
 

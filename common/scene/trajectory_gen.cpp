@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string>
 
 #include "base/errors.hpp"
+#include "base/patient_frame.hpp"
 
 namespace palp {
 namespace {
@@ -186,44 +188,61 @@ struct SideRay {
   double length;
 };
 
-// The ray along the grid's centre line entering from `side`.
-SideRay side_ray(const Grid& grid, ApproachSide side) {
+// The ray along the grid's centre line entering from the face at the `sign` end of `axis`.
+SideRay side_ray(const Grid& grid, SignedAxis face) {
   const Vec3 e = grid.extent_mm();
   const Vec3d centre{e[0] / 2.0, e[1] / 2.0, e[2] / 2.0};
-  int axis = 2;
-  double sign = 1.0;
-  switch (side) {
-    case ApproachSide::PlusX:
-      axis = 0, sign = 1.0;
-      break;
-    case ApproachSide::MinusX:
-      axis = 0, sign = -1.0;
-      break;
-    case ApproachSide::PlusY:
-      axis = 1, sign = 1.0;
-      break;
-    case ApproachSide::MinusY:
-      axis = 1, sign = -1.0;
-      break;
-    case ApproachSide::MinusZ:
-      axis = 2, sign = -1.0;
-      break;
-    case ApproachSide::PlusZ:
-    case ApproachSide::Auto:
-      axis = 2, sign = 1.0;
-      break;
-  }
   SideRay ray;
   ray.origin = centre;
-  set_component(ray.origin, axis, sign > 0.0 ? e[axis] : 0.0);
-  ray.dir = axis_vector(axis, -sign);
-  ray.length = e[axis];
+  set_component(ray.origin, face.axis, face.sign > 0 ? e[face.axis] : 0.0);
+  ray.dir = axis_vector(face.axis, -static_cast<double>(face.sign));
+  ray.length = e[face.axis];
   return ray;
 }
 
-// The anchor entering from one side, if the ray starts in air and reaches skin.
-bool anchor_from_side(const FieldSampler& fields, ApproachSide side, SurfaceAnchor* anchor) {
-  const SideRay ray = side_ray(fields.grid(), side);
+// The grid face of an axis side (+x ... -z).
+SignedAxis grid_face(ApproachSide side) {
+  switch (side) {
+    case ApproachSide::PlusX:
+      return {0, 1};
+    case ApproachSide::MinusX:
+      return {0, -1};
+    case ApproachSide::PlusY:
+      return {1, 1};
+    case ApproachSide::MinusY:
+      return {1, -1};
+    case ApproachSide::MinusZ:
+      return {2, -1};
+    default:
+      return {2, 1};
+  }
+}
+
+// The patient direction of a patient side; nullopt for Auto and the grid faces.
+std::optional<Anatomy> patient_side(ApproachSide side) {
+  switch (side) {
+    case ApproachSide::Anterior:
+      return Anatomy::Anterior;
+    case ApproachSide::Posterior:
+      return Anatomy::Posterior;
+    case ApproachSide::Left:
+      return Anatomy::Left;
+    case ApproachSide::Right:
+      return Anatomy::Right;
+    case ApproachSide::Superior:
+      return Anatomy::Superior;
+    case ApproachSide::Inferior:
+      return Anatomy::Inferior;
+    default:
+      return std::nullopt;
+  }
+}
+
+// The anchor entering from `face`, sliding along `slide` projected onto the skin's tangent
+// plane, if the ray starts in air and reaches skin.
+bool anchor_from_face(const FieldSampler& fields, SignedAxis face, const Vec3d& slide,
+                      SurfaceAnchor* anchor) {
+  const SideRay ray = side_ray(fields.grid(), face);
   if (fields.sample_surf(ray.origin).value > 0.0) return false;  // starts inside the body
   const double step = 0.5 * fields.grid().min_spacing();
   const RayHit hit = find_crossing(fields, ray.origin, ray.dir, ray.length, step, false);
@@ -231,12 +250,28 @@ bool anchor_from_side(const FieldSampler& fields, ApproachSide side, SurfaceAnch
   const Vec3d point = ray.origin + hit.lambda * ray.dir;
   const Vec3d normal = outward_normal(fields, point);
   if (dot(normal, ray.dir) > -0.5) return false;  // not facing the ray: an edge or a corner
-  const bool z_side = side == ApproachSide::PlusZ || side == ApproachSide::MinusZ;
-  const Vec3d slide = z_side ? Vec3d{0.0, 1.0, 0.0} : Vec3d{1.0, 0.0, 0.0};
   anchor->point = point;
   anchor->normal = normal;
   anchor->slide = unit(slide - dot(slide, normal) * normal);
   return true;
+}
+
+// A grid face: slide along +y on the z faces, +x on the others.
+bool anchor_from_side(const FieldSampler& fields, ApproachSide side, SurfaceAnchor* anchor) {
+  const SignedAxis face = grid_face(side);
+  const Vec3d slide = face.axis == 2 ? Vec3d{0.0, 1.0, 0.0} : Vec3d{1.0, 0.0, 0.0};
+  return anchor_from_face(fields, face, slide, anchor);
+}
+
+// A patient side: the grid face nearest to it; slide toward the patient's left, or superior
+// when coming from the left or right. Both snapped to scene axes, so the anchor is the same
+// anatomical point however the volume is stored.
+bool anchor_from_patient_side(const FieldSampler& fields, Anatomy from, SurfaceAnchor* anchor) {
+  const PatientFrame frame = patient_frame(fields.grid());
+  const SignedAxis face = frame.nearest_axis(from);
+  const bool lateral = from == Anatomy::Left || from == Anatomy::Right;
+  const SignedAxis along = frame.nearest_axis(lateral ? Anatomy::Superior : Anatomy::Left);
+  return anchor_from_face(fields, face, axis_vector(along.axis, along.sign), anchor);
 }
 
 // --- Body axis of the ribs path ---------------------------------------------------------------
@@ -287,7 +322,15 @@ ApproachSide parse_approach_side(std::string_view text) {
   if (text == "-y") return ApproachSide::MinusY;
   if (text == "+z") return ApproachSide::PlusZ;
   if (text == "-z") return ApproachSide::MinusZ;
-  throw UsageError("unknown side '" + std::string(text) + "' (auto, +x, -x, +y, -y, +z, -z)");
+  if (text == "anterior") return ApproachSide::Anterior;
+  if (text == "posterior") return ApproachSide::Posterior;
+  if (text == "left") return ApproachSide::Left;
+  if (text == "right") return ApproachSide::Right;
+  if (text == "superior") return ApproachSide::Superior;
+  if (text == "inferior") return ApproachSide::Inferior;
+  throw UsageError("unknown side '" + std::string(text) +
+                   "' (auto, anterior, posterior, left, right, superior, inferior, +x, -x, +y, "
+                   "-y, +z, -z)");
 }
 
 const char* to_string(ApproachSide side) {
@@ -306,22 +349,38 @@ const char* to_string(ApproachSide side) {
       return "+z";
     case ApproachSide::MinusZ:
       return "-z";
+    case ApproachSide::Anterior:
+      return "anterior";
+    case ApproachSide::Posterior:
+      return "posterior";
+    case ApproachSide::Left:
+      return "left";
+    case ApproachSide::Right:
+      return "right";
+    case ApproachSide::Superior:
+      return "superior";
+    case ApproachSide::Inferior:
+      return "inferior";
   }
   return "auto";
 }
 
 SurfaceAnchor find_surface_anchor(const FieldSampler& fields, ApproachSide side) {
   SurfaceAnchor anchor;
-  if (side != ApproachSide::Auto) {
-    if (anchor_from_side(fields, side, &anchor)) return anchor;
-    throw InputError(std::string("no skin facing the ") + to_string(side) +
-                     " side along the grid's centre line");
+  if (side == ApproachSide::Auto) {
+    for (Anatomy a : {Anatomy::Anterior, Anatomy::Right, Anatomy::Left, Anatomy::Superior,
+                      Anatomy::Inferior, Anatomy::Posterior}) {
+      if (anchor_from_patient_side(fields, a, &anchor)) return anchor;
+    }
+    throw InputError("no skin reachable from outside along the grid's centre lines");
   }
-  for (ApproachSide s : {ApproachSide::PlusZ, ApproachSide::MinusY, ApproachSide::MinusX,
-                         ApproachSide::PlusX, ApproachSide::PlusY, ApproachSide::MinusZ}) {
-    if (anchor_from_side(fields, s, &anchor)) return anchor;
+  if (const std::optional<Anatomy> from = patient_side(side)) {
+    if (anchor_from_patient_side(fields, *from, &anchor)) return anchor;
+  } else if (anchor_from_side(fields, side, &anchor)) {
+    return anchor;
   }
-  throw InputError("no skin reachable from outside along the grid's centre lines");
+  throw InputError(std::string("no skin facing the ") + to_string(side) +
+                   " side along the grid's centre line");
 }
 
 double pad_offset(const Tool& tool) {

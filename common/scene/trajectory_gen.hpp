@@ -41,16 +41,35 @@ struct SurfaceAnchor {
   Vec3d slide{0.0, 1.0, 0.0};
 };
 
-// The side of the grid the tool comes from: the anchor's normal is about this axis.
-enum class ApproachSide { Auto, PlusX, MinusX, PlusY, MinusY, PlusZ, MinusZ };
-// "auto", "+x", "-x", "+y", "-y", "+z", "-z"; UsageError otherwise.
+// The side the tool comes from: a face of the grid (+x ... -z), or a patient direction resolved
+// through the grid's direction matrix (base/patient_frame.hpp) to the grid face nearest to it.
+enum class ApproachSide {
+  Auto,
+  PlusX,
+  MinusX,
+  PlusY,
+  MinusY,
+  PlusZ,
+  MinusZ,
+  Anterior,
+  Posterior,
+  Left,
+  Right,
+  Superior,
+  Inferior,
+};
+// "auto", "+x", "-x", "+y", "-y", "+z", "-z", "anterior", "posterior", "left", "right",
+// "superior", "inferior"; UsageError otherwise.
 ApproachSide parse_approach_side(std::string_view text);
 const char* to_string(ApproachSide side);
 
 // The skin point hit by a ray along the grid's centre line, coming from `side` (the grid's face
-// on that side inward). Auto tries +z, -y, -x, +x, +y, -z and takes the first side whose ray
-// starts in air and reaches skin: the cube's top face, the torso's anterior wall. The slide
-// direction is +y for the z sides and +x for the others. InputError when no skin is found.
+// on that side inward). A patient side takes the face nearest to that direction and slides
+// toward the patient's left (toward superior when it comes from the left or right). Auto is the
+// patient's anterior, then right, left, superior, inferior and posterior: the first whose ray
+// starts in air and reaches skin (the torso's anterior wall, the cube's top face, which is its
+// anterior). A grid face (+x ... -z) slides along +y (z faces) or +x. InputError when no skin is
+// found.
 SurfaceAnchor find_surface_anchor(const FieldSampler& fields, ApproachSide side);
 
 // Distance (mm) from the device point to the pad: minus the z of the contact points' centroid

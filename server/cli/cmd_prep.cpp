@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "base/parallel.hpp"
+#include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "prep/prep.hpp"
@@ -20,6 +21,9 @@ std::string prep_usage() {
 Segments body and bone and computes the signed distance maps the force model samples.
 INPUT: a .nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr file, a DICOM series directory, or phantom:NAME.
 Writes body.nii.gz, bone.nii.gz, d_surf.nii.gz, d_bone.nii.gz and prep.json into DIR.
+The input is checked first: air near -1000 HU and soft tissue near 0..100 HU must be present
+and the body must leave air around it. Patient directions come from the file's direction
+matrix; an oblique volume (gantry tilt) is resampled onto the nearest axis-aligned frame.
 Options:
   --out DIR               output directory (required; created if missing)
   --no-cache              recompute even if DIR already holds the result for this input
@@ -31,6 +35,8 @@ Options:
   --bone-seed HU          bone region-growing seeds at or above (default %g)
   --bone-grow HU          bone grows into voxels at or above (default %g)
   --min-bone-island ML    drop bone islands smaller than this (default %g)
+  --not-hu-ok             prep a volume that does not look like a CT in HU (prep refuses a
+                          label map, an MR or a CT saved without its rescale by default)
   -q, --quiet             print only errors
   -h, --help              show this help
 )",
@@ -43,7 +49,7 @@ Options:
 }  // namespace
 
 int cmd_prep(const Arguments& argv) {
-  const Args args(argv, {"help", "no-cache", "quiet"},
+  const Args args(argv, {"help", "no-cache", "quiet", "not-hu-ok"},
                   {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
                    "bone-grow", "min-bone-island", "max-table-thickness"});
   if (args.has("help")) {
@@ -55,6 +61,7 @@ int cmd_prep(const Arguments& argv) {
   if (!out) throw UsageError("prep needs --out DIR");
   PrepParams params;
   params.use_cache = !args.has("no-cache");
+  params.not_hu_ok = args.has("not-hu-ok");
   SegmentationParams& seg = params.segmentation;
   seg.body_threshold_hu = args.number("body-threshold", seg.body_threshold_hu);
   seg.min_body_part_ml = args.number("min-body-part", seg.min_body_part_ml);
@@ -95,6 +102,14 @@ int cmd_prep(const Arguments& argv) {
   std::printf("  grid      %lld x %lld x %lld voxels of %s mm\n", static_cast<long long>(d[0]),
               static_cast<long long>(d[1]), static_cast<long long>(d[2]),
               format_triple(r.grid.spacing).c_str());
+  if (!r.from_cache) {
+    std::printf("  patient   stored %s", r.orientation.c_str());
+    if (r.reoriented)
+      std::printf(", %.1f deg oblique: resampled onto the nearest axis-aligned frame (%s)",
+                  r.obliquity_deg, patient_frame(r.grid).orientation_code().c_str());
+    std::printf("\n");
+    if (!r.hu_warning.empty()) std::printf("  warning   --not-hu-ok: %s\n", r.hu_warning.c_str());
+  }
   std::printf("  body      %llu voxels (%.0f ml)\n",
               static_cast<unsigned long long>(r.stats.body_voxels),
               static_cast<double>(r.stats.body_voxels) * voxel_ml);

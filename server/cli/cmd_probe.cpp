@@ -18,6 +18,7 @@
 
 #include "asio.hpp"
 #include "base/errors.hpp"
+#include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "loop/haptic_loop.hpp"
@@ -346,6 +347,17 @@ int cmd_probe(const Arguments& argv) {
     if (r.have_scene)
       std::printf("  scene     %s, tool %s, device %s, %.6g Hz\n", r.scene.source().c_str(),
                   r.scene.tool().name().c_str(), r.scene.device().c_str(), r.scene.tick_rate_hz());
+    if (r.have_scene && r.scene.grid().direction_size() == 9) {
+      WorldPlacement world;
+      for (int i = 0; i < 9; ++i)
+        world.direction[static_cast<std::size_t>(i)] = r.scene.grid().direction(i);
+      const PatientFrame frame = patient_frame(world);
+      const SignedAxis anterior = frame.nearest_axis(Anatomy::Anterior);
+      std::printf("  patient   CT stored %s: anterior is %c%c, superior %c%c in the scene frame\n",
+                  frame.orientation_code().c_str(), anterior.sign > 0 ? '+' : '-',
+                  "xyz"[anterior.axis], frame.nearest_axis(Anatomy::Superior).sign > 0 ? '+' : '-',
+                  "xyz"[frame.nearest_axis(Anatomy::Superior).axis]);
+    }
     std::printf(
         "  frames    %llu in %.3f s: %.1f frames/s, delivered %.4f (%llu gaps, %llu frames "
         "missing, largest gap %llu), %llu with contact, %llu zeroed by faults\n",

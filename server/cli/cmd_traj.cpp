@@ -33,15 +33,19 @@ KIND:
                 anterior chest wall at a fixed depth, the tool aligned with the local skin
                 normal (default right side, 30 deg anterior of lateral, 5 mm, 20 mm/s)
 The flat paths (slide-*, press-hold) work on a plane through an anchor: the skin point hit along
-the grid's centre line from --side (auto: the first of +z, -y, -x, +x, +y, -z that reaches skin;
-the cube phantom's top face, the torso's anterior wall), sliding along +y (z sides) or +x.
+the grid's centre line from --side. Patient sides (anterior, posterior, left, right, superior,
+inferior) come from the file's direction matrix, not the voxel order, and slide toward the
+patient's left (superior from the left or right). auto: the first of anterior, right, left,
+superior, inferior, posterior that reaches skin (the torso's anterior wall; the cube phantom's
+top face, its anterior). Grid faces (+x, -x, +y, -y, +z, -z) slide along +y (z faces) or +x.
 Options:
 )";
 
 constexpr const char* kTrajOptions = R"(  --out FILE              trajectory CSV to write (required)
   --tool TOOL             sets the pad offset (default finger:37: 8 mm; probe: 50 mm)
   --rate HZ               rows per second (default 1000)
-  --side S                slide-*, press-hold: auto, +x, -x, +y, -y, +z, -z (default auto)
+  --side S                slide-*, press-hold: auto (default), a patient side (anterior, ...)
+                          or a grid face (+x, -x, +y, -y, +z, -z)
   --depth MM              final / fixed depth (slide-ramp 6, slide-speed 3, press-hold 4, ribs 5)
   --depth-start MM        slide-ramp: starting depth (default 0)
   --duration S            slide-ramp: duration (default 6)

@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <regex>
@@ -114,6 +115,28 @@ Png read_png(const fs::path& path) {
   return out;
 }
 
+// The RGB bytes of a PNG, row by row.
+std::vector<std::uint8_t> read_rgb(const fs::path& path) {
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(path.string().c_str());
+  reader->Update();
+  auto* pixels =
+      vtkUnsignedCharArray::SafeDownCast(reader->GetOutput()->GetPointData()->GetScalars());
+  std::vector<std::uint8_t> out;
+  if (!pixels) return out;
+  const int nc = pixels->GetNumberOfComponents();
+  for (vtkIdType i = 0; i < pixels->GetNumberOfTuples(); ++i)
+    for (int k = 0; k < std::min(nc, 3); ++k) out.push_back(pixels->GetValue(i * nc + k));
+  return out;
+}
+
+double mean_abs_difference(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  if (a.size() != b.size() || a.empty()) return 1e9;
+  double sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) sum += std::abs(int{a[i]} - int{b[i]});
+  return sum / static_cast<double>(a.size());
+}
+
 TEST(Palpview, HelpAndUsageErrors) {
   auto r = run_palpview("--help");
   EXPECT_EQ(r.exit_code, 0);
@@ -132,6 +155,44 @@ TEST(Palpview, HelpAndUsageErrors) {
   EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --camera 1,2").exit_code, 2);
   EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --rate").exit_code, 2);
   EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --script x.csv").exit_code, 2);
+  EXPECT_EQ(run_palpview("--connect 127.0.0.1:7400 --view front").exit_code, 2);
+}
+
+// The same torso stored LPS, RAS and PIR: the default view is the patient's anterior in all
+// three (the same picture), and it is not the posterior view.
+TEST(Palpview, DefaultViewIsThePatientsAnteriorHoweverStored) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  const fs::path dir = test_dir();
+  std::map<std::string, std::vector<std::uint8_t>> shots;
+  for (const std::string code : {"LPS", "RAS", "PIR", "LPS posterior"}) {
+    const std::string stored = code.substr(0, 3);
+    const fs::path ct = dir / ("torso_" + stored + ".nii.gz");
+    if (!fs::exists(ct)) {
+      const auto made = testing::run_palp_cli(
+          "phantom torso --dims 96x64x24 --spacing 5x5x8 "
+          "--orientation " +
+              stored + " --out " + ct.string(),
+          shared_cli_dir() / "cache");
+      ASSERT_EQ(made.exit_code, 0) << made.output;
+    }
+    Palpd palpd("--scene " + ct.string() + " --device sim --port 0 --no-realtime --duration 300",
+                dir);
+    ASSERT_GT(palpd.port(), 0) << palpd.log();
+    const fs::path png = dir / ("view_" + stored + (code.size() > 3 ? "_posterior" : "") + ".png");
+    const auto r = run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) +
+                                " --screenshot " + png.string() +
+                                " --frames 2 --width 240 --height 160 --timeout 120 --no-tool"
+                                " --no-deformation --no-overlays" +
+                                (code.size() > 3 ? " --view posterior" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    shots[code] = read_rgb(png);
+  }
+  const double ras = mean_abs_difference(shots["LPS"], shots["RAS"]);
+  const double pir = mean_abs_difference(shots["LPS"], shots["PIR"]);
+  const double back = mean_abs_difference(shots["LPS"], shots["LPS posterior"]);
+  EXPECT_LT(ras, 0.5) << "RAS differs from LPS";
+  EXPECT_LT(pir, 0.5) << "PIR differs from LPS";
+  EXPECT_GT(back, 2.0) << "the posterior view looks like the anterior one: the test cannot fail";
 }
 
 TEST(Palpview, UnreachableServerFailsAfterTheTimeout) {

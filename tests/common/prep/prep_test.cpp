@@ -143,5 +143,46 @@ TEST_F(PrepTest, BadInputThrowsAndLeavesNoPrepJson) {
   EXPECT_THROW(run_prep((dir_ / "missing.nii").string(), (dir_ / "out").string(), {}), InputError);
 }
 
+TEST_F(PrepTest, NotACtIsRefusedUnlessAllowed) {
+  CtVolume ct;
+  write_small_ct(dir_, &ct);
+  for (std::int16_t& v : ct.data) v = static_cast<std::int16_t>(v + 1024);  // rescale dropped
+  const std::string input = (dir_ / "no_rescale.nii.gz").string();
+  write_nifti(input, ct);
+  try {
+    run_prep(input, (dir_ / "out").string(), {});
+    ADD_FAILURE() << "prepped a CT without its rescale";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("without its rescale"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out" / kPrepJsonFile));
+  PrepParams params;
+  params.not_hu_ok = true;
+  const PrepResult r = run_prep(input, (dir_ / "out").string(), params);
+  EXPECT_FALSE(r.hu_warning.empty());
+  std::ifstream in(dir_ / "out" / kPrepJsonFile);
+  const auto json = nlohmann::json::parse(in);
+  EXPECT_TRUE(json.contains("not_hu_ok"));
+}
+
+TEST_F(PrepTest, ObliqueInputIsResampledAndSaysSo) {
+  CtVolume ct;
+  write_small_ct(dir_, &ct);
+  const double t = 15.0 * 3.14159265358979323846 / 180.0;  // turned about superior
+  ct.grid.world.direction = {std::cos(t), -std::sin(t), 0, std::sin(t), std::cos(t), 0, 0, 0, 1};
+  const std::string input = (dir_ / "oblique.nii.gz").string();
+  write_nifti(input, ct);
+  const PrepResult r = run_prep(input, (dir_ / "out").string(), {});
+  EXPECT_TRUE(r.reoriented);
+  EXPECT_NEAR(r.obliquity_deg, 15.0, 1e-3);
+  EXPECT_NE(r.grid.dims, ct.grid.dims);
+  const Mask body = read_nifti_mask((dir_ / "out" / kBodyFile).string());
+  EXPECT_EQ(body.grid.world.direction, (std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  std::ifstream in(dir_ / "out" / kPrepJsonFile);
+  const auto json = nlohmann::json::parse(in);
+  EXPECT_TRUE(json.at("patient").at("reoriented").get<bool>());
+  EXPECT_EQ(json.at("patient").at("orientation").get<std::string>(), "LPS");
+}
+
 }  // namespace
 }  // namespace palp
