@@ -77,7 +77,8 @@ and deforms the skin where the tool presses.
 Mouse: left drag orbits (controller: slides the tool; shift: rotates it), middle drag orbits,
 right drag windows (x: level, y: width), scroll zooms (controller: presses; ctrl: zooms).
 Keys: P next preset, [ ] level, - = width, V next view (anterior, left, posterior, right,
-superior, inferior), Home camera reset, Esc quit; controller: arrows
+superior, inferior), Home camera reset, Esc quit; controller: H re-centres a device placed on
+the patient (palpd --home), arrows
 slide, W/S press, Q/E R/F Z/C rotate, 1/2/3 finger:37/twofinger:19/probe:9x3, space pause,
 backspace start pose.
 )";
@@ -297,6 +298,7 @@ int run(const Options& o) {
     else
       scene.zoom(std::pow(1.1, dy));
   };
+  bool recentre_requested = false;  // H (controller): re-centre a registered device
   events.key = [&](int key, int) {
     const CameraAxes axes = scene.camera_axes();
     switch (key) {
@@ -320,6 +322,9 @@ int run(const Options& o) {
         return;
       case GLFW_KEY_HOME:
         scene.reset_camera();
+        return;
+      case GLFW_KEY_H:
+        if (o.controller) recentre_requested = true;  // sent from the main loop below
         return;
       case GLFW_KEY_V: {
         const auto at = std::find(kViewCycle.begin(), kViewCycle.end(), scene.view());
@@ -428,6 +433,10 @@ int run(const Options& o) {
       }
       if (auto tool = controller.take_tool_request()) client.set_tool(*tool);
       if (auto paused = controller.take_pause_request()) client.set_paused(*paused);
+      if (recentre_requested) {
+        client.recentre();
+        recentre_requested = false;
+      }
     }
     const auto t1 = Clock::now();
     const DeformResult deform = scene.update_deformation();

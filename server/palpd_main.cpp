@@ -26,10 +26,13 @@
 #include "devices/device.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
+#include "model/registration.hpp"
 #include "model/safety.hpp"
 #include "net/server.hpp"
 #include "rt/recording.hpp"
+#include "scene/home_site.hpp"
 #include "scene/trajectory.hpp"
+#include "scene/trajectory_gen.hpp"
 
 namespace palp {
 namespace {
@@ -61,6 +64,19 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
   --device-profile NAME   safety limits after the model: falcon, phantom-premium, omega
                           (default: none)
   --rate HZ               loop rate, 1..100000 (default 1000; tested 500..10000)
+Placing a force device on the patient (usb-haptic; spacemouse takes --home and
+--home-clearance; sim, replay and remote move in the scene frame and take none):
+  --home SITE             where the device's workspace centre sits: auto (default: the
+                          patient's anterior skin), anterior, left, right, ..., ribs-right,
+                          ribs-left (middle of the ribs path), or X,Y,Z in patient coordinates
+                          (the CT's LPS world, mm)
+  --home-clearance MM     the home point is this far above the skin along its normal (20)
+  --device-axes XYZ       the patient directions of the device's x, y, z (default IAR: y up =
+                          anterior, z toward the user = the patient's right, x = inferior)
+  --device-scale S        scene mm per device mm (default 1)
+  --workspace-mm MM       the device's workspace, +-MM about its centre (default 50; a
+                          Falcon is about +-50, a Touch about +-80 x 60 x 35)
+palpd refuses to start when the device, so placed, cannot reach 10 mm below the skin.
   --port P                TCP port (default 7400; 0 = any free port, printed at start)
   --bind ADDR             address to listen on (default 127.0.0.1; 0.0.0.0 for a lab network)
   --token TOKEN           CONTROLLER clients must present it (prefer the config file)
@@ -87,12 +103,13 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
 
 const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime"};
 const std::vector<std::string> kValued = {
-    "device",    "tool",         "device-profile", "rate",
-    "port",      "bind",         "token",          "max-clients",
-    "queue",     "idle-timeout", "hello-timeout",  "write-timeout",
-    "record",    "record-dir",   "watchdog-ms",    "device-timeout-ms",
-    "priority",  "duration",     "config",         "poll-us",
-    "stats-json"};
+    "device",         "tool",         "device-profile", "rate",
+    "port",           "bind",         "token",          "max-clients",
+    "queue",          "idle-timeout", "hello-timeout",  "write-timeout",
+    "record",         "record-dir",   "watchdog-ms",    "device-timeout-ms",
+    "priority",       "duration",     "config",         "poll-us",
+    "stats-json",     "device-axes",  "device-scale",   "home",
+    "home-clearance", "workspace-mm"};
 
 std::string number_text(double v) {
   std::string s;
@@ -171,6 +188,82 @@ std::vector<std::string> param_assignments(const ForceParams& p) {
 }
 
 // Commands from the controller, wired to the loop, the recorder and the remote device.
+// The workspace half extents: "MM" or "X,Y,Z" (mm).
+Vec3d workspace_half(const std::string& text) {
+  double v[3];
+  int n = 0;
+  std::size_t start = 0;
+  while (n < 3 && start <= text.size()) {
+    const std::size_t comma = text.find(',', start);
+    const std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    char* end = nullptr;
+    v[n] = std::strtod(part.c_str(), &end);
+    if (part.empty() || *end != '\0' || !(v[n] > 0.0 && v[n] <= 2000.0))
+      throw UsageError("--workspace-mm needs MM or X,Y,Z, each in (0, 2000], got '" + text + "'");
+    ++n;
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (n == 1) return {v[0], v[0], v[0]};
+  if (n != 3) throw UsageError("--workspace-mm needs MM or X,Y,Z, got '" + text + "'");
+  return {v[0], v[1], v[2]};
+}
+
+// Devices with a frame of their own (usb-haptic) are registered onto the patient; devices that
+// move in the scene frame refuse registration options.
+std::optional<net::SceneDescription::Placement> place_device(const cli::Args& args,
+                                                             std::string_view kind,
+                                                             const Scene& scene, bool quiet) {
+  const bool placed = kind == "usb-haptic";
+  const bool asked = args.get("device-axes") || args.get("device-scale") ||
+                     args.get("workspace-mm") ||
+                     ((args.get("home") || args.get("home-clearance")) && kind != "spacemouse");
+  if (!placed) {
+    // A config file written for the lab's device may be tried with --device sim: a note, not
+    // an error.
+    if (asked)
+      std::fprintf(stderr,
+                   "palpd: note: the %s device moves in the scene frame: --home, --device-axes, "
+                   "--device-scale and --workspace-mm are ignored (they place usb-haptic; "
+                   "spacemouse takes --home)\n",
+                   std::string(kind).c_str());
+    return std::nullopt;
+  }
+  net::SceneDescription::Placement p;
+  p.axes = args.get("device-axes").value_or("IAR");
+  p.home_site = args.get("home").value_or("auto");
+  p.workspace_half_mm = workspace_half(args.get("workspace-mm").value_or("50"));
+  const double scale = args.number("device-scale", 1.0);
+  if (!(scale >= 0.1 && scale <= 10.0)) throw UsageError("--device-scale must be 0.1..10");
+  const PatientFrame frame = patient_frame(scene.grid);
+  const HomeSite site =
+      find_home_site(*scene.fields, p.home_site, args.number("home-clearance", 20.0));
+  p.registration.rotation = rotation_from_axes(frame, p.axes);
+  p.registration.scale = scale;
+  p.registration.home = site.home;
+  p.home_skin = site.skin;
+  const std::string reach =
+      check_reach(p.registration, site.skin, site.normal, p.workspace_half_mm, 10.0);
+  if (!reach.empty()) throw UsageError("device placement: " + reach);
+  if (!quiet) {
+    std::string named;
+    for (std::size_t a = 0; a < 3; ++a) {
+      Anatomy d{};
+      parse_anatomy(p.axes.substr(a, 1), &d);
+      named += std::string(a ? ", " : "") + "xyz"[a] + " " + to_string(d);
+    }
+    std::fprintf(stderr,
+                 "palpd: device placed at home '%s': workspace centre (%.1f, %.1f, %.1f) mm "
+                 "(scene), %.0f mm above the skin; axes %s (%s), scale %g, workspace "
+                 "+-(%g, %g, %g) mm\n",
+                 p.home_site.c_str(), site.home.x, site.home.y, site.home.z,
+                 norm(site.home - site.skin), p.axes.c_str(), named.c_str(), scale,
+                 p.workspace_half_mm.x, p.workspace_half_mm.y, p.workspace_half_mm.z);
+  }
+  return p;
+}
+
 class App final : public net::ControlTarget {
  public:
   App(rt::HapticLoop& loop, std::shared_ptr<const FieldSampler> fields, rt::Device& device,
@@ -207,6 +300,12 @@ class App final : public net::ControlTarget {
   }
   std::string set_paused(bool paused) override {
     loop_.set_paused(paused);
+    return {};
+  }
+  std::string recentre() override {
+    if (loop_.config().registration.is_identity())
+      return "this device moves in the scene frame (no registration): nothing to re-centre";
+    loop_.request_recentre();
     return {};
   }
   std::string start_recording(const std::string& name) override {
@@ -433,6 +532,19 @@ int run(const cli::Arguments& argv_in) {
   device_config.fields = scene.fields;
   device_config.tool = tool;
   device_config.timeout_s = std::max(loop_config.device_timeout_s, 0.01);
+  // device frame -> scene: the registration of a device placed on the patient
+  const std::optional<net::SceneDescription::Placement> placement =
+      place_device(args, device->kind(), scene, quiet);
+  if (placement) loop_config.registration = placement->registration;
+  if (device->kind() == "spacemouse" && (args.get("home") || args.get("home-clearance"))) {
+    const HomeSite site = find_home_site(*scene.fields, args.get("home").value_or("auto"),
+                                         positive(args, "home-clearance", 20.0));
+    Pose home;
+    home.position = site.home;
+    home.orientation =
+        surface_orientation(site.normal, patient_frame(scene.grid).toward(Anatomy::Superior));
+    device_config.home = home;
+  }
   if (device->configure(device_config) != rt::DeviceStatus::Ok)
     throw InputError("device " + *device_spec + ": " + device->last_error());
   if (device->activate() != rt::DeviceStatus::Ok)
@@ -466,6 +578,7 @@ int run(const cli::Arguments& argv_in) {
   description.device = *device_spec;
   description.device_profile = profile ? std::string(profile->name) : "";
   description.fields = scene.fields;
+  description.placement = placement;
   net::Server server(server_config, description, loop, &app);
 
   if (const auto record = args.get("record")) {

@@ -99,6 +99,12 @@ std::string hud_text(const LatestState& state, const HudInputs& inputs) {
   out << "\n";
   if (state.scene) {
     out << "tool " << state.scene->tool << "   device " << state.scene->device << "\n";
+    if (const auto& p = state.scene->placement) {
+      out << "placed at " << p->home_site << "   axes " << p->axes << "   scale "
+          << fixed(p->scale, 2);
+      if (link.recentres > 0) out << "   re-centred " << link.recentres << "x";
+      out << "\n";
+    }
   }
   out << "contacts " << state.frame.n_contact << "/" << state.frame.contact_points;
   out << "   deformation " << (inputs.deformation ? "on" : "off") << "\n";

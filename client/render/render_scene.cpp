@@ -30,6 +30,7 @@
 #include "render/shadow.hpp"
 #include "render/tool_layer.hpp"
 #include "render/volume_layer.hpp"
+#include "render/workspace_box.hpp"
 #include "window/controller_input.hpp"
 
 namespace palp::view {
@@ -47,6 +48,7 @@ struct RenderScene::Impl {
   HudLayer hud;
   ForceChart chart;
   OrientationMarker marker;
+  WorkspaceBox workspace;
   PatientFrame frame;  // of the current scene (its direction matrix)
   std::string orientation = "LPS";
   const SceneDescription* framed_scene = nullptr;
@@ -62,6 +64,7 @@ struct RenderScene::Impl {
         shadow(renderer),
         hud(renderer),
         chart(s.chart_seconds),
+        workspace(renderer),
         tool_glyphs(s.tool_glyphs),
         overlays(s.overlays) {}
 
@@ -140,6 +143,7 @@ void RenderScene::update_state(const LatestState& state, const HudInputs& inputs
     s.camera_placed = true;
   }
   s.tools.update(state, s.tool_glyphs);
+  s.workspace.update(state.scene.get(), state.link.registration_home, s.tool_glyphs);
   s.shadow.update(state.frame, s.tools.tool_name(), s.volume.source(), s.tool_glyphs);
   s.volume.set_contacts(state.frame);  // for the deformation step
 
@@ -263,6 +267,10 @@ const std::string& RenderScene::last_hud_text() const {
 const std::string& RenderScene::last_banner_text() const {
   return impl_->hud.banner_string();
 }
+bool RenderScene::workspace_visible() const {
+  return impl_->workspace.visible();
+}
+
 const std::vector<float>& RenderScene::render_scalars() const {
   return impl_->volume.render_scalars();
 }

@@ -106,6 +106,8 @@ class RenderScene {
   std::array<double, 2> to_display(const Vec3d& point) const;
   const std::string& last_hud_text() const;
   const std::string& last_banner_text() const;
+  // Whether the registered device's workspace box is drawn (a device placed on the patient).
+  bool workspace_visible() const;
   // The render scalars currently in the mapper's buffer (deformed when pressing).
   const std::vector<float>& render_scalars() const;
 

@@ -1,6 +1,8 @@
 // palp.v1 -> plain structs: see frame_decoding.hpp.
 #include "stream/frame_decoding.hpp"
 
+#include <cmath>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -53,6 +55,34 @@ std::shared_ptr<SceneDescription> decode_scene(const v1::SceneInfo& s) {
   scene->device_profile = s.device_profile();
   scene->tick_rate_hz = s.tick_rate_hz();
   scene->device_renders_force = s.device_renders_force();
+  if (s.has_registration()) {
+    const v1::Registration& r = s.registration();
+    SceneDescription::Placement p;
+    if (r.rotation_size() != 9 || r.workspace_half_mm_size() != 3)
+      throw ProtocolViolation("SceneInfo: the registration needs 9 rotation values, 3 extents");
+    for (int i = 0; i < 9; ++i) {
+      if (!std::isfinite(r.rotation(i)) || std::fabs(r.rotation(i)) > 1.0 + 1e-6)
+        throw ProtocolViolation("SceneInfo: registration rotation out of range");
+      p.rotation[static_cast<std::size_t>(i)] = r.rotation(i);
+    }
+    if (!positive_finite(r.scale()) || r.scale() > 100.0)
+      throw ProtocolViolation("SceneInfo: registration scale must be in (0, 100]");
+    p.scale = r.scale();
+    p.workspace_half_mm = {r.workspace_half_mm(0), r.workspace_half_mm(1), r.workspace_half_mm(2)};
+    if (!positive_finite(p.workspace_half_mm.x) || !positive_finite(p.workspace_half_mm.y) ||
+        !positive_finite(p.workspace_half_mm.z) || p.workspace_half_mm.x > 1e4 ||
+        p.workspace_half_mm.y > 1e4 || p.workspace_half_mm.z > 1e4)
+      throw ProtocolViolation("SceneInfo: registration workspace must be in (0, 10000] mm");
+    p.home = palp::wire::from_proto(r.home());
+    p.home_skin = palp::wire::from_proto(r.home_skin());
+    if (!is_finite(p.home) || !is_finite(p.home_skin))
+      throw ProtocolViolation("SceneInfo: registration home not finite");
+    if (r.home_site().size() > palp::wire::kMaxNameBytes || r.axes().size() > 8)
+      throw ProtocolViolation("SceneInfo: registration names too long");
+    p.home_site = r.home_site();
+    p.axes = r.axes();
+    scene->placement = p;
+  }
   return scene;
 }
 

@@ -1,5 +1,6 @@
 // StreamClient::Impl's handlers of the server's messages, applied to the shared state.
 #include "stream/stream_client_impl.hpp"
+#include "wire/messages.hpp"
 
 #include <memory>
 #include <mutex>
@@ -175,6 +176,11 @@ void StreamClient::Impl::on_stats(Connection& c, const v1::Stats& s) {
   l.server_recording = s.recording();
   l.device_state = net::device_state_of(s.device_state());
   l.device_message = s.device_message();
+  if (s.has_registration_home()) {
+    const Vec3d home = palp::wire::from_proto(s.registration_home());
+    if (is_finite(home)) l.registration_home = home;
+  }
+  l.recentres = s.recentres();
 }
 
 void StreamClient::Impl::on_error(const ConnectionPtr& c, const v1::Error& e) {

@@ -467,4 +467,10 @@ std::uint64_t StreamClient::set_paused(bool paused) {
   return impl_->queue_command(m, "");
 }
 
+std::uint64_t StreamClient::recentre() {
+  v1::ClientMessage m;
+  m.mutable_command()->mutable_recentre();
+  return impl_->queue_command(m, "");
+}
+
 }  // namespace palp::view

@@ -37,6 +37,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -84,6 +85,16 @@ struct SceneDescription {
   bool bone_enabled = true;
   std::map<std::string, std::string> metadata;  // palpd: prep_dir, scheme, storage
   std::string server_name;                      // from Welcome
+  // Where the device sits on the patient (palpd --home ...); unset for scene-frame devices.
+  struct Placement {
+    std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major, device -> scene
+    double scale = 1;
+    Vec3d home{};               // scene mm, at start (LinkStats::registration_home: now)
+    Vec3d workspace_half_mm{};  // the device's box, +- about its origin
+    std::string home_site, axes;
+    Vec3d home_skin{};
+  };
+  std::optional<Placement> placement;
 };
 
 // The render volume the server sent, complete (all chunks). Voxel (i, j, k) sits at
@@ -137,6 +148,8 @@ struct LinkStats {
   std::uint64_t server_overruns = 0, server_faults = 0;
   bool server_paused = false, server_recording = false;
   DeviceState device_state = DeviceState::Unknown;  // from Stats
+  std::optional<Vec3d> registration_home;           // from Stats: the device's home now
+  std::uint64_t recentres = 0;                      // from Stats
   std::string device_message;                       // from Stats: the device's last event
   std::uint64_t server_errors = 0;    // non-fatal Errors the server sent (text in `message`)
   double volume_progress = 0;         // 0..1 while Loading
@@ -175,6 +188,8 @@ class StreamClient {
   std::uint64_t set_tool(const std::string& tool);
   std::uint64_t set_parameter(const std::string& name, double value);
   std::uint64_t set_paused(bool paused);
+  // Re-centre a registered device (palpd moves its home at the next tick out of contact).
+  std::uint64_t recentre();
 
   const StreamOptions& options() const { return options_; }
 

@@ -358,6 +358,25 @@ int cmd_probe(const Arguments& argv) {
                   "xyz"[anterior.axis], frame.nearest_axis(Anatomy::Superior).sign > 0 ? '+' : '-',
                   "xyz"[frame.nearest_axis(Anatomy::Superior).axis]);
     }
+    if (r.have_scene && r.scene.has_registration()) {
+      const v1::Registration& g = r.scene.registration();
+      std::printf(
+          "  device    placed at home '%s': axes %s, scale %g, workspace +-(%g, %g, %g) mm, "
+          "centre (%.1f, %.1f, %.1f) mm, skin below it at (%.1f, %.1f, %.1f)",
+          g.home_site().c_str(), g.axes().c_str(), g.scale(),
+          g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(0) : 0.0,
+          g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(1) : 0.0,
+          g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(2) : 0.0, g.home().x(),
+          g.home().y(), g.home().z(), g.home_skin().x(), g.home_skin().y(), g.home_skin().z());
+      if (r.have_stats && r.stats.recentres() > 0)
+        std::printf("; re-centred %llu times, centre now (%.1f, %.1f, %.1f)",
+                    static_cast<unsigned long long>(r.stats.recentres()),
+                    r.stats.registration_home().x(), r.stats.registration_home().y(),
+                    r.stats.registration_home().z());
+      std::printf("\n");
+    } else if (r.have_scene) {
+      std::printf("  device    moves in the scene frame (no registration)\n");
+    }
     std::printf(
         "  frames    %llu in %.3f s: %.1f frames/s, delivered %.4f (%llu gaps, %llu frames "
         "missing, largest gap %llu), %llu with contact, %llu zeroed by faults\n",

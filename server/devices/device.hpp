@@ -28,6 +28,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -72,6 +73,7 @@ struct DeviceConfig {
   std::shared_ptr<const FieldSampler> fields;  // the scene (sim's built-in path)
   Tool tool;                                   // the tool (sim's built-in path: pad offset)
   double timeout_s = 0.25;                     // remote: no pose for this long -> Timeout
+  std::optional<Pose> home;  // spacemouse: the home pose (palpd --home); unset: its own default
 };
 
 class Device {

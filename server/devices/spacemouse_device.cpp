@@ -230,6 +230,8 @@ DeviceStatus SpaceMouseDevice::configure(const DeviceConfig& config) {
   try {
     if (options_.home) {
       mapper_.set_home(*options_.home);
+    } else if (config.home) {
+      mapper_.set_home(*config.home);
     } else {
       if (!config.fields) return fail("spacemouse: the home pose needs a scene");
       mapper_.set_home(spacemouse::home_pose(*config.fields, config.tool, options_.home_lift_mm));

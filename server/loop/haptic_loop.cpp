@@ -57,6 +57,17 @@ HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopC
   current_ = std::make_unique<Bundle>(Bundle{model, make_state(*model)});
   requested_ = std::move(model);
   device_state_.store(static_cast<std::uint8_t>(device_.state()), std::memory_order_relaxed);
+  registration_ = config.registration;
+  identity_ = registration_.is_identity();
+  for (int a = 0; a < 3; ++a)
+    home_[static_cast<std::size_t>(a)].store(a == 0   ? registration_.home.x
+                                             : a == 1 ? registration_.home.y
+                                                      : registration_.home.z);
+}
+
+Vec3d HapticLoop::registration_home() const {
+  return {home_[0].load(std::memory_order_relaxed), home_[1].load(std::memory_order_relaxed),
+          home_[2].load(std::memory_order_relaxed)};
 }
 
 HapticLoop::~HapticLoop() {
@@ -158,7 +169,9 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   DeviceSample sample;
   switch (device_.read(deadline_ns, sample)) {
     case DeviceStatus::Ok:
-      last_pose_ = sample.pose;
+      // device pose -> scene pose (registration; identity skipped)
+      last_device_pose_ = sample.pose;
+      last_pose_ = identity_ ? sample.pose : to_scene(registration_, sample.pose);
       have_pose_ = true;
       last_sample_ns_ = deadline_ns;
       zero |= sample.forced_fault;
@@ -186,6 +199,20 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       have_pose_ = false;  // after a replug, wait for a fresh pose
       break;
   }
+  // re-centre (requested by a controller): only out of contact, so the force cannot step
+  if (recentre_request_.load(std::memory_order_relaxed) && have_pose_ && last_contacts_ == 0 &&
+      !identity_) {
+    recentre_request_.store(false, std::memory_order_relaxed);
+    const Vec3d moved =
+        to_scene(Registration{registration_.rotation, registration_.scale, {}}, last_device_pose_)
+            .position;
+    registration_.home = config_.registration.home - moved;
+    last_pose_ = to_scene(registration_, last_device_pose_);
+    home_[0].store(registration_.home.x, std::memory_order_relaxed);
+    home_[1].store(registration_.home.y, std::memory_order_relaxed);
+    home_[2].store(registration_.home.z, std::memory_order_relaxed);
+    recentres_.fetch_add(1, std::memory_order_relaxed);
+  }
   DeviceState device_state = device_.state();
   if ((zero & kZeroDeviceAbsent) && device_state == DeviceState::Present)
     device_state = DeviceState::Absent;
@@ -204,9 +231,14 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   const auto points = static_cast<std::uint32_t>(bundle.model->contact_count());
   const State* published_state = nullptr;
   if (zero == 0) {
+    // scene pose -> model tick -> scene force -> device frame -> safety (device frame) -> write
     tick(*bundle.model, bundle.state, last_pose_);
-    const Vec3d position = last_pose_.position;
+    const Vec3d position = last_device_pose_.position;
     Vec3d force = bundle.state.f_device, torque = bundle.state.tau_device;
+    if (!identity_) {
+      force = force_to_device(registration_, force);
+      torque = torque_to_device(registration_, torque);
+    }
     std::uint32_t safety = kSafetyOk;
     if (config_.profile) {
       SafetyInput in;
@@ -224,8 +256,8 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       prev_force_ = force;
       prev_position_ = position;
       prev_valid_ = true;
-      rec.force = force;
-      rec.torque = torque;
+      rec.force = identity_ ? force : force_to_scene(registration_, force);
+      rec.torque = identity_ ? torque : torque_to_scene(registration_, torque);
       rec.u = bundle.state.u;
       rec.n_contact = bundle.state.n_contact;
       rec.tick_status = bundle.state.status;
@@ -239,7 +271,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     device_.write(DeviceCommand{});  // zero first, then report
     reset(bundle.state);
     prev_force_ = Vec3d{};
-    prev_position_ = last_pose_.position;
+    prev_position_ = last_device_pose_.position;
     prev_valid_ = have_pose_;
     rec.fault = zero;
     if (zero & kFaultMask) {
@@ -247,6 +279,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       last_fault_.store(zero & kFaultMask, std::memory_order_relaxed);
     }
   }
+  last_contacts_ = rec.n_contact;
   publish(rec, published_state, points, device_state);
   ticks_.fetch_add(1, std::memory_order_release);
   const std::int64_t spent = monotonic_ns() - begin;
@@ -328,6 +361,7 @@ LoopStats HapticLoop::stats() const {
   s.finished = finished();
   s.device_state = device_state();
   s.absent_events = absent_events_.load(std::memory_order_relaxed);
+  s.recentres = recentres_.load(std::memory_order_relaxed);
   s.net_published = net_ring_.published();
   s.net_dropped = net_ring_.dropped();
   s.record_published = record_ring_.published();

@@ -39,6 +39,7 @@
 
 #include "devices/device.hpp"
 #include "model/force_model.hpp"
+#include "model/registration.hpp"
 #include "model/safety.hpp"
 #include "rt/snapshot.hpp"
 
@@ -74,9 +75,12 @@ struct LoopConfig {
   double watchdog_late_s = 0.005;  // a tick starting later than this: fault (0 = off)
   double device_timeout_s = 0.1;   // device NoData for longer than this: fault (0 = off)
   const DeviceProfile* profile = nullptr;  // safety filters after the model (nullptr: none)
-  std::size_t net_slots = 1024;            // snapshot ring toward the network
-  std::size_t record_slots = 16384;        // record ring toward the recorder
-  std::size_t contact_capacity = 0;        // contacts per snapshot; 0 = the tool's, at least 64
+  // Device frame -> scene (model/registration.hpp): applied to every pose read and, transposed,
+  // to every force written; the safety filters run in the device frame. Identity: skipped.
+  Registration registration;
+  std::size_t net_slots = 1024;      // snapshot ring toward the network
+  std::size_t record_slots = 16384;  // record ring toward the recorder
+  std::size_t contact_capacity = 0;  // contacts per snapshot; 0 = the tool's, at least 64
 };
 
 struct LoopStats {
@@ -94,6 +98,7 @@ struct LoopStats {
   bool finished = false;  // the device reported Finished and the loop stopped
   DeviceState device_state = DeviceState::Present;  // as of the last tick
   std::uint64_t absent_events = 0;                  // present -> absent transitions (unplugs)
+  std::uint64_t recentres = 0;                      // re-centres done (request_recentre)
   std::uint64_t net_published = 0, net_dropped = 0;
   std::uint64_t record_published = 0, record_dropped = 0;
 };
@@ -134,6 +139,12 @@ class HapticLoop {
   SnapshotRing& net_ring() { return net_ring_; }
   SnapshotRing& record_ring() { return record_ring_; }
   LoopStats stats() const;
+  // Not real time: at the next tick out of contact, move the registration's home so that where
+  // the device is now maps to the configured home point (a re-centre, like lifting a mouse).
+  // Ignored while in contact (it would step the force); count in LoopStats::recentres.
+  void request_recentre() { recentre_request_.store(true, std::memory_order_relaxed); }
+  // The registration's home now (scene mm).
+  Vec3d registration_home() const;
   const LoopConfig& config() const { return config_; }
   std::int64_t period_ns() const { return period_ns_; }
   const Device& device() const { return device_; }
@@ -161,8 +172,12 @@ class HapticLoop {
   std::atomic<Bundle*> pending_{nullptr};
   std::atomic<Bundle*> retired_{nullptr};
   std::uint64_t seq_ = 0;
-  Pose last_pose_{};
+  Pose last_pose_{};           // scene frame
+  Pose last_device_pose_{};    // device frame (as read)
+  Registration registration_;  // loop side: config_.registration, home moved by re-centres
+  bool identity_ = true;
   bool have_pose_ = false;
+  std::int32_t last_contacts_ = 0;
   std::int64_t last_sample_ns_ = 0;
   Vec3d prev_force_{};
   Vec3d prev_position_{};
@@ -175,7 +190,9 @@ class HapticLoop {
   std::array<std::atomic<std::uint64_t>, kJitterBuckets> jitter_{};
   std::atomic<std::int64_t> max_late_ns_{0}, tick_ns_max_{0};
   std::atomic<std::uint64_t> tick_ns_sum_{0};
-  std::atomic<std::uint64_t> absent_events_{0};
+  std::atomic<std::uint64_t> absent_events_{0}, recentres_{0};
+  std::atomic<bool> recentre_request_{false};
+  std::array<std::atomic<double>, 3> home_{};
   std::atomic<std::uint8_t> device_state_{static_cast<std::uint8_t>(DeviceState::Present)};
   std::atomic<bool> paused_{false}, recording_{false}, stop_{false}, finished_{false};
   std::atomic<int> record_request_{0};  // 1: start recording (reset state), 2: stop

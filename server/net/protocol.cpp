@@ -102,6 +102,7 @@ ClientCheck parse_client_message(std::string_view body, v1::ClientMessage& out) 
             return bad(v1::Error::BAD_REQUEST, "recording name too long");
           return {};
         case v1::Command::kPause:
+        case v1::Command::kRecentre:
         case v1::Command::kStopRecording:
           return {};
         case v1::Command::KIND_NOT_SET:

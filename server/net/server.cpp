@@ -335,6 +335,9 @@ class Server::Impl {
           case v1::Command::kPause:
             failure = control_->set_paused(c.pause().paused());
             break;
+          case v1::Command::kRecentre:
+            failure = control_->recentre();
+            break;
           case v1::Command::kStartRecording:
             failure = control_->start_recording(c.start_recording().name());
             break;
@@ -394,6 +397,19 @@ class Server::Impl {
     si->set_device_profile(scene_.device_profile);
     si->set_device_renders_force(loop_.device().renders_force());
     si->set_tick_rate_hz(loop_.config().rate_hz);
+    if (scene_.placement) {
+      const SceneDescription::Placement& pl = *scene_.placement;
+      v1::Registration* r = si->mutable_registration();
+      for (double v : pl.registration.rotation) r->add_rotation(v);
+      r->set_scale(pl.registration.scale);
+      wire::to_proto(pl.registration.home, r->mutable_home());
+      r->add_workspace_half_mm(pl.workspace_half_mm.x);
+      r->add_workspace_half_mm(pl.workspace_half_mm.y);
+      r->add_workspace_half_mm(pl.workspace_half_mm.z);
+      r->set_home_site(pl.home_site);
+      r->set_axes(pl.axes);
+      wire::to_proto(pl.home_skin, r->mutable_home_skin());
+    }
     return frame_of(m);
   }
 
@@ -636,6 +652,9 @@ class Server::Impl {
     st->set_last_fault(ls.last_fault);
     st->set_device_state(to_proto(ls.device_state));
     st->set_device_message(loop_.device().status_message());
+    if (scene_.placement)
+      wire::to_proto(loop_.registration_home(), st->mutable_registration_home());
+    st->set_recentres(ls.recentres);
     for (const SessionPtr& s : sessions_) {
       if (!s->welcomed || s->closing || s->closed) continue;
       st->set_client_frames_sent(s->frames_sent);

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "base/volume.hpp"
@@ -54,6 +55,14 @@ struct SceneDescription {
   std::string device;
   std::string device_profile;
   std::shared_ptr<const FieldSampler> fields;  // sampled for the render volume
+  // The device's registration, for devices placed on the patient (unset: scene-frame devices).
+  struct Placement {
+    Registration registration;
+    Vec3d workspace_half_mm{};
+    std::string home_site, axes;
+    Vec3d home_skin{};
+  };
+  std::optional<Placement> placement;
 };
 
 // What Commands do; palpd wires it to the loop, the recorder and the remote device. Each
@@ -64,6 +73,7 @@ class ControlTarget {
   virtual std::string set_tool(const std::string& tool) = 0;
   virtual std::string set_parameter(const std::string& name, double value) = 0;
   virtual std::string set_paused(bool paused) = 0;
+  virtual std::string recentre() = 0;
   virtual std::string start_recording(const std::string& name) = 0;
   virtual std::string stop_recording() = 0;
   virtual bool recording() const = 0;

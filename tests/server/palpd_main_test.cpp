@@ -85,6 +85,23 @@ TEST(Palpd, HelpAndUsageErrors) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+// Placing a device on the patient: scene-frame devices note that the options do not apply; a
+// device whose workspace, so placed, cannot reach the skin is refused with what it would need.
+TEST(Palpd, DevicePlacementIsCheckedBeforeStarting) {
+  auto r = run_palpd(
+      "--scene phantom:sphere --device sim --home auto --no-realtime --port 0 --duration 0.2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("moves in the scene frame"), std::string::npos) << r.output;
+  r = run_palpd("--scene phantom:sphere --device usb-haptic --workspace-mm 15 --no-realtime");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot reach 10 mm below the skin"), std::string::npos) << r.output;
+  r = run_palpd("--scene phantom:sphere --device usb-haptic --device-axes IAP --no-realtime");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  r = run_palpd("--scene phantom:sphere --device usb-haptic --home belly --no-realtime");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("ribs-right"), std::string::npos) << r.output;
+}
+
 TEST(Palpd, ConfigFileSetsOptionsAndCommandLineWins) {
   const fs::path config = shared_cli_dir() / "palpd.toml";
   std::ofstream(config) << "scene = \"phantom:sphere\"\ndevice = \"sim\"\nrate = 500\n"

@@ -18,6 +18,7 @@
 #include "base/errors.hpp"
 #include "model/tool.hpp"
 #include "render/transfer_presets.hpp"
+#include "render/workspace_box.hpp"
 
 namespace palp::view {
 namespace {
@@ -267,6 +268,43 @@ TEST(RenderScene, TheBallIsVisible) {
       }
     }
   EXPECT_EQ(inside_lit, inside);
+}
+
+TEST(WorkspaceBox, CornersFollowTheRegistration) {
+  SceneDescription::Placement p;
+  p.rotation = {0, 0, -1, 0, -1, 0, -1, 0, 0};  // IAR in an LPS scene
+  p.scale = 2.0;
+  p.workspace_half_mm = {10, 20, 30};
+  const auto corners = workspace_corners(p, {100, 100, 100});
+  // Corner 0 is (-10, -20, -30) on the device: R (..) = (30, 20, 10), times 2.
+  EXPECT_EQ(corners[0], (Vec3d{160, 140, 120}));
+  EXPECT_EQ(corners[7], (Vec3d{40, 60, 80}));
+}
+
+// A device placed on the patient shows its workspace as a wireframe; a scene-frame device none.
+TEST(RenderScene, PlacedDeviceShowsItsWorkspace) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  SceneSettings settings = quiet_settings();
+  settings.tool_glyphs = true;  // the box is drawn with the tool
+  Offscreen view(settings);
+  LatestState state = live_state();
+  state.volume = ball_volume();
+  const RgbImage without = view.draw(state);
+  EXPECT_FALSE(view.scene->workspace_visible());
+  auto scene = std::make_shared<SceneDescription>(*state.scene);
+  SceneDescription::Placement p;
+  p.workspace_half_mm = {15, 15, 15};
+  p.home = {kCentre, kCentre, kCentre + kRadius + 20};
+  p.home_skin = {kCentre, kCentre, kCentre + kRadius};
+  p.home_site = "auto";
+  p.axes = "LPS";
+  scene->placement = p;
+  state.scene = scene;
+  const RgbImage with = view.draw(state);
+  EXPECT_TRUE(view.scene->workspace_visible());
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i < with.rgb.size(); ++i) changed += with.rgb[i] != without.rgb[i];
+  EXPECT_GT(changed, 50u);
 }
 
 TEST(RenderScene, PressingDeformsTheSkinInsideTheRoiOnly) {

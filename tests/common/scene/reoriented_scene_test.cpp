@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <functional>
 
 #include "base/patient_frame.hpp"
+#include "io/ct_io.hpp"
 #include "io/phantom.hpp"
 #include "model/field_sampler.hpp"
 #include "prep/distance_transform.hpp"
@@ -201,6 +203,29 @@ TEST(ReorientedScene, ObliqueCopyIsResampledToTheSameAnatomy) {
       }
   const double dice = 2.0 * static_cast<double>(both) / static_cast<double>(a + b);
   EXPECT_GT(dice, 0.97);
+}
+
+// The shared real CT (stored RAS) and the same voxels stored LPS: the same masks voxel for voxel
+// and the same pressed spot. Skips when ../shared/data is absent.
+TEST(ReorientedScene, RealCtStoredLpsIsTheSamePatient) {
+  const std::string path = std::string(PALP_SHARED_DATA_DIR) + "/ct_abdomen_3mm.nii.gz";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
+  const CtVolume ras = read_ct(path);
+  ASSERT_EQ(patient_frame(ras.grid).orientation_code(), "RAS");
+  const CtVolume lps = reorder_axes(ras, "LPS");
+  const Index3 n = ras.grid.dims;
+  const auto index = [n](Index3 o) { return Index3{n[0] - 1 - o[0], n[1] - 1 - o[1], o[2]}; };
+  const SegmentationParams params;
+  const Mask body = segment_body(ras, params);
+  const Mask body_lps = segment_body(lps, params);
+  EXPECT_EQ(mismatches(body, body_lps, index), 0);
+  EXPECT_EQ(mismatches(segment_bone(ras, body, params), segment_bone(lps, body_lps, params), index),
+            0);
+  const SurfaceAnchor a = auto_anchor(ras), b = auto_anchor(lps);
+  EXPECT_LE(norm(world_of(ras.grid, a.point) - world_of(lps.grid, b.point)), 3.0);
+  // The anterior skin: the outward normal points anterior (-y in LPS world).
+  const Vec3d normal = world_of(ras.grid, a.normal) - to_vec3d(ras.grid.world.origin);
+  EXPECT_LT(normal.y, -0.7);
 }
 
 }  // namespace

@@ -9,16 +9,20 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <mutex>
 #include <set>
 #include <thread>
 
 #include "base/errors.hpp"
+#include "base/patient_frame.hpp"
 #include "loop/haptic_loop.hpp"
+#include "model/registration.hpp"
 #include "net/server.hpp"
 #include "support/net_test_client.hpp"
 #include "support/palpd_test_util.hpp"
 #include "support/usb_emulator.hpp"
+#include "wire/messages.hpp"
 
 namespace palp::rt {
 namespace {
@@ -469,6 +473,71 @@ TEST_F(UsbHapticTest, ClientsAreToldWhenTheDeviceComesAndGoes) {
   EXPECT_NE(m.stats().device_message().find("streaming"), std::string::npos)
       << m.stats().device_message();
   EXPECT_TRUE(loop.running());
+  server.stop();
+  loop.stop();
+  device->deactivate();
+}
+
+// A usb-haptic device placed on the patient: its pose lands at home + R·p in the frames clients
+// see, SceneInfo carries the registration, and the firmware is written the scene force turned
+// back into its own frame (Rᵀ·F).
+TEST_F(UsbHapticTest, RegisteredDeviceFeelsTheSceneForceInItsOwnFrame) {
+  Firmware firmware(*testbed_);
+  firmware.power_on(1000.0);
+  std::unique_ptr<Device> device = make_device("usb-haptic:1209:0001");
+  ASSERT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
+  auto model = testing::ball_model();
+  LoopConfig lc = loop_config();
+  lc.registration.rotation = rotation_from_axes(PatientFrame{}, "IAR");
+  lc.registration.home = {31, 31, 31 + 20 + 8 + 10};  // 10 mm above the top of the ball
+  HapticLoop loop(model, *device, lc);
+  net::SceneDescription scene;
+  scene.source = "ball";
+  scene.grid = model->fields().grid();
+  scene.device = "usb-haptic";
+  net::SceneDescription::Placement placement;
+  placement.registration = lc.registration;
+  placement.workspace_half_mm = {50, 50, 50};
+  placement.home_site = "auto";
+  placement.axes = "IAR";
+  scene.placement = placement;
+  net::ServerConfig config;
+  config.port = 0;
+  net::Server server(config, scene, loop, nullptr);
+  // IAR: the device's +x points inferior (scene -z), so 12 mm along it puts the device point 12 mm
+  // below home: the pad (8 mm under it) 2 mm into the top of the ball.
+  Pose pose;
+  pose.position = {12.0, 0.0, 0.0};                                // 12 mm toward inferior
+  pose.orientation = Quat{0, std::sqrt(0.5), 0, -std::sqrt(0.5)};  // tool upright in scene
+  firmware.set_pose(pose);
+  loop.start();
+  server.start();
+
+  testing::TestClient client(server.port());
+  client.hello(v1::OBSERVER, "", net::kProtocolVersion, 0, 200.0);
+  v1::ServerMessage m;
+  ASSERT_TRUE(client.wait_for_case(v1::ServerMessage::kScene, m, kWait));
+  ASSERT_TRUE(m.scene().has_registration());
+  EXPECT_EQ(m.scene().registration().axes(), "IAR");
+  EXPECT_EQ(m.scene().registration().rotation_size(), 9);
+  EXPECT_EQ(m.scene().registration().home().z(), 69.0);
+  ASSERT_TRUE(client.wait_for(
+      [](const v1::ServerMessage& msg) {
+        return msg.has_frame() && msg.frame().n_contact() > 0 && msg.frame().force().z() > 0.5;
+      },
+      m, kWait));
+  // Scene pose: home + R (12, 0, 0) = (31, 31, 69) + 12 · inferior = (31, 31, 57).
+  EXPECT_NEAR(m.frame().device_pose().position().x(), 31.0, 1e-3);
+  EXPECT_NEAR(m.frame().device_pose().position().z(), 57.0, 1e-3);
+  // The ball pushes the finger up (+z, superior): on the device that is -x.
+  const Vec3d scene_force = wire::from_proto(m.frame().force());
+  const Vec3d expected = force_to_device(lc.registration, scene_force);
+  ASSERT_TRUE(
+      wait_until([&] { return std::fabs(firmware.seen().force.x - expected.x) < 0.05; }, kWait));
+  EXPECT_LT(firmware.seen().force.x, -0.5);
+  EXPECT_NEAR(firmware.seen().force.z, expected.z, 0.05);
   server.stop();
   loop.stop();
   device->deactivate();

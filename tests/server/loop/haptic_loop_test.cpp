@@ -2,6 +2,8 @@
 // thread. No assertion depends on timing.
 #include "loop/haptic_loop.hpp"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "support/heap_allocation_counter.hpp"
@@ -98,6 +100,83 @@ TEST(HapticLoop, ForcesAreTheModelsExactly) {
   EXPECT_EQ(s.jitter[jitter_bucket(20'000)], 50u);
   EXPECT_EQ(s.max_late_ns, 20'000);
   EXPECT_EQ(s.net_published, 50u);
+}
+
+// A registered device: poses are moved into the scene, forces sent back in the device frame, and
+// both are the model's exactly (the registration of scale 1 and an axis permutation is exact).
+TEST(HapticLoop, RegisteredDeviceFeelsTheSceneForceInItsFrame) {
+  auto model = testing::ball_model();
+  Registration reg;
+  reg.rotation = rotation_from_axes(PatientFrame{}, "IAR");
+  reg.home = {40, 10, 60};
+  ScriptedDevice d;
+  std::vector<Pose> scene_poses;
+  for (int i = 0; i < 20; ++i) {
+    const Pose scene = testing::press_pose(0.5 + 0.1 * i);
+    scene_poses.push_back(scene);
+    Pose device;
+    device.position = scene_point_to_device(reg, scene.position);
+    // The tool's orientation in the scene stays the identity: device turn = R⁻¹.
+    device.orientation = Quat{0, std::sqrt(0.5), 0, -std::sqrt(0.5)};  // R = IAR's rotation
+    d.script.push_back({DeviceStatus::Ok, device});
+  }
+  d.writes.reserve(64);
+  d.write_after_read.reserve(64);
+  LoopConfig c = quiet_config();
+  c.registration = reg;
+  HapticLoop loop(model, d, c);
+  State reference = make_state(*model);
+  for (std::int64_t n = 0; n < 20; ++n) loop.step(n * kPeriod, n * kPeriod + 20'000);
+  const std::vector<TickRecord> records = drain(loop);
+  ASSERT_EQ(records.size(), 20u);
+  for (std::size_t n = 0; n < 20; ++n) {
+    Pose scene = to_scene(reg, d.script[n].pose);
+    EXPECT_NEAR(norm(scene.position - scene_poses[n].position), 0.0, 1e-12);
+    tick(*model, reference, scene);
+    EXPECT_EQ(records[n].pose.position, scene.position);
+    EXPECT_EQ(records[n].force, force_to_scene(reg, force_to_device(reg, reference.f_device)));
+    EXPECT_EQ(d.writes[n].force, force_to_device(reg, reference.f_device));
+    EXPECT_GT(reference.n_contact, 0);
+  }
+}
+
+// A re-centre waits while the finger is in contact; once lifted, home moves so that where the
+// device is now maps to the configured home point.
+TEST(HapticLoop, RecentreWaitsForLiftOffThenMovesHome) {
+  auto model = testing::ball_model();
+  Registration reg;
+  reg.rotation = rotation_from_axes(PatientFrame{}, "IAR");
+  reg.home = {31, 31, 90};  // 20 mm above the top of the ball... and 8 more for the pad
+  ScriptedDevice d;
+  Pose pressing;
+  pressing.position = scene_point_to_device(reg, testing::press_pose(1.0).position);
+  pressing.orientation = Quat{0, std::sqrt(0.5), 0, -std::sqrt(0.5)};  // tool upright in the scene
+  Pose lifted;
+  lifted.position = {5, 7, -3};  // away from the ball: no contact
+  d.script = {{DeviceStatus::Ok, pressing},
+              {DeviceStatus::Ok, pressing},
+              {DeviceStatus::Ok, lifted},
+              {DeviceStatus::Ok, lifted},
+              {DeviceStatus::Ok, lifted}};
+  d.writes.reserve(64);
+  d.write_after_read.reserve(64);
+  LoopConfig c = quiet_config();
+  c.registration = reg;
+  HapticLoop loop(model, d, c);
+  loop.step(0, 20'000);
+  loop.request_recentre();
+  loop.step(kPeriod, kPeriod + 20'000);  // in contact: waits
+  EXPECT_EQ(loop.stats().recentres, 0u);
+  loop.step(2 * kPeriod, 2 * kPeriod + 20'000);  // lifted this tick; the last tick touched
+  EXPECT_EQ(loop.stats().recentres, 0u);
+  loop.step(3 * kPeriod, 3 * kPeriod + 20'000);  // out of contact: re-centred
+  EXPECT_EQ(loop.stats().recentres, 1u);
+  const Vec3d moved = to_scene(Registration{reg.rotation, 1.0, {}}, lifted).position;
+  EXPECT_EQ(loop.registration_home(), reg.home - moved);
+  const std::vector<TickRecord> records = drain(loop);
+  ASSERT_EQ(records.size(), 4u);
+  EXPECT_GT(records[1].n_contact, 0);
+  EXPECT_EQ(records[3].pose.position, reg.home);  // the device now sits at the home point
 }
 
 TEST(HapticLoop, DeviceProfileLimitsTheForce) {

@@ -43,6 +43,11 @@ class TestControl final : public ControlTarget {
     loop_.set_paused(paused);
     return {};
   }
+  std::string recentre() override {
+    ++recentres;
+    return "the remote device moves in the scene frame";
+  }
+  int recentres = 0;
   std::string start_recording(const std::string&) override { return "not in this test"; }
   std::string stop_recording() override { return "not recording"; }
   bool recording() const override { return false; }
@@ -320,6 +325,16 @@ TEST_F(ServerTest, ControllerNeedsTheTokenAndCommands) {
   ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kResult, m));
   EXPECT_TRUE(m.result().ok()) << m.result().message();
   EXPECT_EQ(loop_->model()->params().k, 0.25);
+
+  // Recentre reaches the control target, and its refusal comes back as the result.
+  cmd.mutable_command()->set_request_id(5);
+  cmd.mutable_command()->mutable_recentre();
+  c.send(cmd);
+  ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kResult, m));
+  EXPECT_EQ(m.result().request_id(), 5u);
+  EXPECT_FALSE(m.result().ok());
+  EXPECT_NE(m.result().message().find("scene frame"), std::string::npos) << m.result().message();
+  EXPECT_EQ(control_->recentres, 1);
 
   cmd.mutable_command()->set_request_id(4);
   cmd.mutable_command()->mutable_pause()->set_paused(true);
