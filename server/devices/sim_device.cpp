@@ -16,7 +16,7 @@ Trajectory builtin_palpation_path(const FieldSampler& fields, const Tool& tool) 
     ribs.rate_hz = 1000.0;
     return ribs_slide(fields, offset, ribs);
   } catch (const InputError&) {
-    // Not a torso-like scene: press and hold on the skin seen from above, with a slide.
+    // Not a torso-like scene: press and hold on the patient's anterior skin, with a slide.
     PressHoldSpec hold;
     hold.rate_hz = 1000.0;
     hold.shift_mm = 10.0;

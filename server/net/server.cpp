@@ -13,6 +13,7 @@
 #include "asio.hpp"
 #include "base/errors.hpp"
 #include "net/protocol.hpp"
+#include "net/scene_messages.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::net {
@@ -150,9 +151,8 @@ class Server::Impl {
     std::int64_t connected_ns = 0, last_rx_ns = 0, write_started_ns = 0;
     std::uint64_t frames_sent = 0, frames_dropped = 0;
     // Volume streaming.
-    std::uint32_t volume_step = 0;
-    std::array<std::int64_t, 3> volume_dims{};
-    std::uint32_t volume_k = 0, volume_chunk = 0, volume_chunks = 0, volume_slab = 1;
+    VolumePlan volume;
+    std::uint32_t volume_k = 0, volume_chunk = 0;
   };
   using SessionPtr = std::shared_ptr<Session>;
 
@@ -312,7 +312,7 @@ class Server::Impl {
     s->control.push_back(frame_of(m));
     s->control.push_back(scene_frame());
     plan_volume(*s, h.volume_step(), h.volume_max_dim());
-    if (s->volume_chunks == 0) s->ready = true;
+    if (s->volume.chunks == 0) s->ready = true;
     pump(s);
   }
 
@@ -370,103 +370,23 @@ class Server::Impl {
   // ------------------------------------------------------------------ scene and volume
   Bytes scene_frame() {
     v1::ServerMessage m;
-    v1::SceneInfo* si = m.mutable_scene();
-    si->set_source(scene_.source);
-    v1::Grid* g = si->mutable_grid();
-    for (int a = 0; a < 3; ++a) {
-      g->add_dims(scene_.grid.dims[a]);
-      g->add_spacing(scene_.grid.spacing[a]);
-      g->add_origin(scene_.grid.world.origin[a]);
-    }
-    for (double d : scene_.grid.world.direction) g->add_direction(d);
-    for (const auto& [k, v] : scene_.metadata) (*si->mutable_metadata())[k] = v;
-    const std::shared_ptr<const Model> model = loop_.model();
-    v1::ToolInfo* tool = si->mutable_tool();
-    tool->set_name(model->tool().name);
-    for (const Vec3d& p : model->tool().points) wire::to_proto(p, tool->add_points());
-    const ForceParams& fp = model->params();
-    v1::Parameters* p = si->mutable_parameters();
-    p->set_c(fp.c);
-    p->set_k(fp.k);
-    p->set_bone_fmax(fp.bone_fmax);
-    p->set_bone_flip(fp.bone_flip);
-    p->set_bone_enabled(fp.bone_enabled);
-    p->set_bone_mode(to_string(fp.bone_mode));
-    p->set_bone_k(fp.bone_k);
-    si->set_device(scene_.device);
-    si->set_device_profile(scene_.device_profile);
-    si->set_device_renders_force(loop_.device().renders_force());
-    si->set_tick_rate_hz(loop_.config().rate_hz);
-    if (scene_.placement) {
-      const SceneDescription::Placement& pl = *scene_.placement;
-      v1::Registration* r = si->mutable_registration();
-      for (double v : pl.registration.rotation) r->add_rotation(v);
-      r->set_scale(pl.registration.scale);
-      wire::to_proto(pl.registration.home, r->mutable_home());
-      r->add_workspace_half_mm(pl.workspace_half_mm.x);
-      r->add_workspace_half_mm(pl.workspace_half_mm.y);
-      r->add_workspace_half_mm(pl.workspace_half_mm.z);
-      r->set_home_site(pl.home_site);
-      r->set_axes(pl.axes);
-      wire::to_proto(pl.home_skin, r->mutable_home_skin());
-    }
+    fill_scene_info(scene_, loop_, m.mutable_scene());
     return frame_of(m);
   }
 
   void plan_volume(Session& s, std::uint32_t step, std::uint32_t max_dim) {
     if (!scene_.fields || (step == 0 && max_dim == 0)) return;
-    const Index3 dims = scene_.grid.dims;
-    if (step == 0) {
-      const std::int64_t largest = std::max({dims[0], dims[1], dims[2]});
-      step = static_cast<std::uint32_t>((largest + max_dim - 1) / max_dim);
-    }
-    step = std::clamp<std::uint32_t>(step, 1, 1024);
-    s.volume_step = step;
-    for (int a = 0; a < 3; ++a) s.volume_dims[a] = (dims[a] + step - 1) / step;
-    const std::size_t slice_bytes =
-        static_cast<std::size_t>(s.volume_dims[0] * s.volume_dims[1]) * sizeof(float);
-    s.volume_slab = static_cast<std::uint32_t>(std::max<std::size_t>(
-        1, config_.volume_chunk_bytes / std::max<std::size_t>(1, slice_bytes)));
-    s.volume_chunks =
-        static_cast<std::uint32_t>((s.volume_dims[2] + s.volume_slab - 1) / s.volume_slab);
+    s.volume = net::plan_volume(scene_.grid, step, max_dim, config_.volume_chunk_bytes);
     s.volume_k = 0;
     s.volume_chunk = 0;
   }
 
   Bytes next_volume_chunk(Session& s) {
-    const FieldSampler& fields = *scene_.fields;
-    const std::uint32_t k_count = std::min<std::uint32_t>(
-        s.volume_slab, static_cast<std::uint32_t>(s.volume_dims[2]) - s.volume_k);
-    const std::size_t n = static_cast<std::size_t>(s.volume_dims[0] * s.volume_dims[1]) * k_count;
-    std::vector<float> surf(n), bone(fields.has_bone() ? n : 0);
-    const Vec3 sp = scene_.grid.spacing;
-    std::size_t v = 0;
-    for (std::uint32_t k = 0; k < k_count; ++k)
-      for (std::int64_t j = 0; j < s.volume_dims[1]; ++j)
-        for (std::int64_t i = 0; i < s.volume_dims[0]; ++i, ++v) {
-          const double st = s.volume_step;
-          const Vec3d x{static_cast<double>(i) * st * sp[0], static_cast<double>(j) * st * sp[1],
-                        static_cast<double>(s.volume_k + k) * st * sp[2]};
-          surf[v] = static_cast<float>(fields.sample_surf(x).value);
-          if (!bone.empty()) bone[v] = static_cast<float>(fields.sample_bone(x).value);
-        }
     v1::ServerMessage m;
-    v1::VolumeChunk* c = m.mutable_volume();
-    c->set_step(s.volume_step);
-    for (int a = 0; a < 3; ++a) {
-      c->add_dims(s.volume_dims[a]);
-      c->add_spacing(sp[a] * s.volume_step);
-    }
-    c->set_k_begin(s.volume_k);
-    c->set_k_count(k_count);
-    c->set_d_surf(reinterpret_cast<const char*>(surf.data()), surf.size() * sizeof(float));
-    if (!bone.empty())
-      c->set_d_bone(reinterpret_cast<const char*>(bone.data()), bone.size() * sizeof(float));
-    c->set_chunk_index(s.volume_chunk);
-    c->set_chunk_count(s.volume_chunks);
-    s.volume_k += k_count;
+    s.volume_k += fill_volume_chunk(*scene_.fields, scene_.grid, s.volume, s.volume_k,
+                                    s.volume_chunk, m.mutable_volume());
     ++s.volume_chunk;
-    if (s.volume_chunk == s.volume_chunks) s.ready = true;
+    if (s.volume_chunk == s.volume.chunks) s.ready = true;
     return frame_of(m);
   }
 
@@ -480,7 +400,7 @@ class Server::Impl {
       s->inflight.push_back(std::move(s->control.front()));
       s->control.pop_front();
     }
-    if (!s->closing && !s->ready && s->volume_chunks > 0 && s->inflight.empty())
+    if (!s->closing && !s->ready && s->volume.chunks > 0 && s->inflight.empty())
       s->inflight.push_back(next_volume_chunk(*s));
     if (!s->closing && s->ready) {
       while (!s->frames.empty()) {
@@ -629,32 +549,8 @@ class Server::Impl {
     last_stats_ticks_ = ls.ticks;
     v1::ServerMessage m;
     v1::Stats* st = m.mutable_stats();
-    st->set_server_time_ns(now);
-    st->set_target_rate_hz(loop_.config().rate_hz);
-    st->set_rate_hz(rate);
-    st->set_ticks(ls.ticks);
-    st->set_overruns(ls.overruns);
-    st->set_faults(ls.faults);
-    for (double b : rt::kJitterBucketUpperUs) st->add_jitter_bucket_upper_us(b);
-    for (std::uint64_t c : ls.jitter) st->add_jitter_counts(c);
-    st->set_jitter_max_us(static_cast<double>(ls.max_late_ns) * 1e-3);
-    st->set_tick_mean_us(ls.ticks ? static_cast<double>(ls.tick_ns_sum) * 1e-3 /
-                                        static_cast<double>(ls.ticks)
-                                  : 0.0);
-    st->set_tick_max_us(static_cast<double>(ls.tick_ns_max) * 1e-3);
-    st->set_clients(static_cast<std::uint32_t>(sessions_.size()));
-    st->set_frames_published(ls.net_published);
-    st->set_frames_lost(ls.net_dropped);
-    st->set_realtime(ls.realtime);
-    st->set_recording(control_ ? control_->recording() : ls.recording);
-    st->set_record_lost(control_ ? control_->record_lost() : ls.record_dropped);
-    st->set_paused(ls.paused);
-    st->set_last_fault(ls.last_fault);
-    st->set_device_state(to_proto(ls.device_state));
-    st->set_device_message(loop_.device().status_message());
-    if (scene_.placement)
-      wire::to_proto(loop_.registration_home(), st->mutable_registration_home());
-    st->set_recentres(ls.recentres);
+    fill_stats(ls, loop_, scene_, control_, rate, now, static_cast<std::uint32_t>(sessions_.size()),
+               st);
     for (const SessionPtr& s : sessions_) {
       if (!s->welcomed || s->closing || s->closed) continue;
       st->set_client_frames_sent(s->frames_sent);

@@ -1,0 +1,135 @@
+// SceneInfo, render volume chunks and Stats for palpd's clients: see scene_messages.hpp.
+#include "net/scene_messages.hpp"
+
+#include <algorithm>
+#include <vector>
+
+#include "net/protocol.hpp"
+#include "wire/messages.hpp"
+
+namespace palp::net {
+
+void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, v1::SceneInfo* si) {
+  si->set_source(scene.source);
+  v1::Grid* g = si->mutable_grid();
+  for (int a = 0; a < 3; ++a) {
+    g->add_dims(scene.grid.dims[a]);
+    g->add_spacing(scene.grid.spacing[a]);
+    g->add_origin(scene.grid.world.origin[a]);
+  }
+  for (double d : scene.grid.world.direction) g->add_direction(d);
+  for (const auto& [k, v] : scene.metadata) (*si->mutable_metadata())[k] = v;
+  const std::shared_ptr<const Model> model = loop.model();
+  v1::ToolInfo* tool = si->mutable_tool();
+  tool->set_name(model->tool().name);
+  for (const Vec3d& p : model->tool().points) wire::to_proto(p, tool->add_points());
+  const ForceParams& fp = model->params();
+  v1::Parameters* p = si->mutable_parameters();
+  p->set_c(fp.c);
+  p->set_k(fp.k);
+  p->set_bone_fmax(fp.bone_fmax);
+  p->set_bone_flip(fp.bone_flip);
+  p->set_bone_enabled(fp.bone_enabled);
+  p->set_bone_mode(to_string(fp.bone_mode));
+  p->set_bone_k(fp.bone_k);
+  si->set_device(scene.device);
+  si->set_device_profile(scene.device_profile);
+  si->set_device_renders_force(loop.device().renders_force());
+  si->set_tick_rate_hz(loop.config().rate_hz);
+  if (scene.placement) {
+    const SceneDescription::Placement& pl = *scene.placement;
+    v1::Registration* r = si->mutable_registration();
+    for (double v : pl.registration.rotation) r->add_rotation(v);
+    r->set_scale(pl.registration.scale);
+    wire::to_proto(pl.registration.home, r->mutable_home());
+    r->add_workspace_half_mm(pl.workspace_half_mm.x);
+    r->add_workspace_half_mm(pl.workspace_half_mm.y);
+    r->add_workspace_half_mm(pl.workspace_half_mm.z);
+    r->set_home_site(pl.home_site);
+    r->set_axes(pl.axes);
+    wire::to_proto(pl.home_skin, r->mutable_home_skin());
+  }
+}
+
+VolumePlan plan_volume(const Grid& grid, std::uint32_t step, std::uint32_t max_dim,
+                       std::size_t chunk_bytes) {
+  VolumePlan plan;
+  const Index3 dims = grid.dims;
+  if (step == 0) {
+    const std::int64_t largest = std::max({dims[0], dims[1], dims[2]});
+    step = static_cast<std::uint32_t>((largest + max_dim - 1) / max_dim);
+  }
+  step = std::clamp<std::uint32_t>(step, 1, 1024);
+  plan.step = step;
+  for (int a = 0; a < 3; ++a) plan.dims[a] = (dims[a] + step - 1) / step;
+  const std::size_t slice_bytes =
+      static_cast<std::size_t>(plan.dims[0] * plan.dims[1]) * sizeof(float);
+  plan.slab = static_cast<std::uint32_t>(
+      std::max<std::size_t>(1, chunk_bytes / std::max<std::size_t>(1, slice_bytes)));
+  plan.chunks = static_cast<std::uint32_t>((plan.dims[2] + plan.slab - 1) / plan.slab);
+  return plan;
+}
+
+std::uint32_t fill_volume_chunk(const FieldSampler& fields, const Grid& grid,
+                                const VolumePlan& plan, std::uint32_t k_begin, std::uint32_t index,
+                                v1::VolumeChunk* c) {
+  const std::uint32_t k_count =
+      std::min<std::uint32_t>(plan.slab, static_cast<std::uint32_t>(plan.dims[2]) - k_begin);
+  const std::size_t n = static_cast<std::size_t>(plan.dims[0] * plan.dims[1]) * k_count;
+  std::vector<float> surf(n), bone(fields.has_bone() ? n : 0);
+  const Vec3 sp = grid.spacing;
+  std::size_t v = 0;
+  for (std::uint32_t k = 0; k < k_count; ++k)
+    for (std::int64_t j = 0; j < plan.dims[1]; ++j)
+      for (std::int64_t i = 0; i < plan.dims[0]; ++i, ++v) {
+        const double st = plan.step;
+        const Vec3d x{static_cast<double>(i) * st * sp[0], static_cast<double>(j) * st * sp[1],
+                      static_cast<double>(k_begin + k) * st * sp[2]};
+        surf[v] = static_cast<float>(fields.sample_surf(x).value);
+        if (!bone.empty()) bone[v] = static_cast<float>(fields.sample_bone(x).value);
+      }
+  c->set_step(plan.step);
+  for (int a = 0; a < 3; ++a) {
+    c->add_dims(plan.dims[a]);
+    c->add_spacing(sp[a] * plan.step);
+  }
+  c->set_k_begin(k_begin);
+  c->set_k_count(k_count);
+  c->set_d_surf(reinterpret_cast<const char*>(surf.data()), surf.size() * sizeof(float));
+  if (!bone.empty())
+    c->set_d_bone(reinterpret_cast<const char*>(bone.data()), bone.size() * sizeof(float));
+  c->set_chunk_index(index);
+  c->set_chunk_count(plan.chunks);
+  return k_count;
+}
+
+void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const SceneDescription& scene,
+                const ControlTarget* control, double rate_hz, std::int64_t now_ns,
+                std::uint32_t clients, v1::Stats* st) {
+  st->set_server_time_ns(now_ns);
+  st->set_target_rate_hz(loop.config().rate_hz);
+  st->set_rate_hz(rate_hz);
+  st->set_ticks(ls.ticks);
+  st->set_overruns(ls.overruns);
+  st->set_faults(ls.faults);
+  for (double b : rt::kJitterBucketUpperUs) st->add_jitter_bucket_upper_us(b);
+  for (std::uint64_t c : ls.jitter) st->add_jitter_counts(c);
+  st->set_jitter_max_us(static_cast<double>(ls.max_late_ns) * 1e-3);
+  st->set_tick_mean_us(
+      ls.ticks ? static_cast<double>(ls.tick_ns_sum) * 1e-3 / static_cast<double>(ls.ticks) : 0.0);
+  st->set_tick_max_us(static_cast<double>(ls.tick_ns_max) * 1e-3);
+  st->set_clients(clients);
+  st->set_frames_published(ls.net_published);
+  st->set_frames_lost(ls.net_dropped);
+  st->set_realtime(ls.realtime);
+  st->set_recording(control ? control->recording() : ls.recording);
+  st->set_record_lost(control ? control->record_lost() : ls.record_dropped);
+  st->set_paused(ls.paused);
+  st->set_last_fault(ls.last_fault);
+  st->set_device_state(to_proto(ls.device_state));
+  st->set_device_message(loop.device().status_message());
+  if (scene.placement) wire::to_proto(loop.registration_home(), st->mutable_registration_home());
+  st->set_recentres(ls.recentres);
+}
+
+}  // namespace palp::net
