@@ -28,9 +28,10 @@
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
-#include "model/safety.hpp"
 #include "net/server.hpp"
 #include "rt/recording.hpp"
+#include "safety/engagement.hpp"
+#include "safety/safety.hpp"
 #include "scene/home_site.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
@@ -62,8 +63,17 @@ Options:
 constexpr const char* kOptions = R"(  --device DEVICE         see above (required)
   --tool TOOL             finger:N, twofinger:N, probe:NXxNY (default finger:37)
   --param NAME=VALUE      force parameter override, repeatable (as in palp run)
-  --device-profile NAME   safety limits after the model: falcon, phantom-premium, omega
-                          (default: none)
+  --device-profile NAME   safety limits after the model: touch, falcon, phantom-premium,
+                          omega. A device that pushes on a hand (usb-haptic) always gets
+                          limits: this profile, lowered to what the device declares (GET_INFO);
+                          without one, the most conservative class (touch: 3.3 N). sim, replay
+                          and remote apply limits only when a profile is named.
+  --engage-ramp-s S       with limits: after start and every fault, replug, tool, parameter or
+                          scene change and unpause, no force until it is below 0.2 N, then a
+                          ramp over S seconds (default 1.5)
+  --NO-FORCE-LIMITS       (spelled --no-force-limits) send the model's raw force to a usb-haptic
+                          device: no clamp, no step bound, no engagement. Command line only,
+                          never in a config file; for bench tests with no hand on the device
   --rate HZ               loop rate, 1..100000 (default 1000; tested 500..10000)
 Placing a force device on the patient (usb-haptic; spacemouse takes --home and
 --home-clearance; sim, replay and remote move in the scene frame and take none):
@@ -102,15 +112,15 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   -h, --help              show this help
 )";
 
-const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime"};
+const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits"};
 const std::vector<std::string> kValued = {
-    "device",         "tool",         "device-profile", "rate",
-    "port",           "bind",         "token",          "max-clients",
-    "queue",          "idle-timeout", "hello-timeout",  "write-timeout",
-    "record",         "record-dir",   "watchdog-ms",    "device-timeout-ms",
-    "priority",       "duration",     "config",         "poll-us",
-    "stats-json",     "device-axes",  "device-scale",   "home",
-    "home-clearance", "workspace-mm"};
+    "device",        "tool",           "device-profile", "rate",
+    "port",          "bind",           "token",          "max-clients",
+    "queue",         "idle-timeout",   "hello-timeout",  "write-timeout",
+    "record",        "record-dir",     "watchdog-ms",    "device-timeout-ms",
+    "priority",      "duration",       "config",         "poll-us",
+    "stats-json",    "device-axes",    "device-scale",   "home",
+    "engage-ramp-s", "home-clearance", "workspace-mm"};
 
 std::string number_text(double v) {
   std::string s;
@@ -137,6 +147,9 @@ cli::Arguments config_arguments(const std::string& path) {
       throw UsageError(path + ": '" + key + "' must be a string or a number");
     };
     if (key == "config") throw UsageError(path + ": 'config' cannot be set in a config file");
+    if (key == "no-force-limits")
+      throw UsageError(path +
+                       ": 'no-force-limits' cannot be set in a config file (command line only)");
     if (key == "param") {
       if (const toml::array* a = node.as_array()) {
         for (const toml::node& item : *a) out.push_back("--param=" + scalar(item));
@@ -426,7 +439,6 @@ int run(const cli::Arguments& argv_in) {
   loop_config.priority = static_cast<int>(args.number("priority", 80));
   loop_config.watchdog_late_s = positive(args, "watchdog-ms", 5.0) * 1e-3;
   loop_config.device_timeout_s = positive(args, "device-timeout-ms", 100.0) * 1e-3;
-  loop_config.profile = profile;
   net::ServerConfig server_config;
   server_config.bind = args.get("bind").value_or("127.0.0.1");
   const double port = args.number("port", 7400);
@@ -449,6 +461,34 @@ int run(const cli::Arguments& argv_in) {
   std::unique_ptr<rt::Device> device =
       replay ? std::make_unique<rt::ReplayDevice>(std::move(replay->records))
              : rt::make_device(*device_spec);
+  // Limits: a device that pushes on a hand always gets them (the profile, or the most
+  // conservative class), lowered in the loop to what the device declares; engagement with them.
+  const bool drives_a_hand = device->kind() == "usb-haptic";
+  if (drives_a_hand && !profile) {
+    if (args.has("no-force-limits")) {
+      std::fprintf(stderr,
+                   "palpd: WARNING: --no-force-limits: the model's raw force goes to the device, "
+                   "unclamped and unramped (the skin law alone reaches 144 N at 20 mm). Keep "
+                   "hands off the device.\n");
+    } else {
+      profile = &default_device_profile();
+      if (!quiet)
+        std::fprintf(stderr,
+                     "palpd: no --device-profile: limiting the force to the %s class (%.1f N, "
+                     "%.1f N/mm) and to what the device declares\n",
+                     std::string(profile->name).c_str(), profile->max_force_N,
+                     profile->max_stiffness_N_per_mm);
+    }
+  } else if (args.has("no-force-limits")) {
+    throw UsageError("--no-force-limits applies to usb-haptic only");
+  }
+  loop_config.profile = profile;
+  if (profile) {
+    EngageParams engage;
+    engage.ramp_s = args.number("engage-ramp-s", engage.ramp_s);
+    validate(engage);
+    loop_config.engage = engage;
+  }
   const Scene scene = cli::load_scene_for(args, "palpd", quiet);
   auto model = std::make_shared<const Model>(scene.fields, tool, params);
 

@@ -377,6 +377,22 @@ int cmd_probe(const Arguments& argv) {
     } else if (r.have_scene) {
       std::printf("  device    moves in the scene frame (no registration)\n");
     }
+    if (r.have_scene && r.scene.has_limits()) {
+      const v1::ForceLimits& l = r.scene.limits();
+      std::printf("  limits    %s: %.2f N", l.profile().c_str(), l.max_force_n());
+      if (r.have_stats && r.stats.declared_max_force_n() > 0)
+        std::printf(" (the device declares %.2f N)", r.stats.declared_max_force_n());
+      std::printf(
+          ", %.2f N/mm, step <= %.2f N per tick", l.max_stiffness_n_per_mm(),
+          r.scene.tick_rate_hz() > 0 ? l.max_force_rate_n_per_s() / r.scene.tick_rate_hz() : 0.0);
+      if (l.engage_threshold_n() > 0)
+        std::printf(", engages below %.2f N over %.1f s", l.engage_threshold_n(),
+                    l.engage_ramp_s());
+      if (r.have_stats) std::printf("; engagement gain now %.2f", r.stats.engage_gain());
+      std::printf("\n");
+    } else if (r.have_scene) {
+      std::printf("  limits    none (%s)\n", r.scene.device().c_str());
+    }
     std::printf(
         "  frames    %llu in %.3f s: %.1f frames/s, delivered %.4f (%llu gaps, %llu frames "
         "missing, largest gap %llu), %llu with contact, %llu zeroed by faults\n",

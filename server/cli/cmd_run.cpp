@@ -11,7 +11,7 @@
 #include "cli/commands.hpp"
 #include "cli/model_setup.hpp"
 #include "model/force_model.hpp"
-#include "model/safety.hpp"
+#include "safety/safety.hpp"
 #include "scene/trajectory.hpp"
 
 namespace palp::cli {

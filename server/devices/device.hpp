@@ -94,6 +94,9 @@ class Device {
   virtual DeviceState state() const noexcept { return DeviceState::Present; }
   // Whether the device renders the force it is written (false: a pose source only).
   virtual bool renders_force() const noexcept { return true; }
+  // Real time (an atomic load): the largest force magnitude the device itself declares (N;
+  // 0: nothing declared). The loop never sends more.
+  virtual double declared_max_force_N() const noexcept { return 0.0; }
   // Not real time: the device's last event or error, for people ("" when nothing to say).
   virtual std::string status_message() const { return {}; }
 

@@ -100,6 +100,8 @@ std::string UsbHapticDevice::handshake(libusb_device_handle* handle) {
     return error;
   if (!(error = command(ohp::kSetStream, 1, "SET_STREAM")).empty()) return error;
   info_ = info;
+  declared_max_force_.store(static_cast<double>(info.max_force_uN) * 1e-6,
+                            std::memory_order_relaxed);
   have_seq_ = false;
   clear_faults_ = false;
   prev_faults_ = 0;
@@ -145,8 +147,19 @@ void UsbHapticDevice::on_frame(const std::uint8_t* data, std::size_t size) {
   ohp::HostFrame out;
   out.seq = ++host_seq_;
   out.echo = frame.seq;
-  out.force_uN = ohp::to_uN(command.force);
-  out.torque_mNmm = ohp::to_mNmm(command.torque);
+  // The last guard: never more than the device declares, the direction kept (the wire's own
+  // per-axis saturation is never reached).
+  const double declared = declared_max_force_.load(std::memory_order_relaxed);
+  Vec3d force = is_finite(command.force) ? command.force : Vec3d{};
+  if (declared > 0.0 && norm(force) > declared) force = force * (declared / norm(force));
+  Vec3d torque = is_finite(command.torque) ? command.torque : Vec3d{};
+  const double max_torque = static_cast<double>(info_.max_torque_mNmm) * 1e-3;  // N mm
+  if (!(info_.capabilities & ohp::kCapTorque) || max_torque <= 0.0)
+    torque = Vec3d{};
+  else if (norm(torque) > max_torque)
+    torque = torque * (max_torque / norm(torque));
+  out.force_uN = ohp::to_uN(force);
+  out.torque_mNmm = ohp::to_mNmm(torque);
   out.flags = ohp::kFlagEnable;
   // A watchdog trip clears itself once the host is back (the loop ramps the force in again);
   // other faults stay for a person to look at.

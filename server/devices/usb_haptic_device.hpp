@@ -62,6 +62,10 @@ class UsbHapticDevice final : public Device {
   Counters counters() const noexcept;
   usb::LinkState link_state() const noexcept;
   const usb::ohp::Info& info() const { return info_; }  // valid once Present
+  // What GET_INFO declared (max_force_uN), from the first handshake on.
+  double declared_max_force_N() const noexcept override {
+    return declared_max_force_.load(std::memory_order_relaxed);
+  }
 
  private:
   struct Incoming {
@@ -96,6 +100,7 @@ class UsbHapticDevice final : public Device {
   std::atomic<std::uint64_t> frames_{0}, short_{0}, malformed_{0}, gaps_{0}, host_frames_{0},
       trips_{0};
   std::atomic<std::uint32_t> last_echo_{0};
+  std::atomic<double> declared_max_force_{0.0};
   std::atomic<std::uint16_t> last_faults_{0}, last_status_{0}, buttons_{0};
 };
 

@@ -143,6 +143,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     if (Bundle* fresh = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
       retired_.store(current_.release(), std::memory_order_release);
       current_.reset(fresh);
+      engagement_ = Engagement{};  // a new tool or parameters: engage afresh
     }
   }
   Bundle& bundle = *current_;
@@ -151,6 +152,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     recording_on_ = request == 1;
     if (recording_on_) {
       reset(bundle.state);
+      engagement_ = Engagement{};
       prev_force_ = Vec3d{};
       prev_valid_ = false;
     }
@@ -240,7 +242,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       torque = torque_to_device(registration_, torque);
     }
     std::uint32_t safety = kSafetyOk;
-    if (config_.profile) {
+    if (config_.profile) {  // limits: the profile, lowered to what the device declares
       SafetyInput in;
       in.force = force;
       in.torque = torque;
@@ -248,8 +250,15 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       in.position = position;
       in.prev_position = prev_valid_ ? prev_position_ : position;
       in.dt = dt_s_;
-      const SafetyOutput out = apply_device_limits(*config_.profile, in);
+      const SafetyOutput out = apply_device_limits(
+          with_declared_force(*config_.profile, device_.declared_max_force_N()), in);
       force = out.force, torque = out.torque, safety = out.status;
+    }
+    if (config_.engage) {  // engagement: nothing until the model's force is small, then a ramp
+      engagement_ = engage(engagement_, norm(bundle.state.f_device), dt_s_, *config_.engage);
+      force = force * engagement_.gain;
+      torque = torque * engagement_.gain;
+      if (!engagement_.engaged()) safety |= kSafetyEngaging;
     }
     const DeviceStatus written = device_.write(DeviceCommand{force, torque});
     if (written == DeviceStatus::Ok || written == DeviceStatus::NoData) {
@@ -270,6 +279,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   if (zero != 0) {
     device_.write(DeviceCommand{});  // zero first, then report
     reset(bundle.state);
+    engagement_ = Engagement{};  // and ramp back in after it
     prev_force_ = Vec3d{};
     prev_position_ = last_device_pose_.position;
     prev_valid_ = have_pose_;
@@ -280,6 +290,8 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     }
   }
   last_contacts_ = rec.n_contact;
+  if (config_.engage)
+    engage_gain_.store(zero != 0 ? 0.0 : engagement_.gain, std::memory_order_relaxed);
   publish(rec, published_state, points, device_state);
   ticks_.fetch_add(1, std::memory_order_release);
   const std::int64_t spent = monotonic_ns() - begin;
@@ -362,6 +374,7 @@ LoopStats HapticLoop::stats() const {
   s.device_state = device_state();
   s.absent_events = absent_events_.load(std::memory_order_relaxed);
   s.recentres = recentres_.load(std::memory_order_relaxed);
+  s.engage_gain = engage_gain_.load(std::memory_order_relaxed);
   s.net_published = net_ring_.published();
   s.net_dropped = net_ring_.dropped();
   s.record_published = record_ring_.published();

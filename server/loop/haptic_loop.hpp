@@ -34,14 +34,16 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
 #include "devices/device.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
-#include "model/safety.hpp"
 #include "rt/snapshot.hpp"
+#include "safety/engagement.hpp"
+#include "safety/safety.hpp"
 
 namespace palp::rt {
 
@@ -75,6 +77,9 @@ struct LoopConfig {
   double watchdog_late_s = 0.005;  // a tick starting later than this: fault (0 = off)
   double device_timeout_s = 0.1;   // device NoData for longer than this: fault (0 = off)
   const DeviceProfile* profile = nullptr;  // safety filters after the model (nullptr: none)
+  // Force engagement (safety/engagement.hpp) after start and every reset; unset: none (offline
+  // runs, tests of the raw model). palpd sets it whenever limits apply.
+  std::optional<EngageParams> engage;
   // Device frame -> scene (model/registration.hpp): applied to every pose read and, transposed,
   // to every force written; the safety filters run in the device frame. Identity: skipped.
   Registration registration;
@@ -99,6 +104,7 @@ struct LoopStats {
   DeviceState device_state = DeviceState::Present;  // as of the last tick
   std::uint64_t absent_events = 0;                  // present -> absent transitions (unplugs)
   std::uint64_t recentres = 0;                      // re-centres done (request_recentre)
+  double engage_gain = 1.0;                         // as of the last tick (1: no engagement)
   std::uint64_t net_published = 0, net_dropped = 0;
   std::uint64_t record_published = 0, record_dropped = 0;
 };
@@ -172,8 +178,9 @@ class HapticLoop {
   std::atomic<Bundle*> pending_{nullptr};
   std::atomic<Bundle*> retired_{nullptr};
   std::uint64_t seq_ = 0;
-  Pose last_pose_{};           // scene frame
-  Pose last_device_pose_{};    // device frame (as read)
+  Pose last_pose_{};         // scene frame
+  Pose last_device_pose_{};  // device frame (as read)
+  Engagement engagement_;
   Registration registration_;  // loop side: config_.registration, home moved by re-centres
   bool identity_ = true;
   bool have_pose_ = false;
@@ -192,6 +199,7 @@ class HapticLoop {
   std::atomic<std::uint64_t> tick_ns_sum_{0};
   std::atomic<std::uint64_t> absent_events_{0}, recentres_{0};
   std::atomic<bool> recentre_request_{false};
+  std::atomic<double> engage_gain_{1.0};
   std::array<std::atomic<double>, 3> home_{};
   std::atomic<std::uint8_t> device_state_{static_cast<std::uint8_t>(DeviceState::Present)};
   std::atomic<bool> paused_{false}, recording_{false}, stop_{false}, finished_{false};

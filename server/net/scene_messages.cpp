@@ -36,6 +36,17 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
   si->set_device_profile(scene.device_profile);
   si->set_device_renders_force(loop.device().renders_force());
   si->set_tick_rate_hz(loop.config().rate_hz);
+  if (const DeviceProfile* profile = loop.config().profile) {
+    v1::ForceLimits* l = si->mutable_limits();
+    l->set_profile(std::string(profile->name));
+    l->set_max_force_n(profile->max_force_N);
+    l->set_max_stiffness_n_per_mm(profile->max_stiffness_N_per_mm);
+    l->set_max_force_rate_n_per_s(profile->max_force_rate_N_per_s);
+    if (loop.config().engage) {
+      l->set_engage_threshold_n(loop.config().engage->threshold_N);
+      l->set_engage_ramp_s(loop.config().engage->ramp_s);
+    }
+  }
   if (scene.placement) {
     const SceneDescription::Placement& pl = *scene.placement;
     v1::Registration* r = si->mutable_registration();
@@ -130,6 +141,8 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_device_message(loop.device().status_message());
   if (scene.placement) wire::to_proto(loop.registration_home(), st->mutable_registration_home());
   st->set_recentres(ls.recentres);
+  st->set_declared_max_force_n(loop.device().declared_max_force_N());
+  st->set_engage_gain(ls.engage_gain);
 }
 
 }  // namespace palp::net

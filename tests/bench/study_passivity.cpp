@@ -43,8 +43,8 @@
 #include "bench/study_util.hpp"
 #include "model/field_sampler.hpp"
 #include "model/force_model.hpp"
-#include "model/safety.hpp"
 #include "model/tool.hpp"
+#include "safety/safety.hpp"
 
 namespace palp::study {
 namespace {

@@ -125,6 +125,9 @@ TEST(Deploy, PalpdAcceptsTheExampleConfig) {
       quoted(dir / "cache");
   const CliOutcome run = run_shell(palpd + session);
   EXPECT_EQ(run.exit_code, 0) << run.output;
+  // The lab's config never switches the force limits off (palpd refuses the key anyway).
+  EXPECT_EQ(read_text(kSourceDir / "deploy/palpd.toml").find("no-force-limits ="),
+            std::string::npos);
   EXPECT_NE(run.output.find("listening on 127.0.0.1:"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find(" ticks, "), std::string::npos) << run.output;
   // The file is really read: the same file with one unknown key is refused.

@@ -303,6 +303,37 @@ TEST(Probe, UsageErrors) {
 
 // --stats-json writes the final counters; the probe's JSON has the arrival figures, and
 // --same-host keeps latency for a server it trusts to share the clock.
+// The limits in force travel to clients: palp probe names the profile, the step bound per tick
+// and the engagement; --no-force-limits is refused for a device that pushes on no hand and in a
+// config file.
+TEST(Palpd, ProbeShowsTheForceLimits) {
+  const fs::path dir = shared_cli_dir() / "limits";
+  fs::create_directories(dir);
+  const fs::path log = dir / "palpd.log";
+  const int port = start_palpd(
+      "--scene phantom:sphere --device sim --device-profile falcon --port 0 --rate 1000 "
+      "--duration 2 --no-realtime",
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  const auto probe = run_palp_cli(
+      "probe 127.0.0.1:" + std::to_string(port) + " --duration 0.5 --same-host", dir / "cache");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  EXPECT_NE(probe.output.find("limits    falcon: 8.00 N, 3.00 N/mm, step <= 1.60 N per tick, "
+                              "engages below 0.20 N over 1.5 s"),
+            std::string::npos)
+      << probe.output;
+  ASSERT_TRUE(wait_palpd_exit(log)) << read_text(log);
+
+  auto r = run_palpd("--scene phantom:sphere --device sim --no-force-limits --no-realtime");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("usb-haptic only"), std::string::npos) << r.output;
+  const fs::path config = dir / "unlimited.toml";
+  std::ofstream(config) << "no-force-limits = true\n";
+  r = run_palpd("--config " + config.string() + " --scene phantom:sphere --device sim");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("command line only"), std::string::npos) << r.output;
+}
+
 TEST(Palpd, StatsJsonAndProbeArrivals) {
   const fs::path dir = shared_cli_dir() / "stats";
   fs::create_directories(dir);

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <set>
@@ -19,6 +20,8 @@
 #include "loop/haptic_loop.hpp"
 #include "model/registration.hpp"
 #include "net/server.hpp"
+#include "safety/engagement.hpp"
+#include "safety/safety.hpp"
 #include "support/net_test_client.hpp"
 #include "support/palpd_test_util.hpp"
 #include "support/usb_emulator.hpp"
@@ -41,8 +44,9 @@ constexpr double kWait = 20.0;  // generous: a loaded 2-core machine
 // device time, host frames applied with their echo checked, and the watchdog.
 class Firmware {
  public:
-  explicit Firmware(UsbTestbed& testbed, std::uint8_t version_major = ohp::kVersionMajor)
-      : version_major_(version_major), usb_(testbed, spec()) {
+  explicit Firmware(UsbTestbed& testbed, std::uint8_t version_major = ohp::kVersionMajor,
+                    std::uint32_t max_force_uN = 10'000'000)
+      : version_major_(version_major), max_force_uN_(max_force_uN), usb_(testbed, spec()) {
     usb_.on_control([this](const ControlRequest& r) { return control(r); });
     usb_.on_out([this](std::uint8_t endpoint, const std::vector<std::uint8_t>& packet) {
       if (endpoint == ohp::kEndpointOut) host_frame(packet);
@@ -126,6 +130,7 @@ class Firmware {
         ohp::Info info;
         info.version_major = version_major_;
         info.capabilities = ohp::kCapPose | ohp::kCapForce | ohp::kCapTorque | ohp::kCapHoming;
+        info.max_force_uN = max_force_uN_;
         std::uint8_t bytes[ohp::kInfoSize];
         ohp::encode_info(info, bytes);
         return ControlReply::in(std::vector<std::uint8_t>(bytes, bytes + sizeof bytes));
@@ -204,6 +209,7 @@ class Firmware {
   }
 
   std::uint8_t version_major_;
+  std::uint32_t max_force_uN_;
   EmulatedUsbDevice usb_;
   std::mutex mutex_;
   Pose pose_ = testing::press_pose(2.0);
@@ -541,6 +547,52 @@ TEST_F(UsbHapticTest, RegisteredDeviceFeelsTheSceneForceInItsOwnFrame) {
   server.stop();
   loop.stop();
   device->deactivate();
+}
+
+// A device declaring 3 N never receives more, whatever the model says: with a profile allowing
+// 8 N (the loop lowers it to the declared 3 N) and with no limits in the loop at all (the device's
+// own guard), pressing 15 mm into the ball where the model asks for tens of newtons.
+TEST_F(UsbHapticTest, ADeviceDeclaring3NeverGetsMoreThan3N) {
+  for (const bool loop_limits : {true, false}) {
+    SCOPED_TRACE(loop_limits ? "falcon profile in the loop" : "no limits in the loop");
+    Firmware firmware(*testbed_, ohp::kVersionMajor, 3'000'000);
+    firmware.power_on(1000.0);
+    std::unique_ptr<Device> device = make_device("usb-haptic:1209:0001");
+    ASSERT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
+    ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+    ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
+    EXPECT_EQ(device->declared_max_force_N(), 3.0);
+    LoopConfig lc = loop_config();
+    if (loop_limits) {
+      lc.profile = &device_profile("falcon");
+      lc.engage = EngageParams{0.2, 0.05};
+    }
+    HapticLoop loop(testing::ball_model(), *device, lc);
+    Pose lifted;
+    lifted.position = {31, 31, 90};
+    firmware.set_pose(lifted);  // out of contact first, so the force engages
+    loop.start();
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    firmware.set_pose(testing::press_pose(15.0));
+    // The falcon profile lets a held force settle at 3 N/s (lowered with the declared force):
+    // watch for up to 4 s, and 200 ms more once it is there.
+    double largest = 0.0;
+    auto until = std::chrono::steady_clock::now() + std::chrono::seconds(4);
+    bool there = false;
+    while (std::chrono::steady_clock::now() < until) {
+      largest = std::max(largest, norm(firmware.seen().force));
+      if (!there && largest > 2.95) {
+        there = true;
+        until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    EXPECT_GT(largest, 2.9);         // it pushes back as hard as it may
+    EXPECT_LE(largest, 3.0 + 1e-6);  // and no harder (the wire's micronewtons)
+    loop.stop();
+    device->deactivate();
+    firmware.unplug();
+  }
 }
 
 }  // namespace

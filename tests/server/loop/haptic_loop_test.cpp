@@ -179,6 +179,57 @@ TEST(HapticLoop, RecentreWaitsForLiftOffThenMovesHome) {
   EXPECT_EQ(records[3].pose.position, reg.home);  // the device now sits at the home point
 }
 
+// With engagement: no force until the finger is out of contact, then a ramp; a device fault
+// mid-press zeroes the force and it comes back as a ramp after lift-off, never as a step.
+TEST(HapticLoop, FaultAndRecoveryRampTheForceBackIn) {
+  auto model = testing::ball_model();
+  ScriptedDevice d;
+  Pose lifted;
+  lifted.position = {31, 31, 90};
+  const Pose pressing = testing::press_pose(3.0);
+  auto add = [&](DeviceStatus status, const Pose& pose, int n) {
+    for (int i = 0; i < n; ++i) d.script.push_back({status, pose});
+  };
+  add(DeviceStatus::Ok, pressing, 3);  // start pressing: held off
+  add(DeviceStatus::Ok, lifted, 2);    // lift: engages
+  add(DeviceStatus::Ok, pressing, 8);  // press during and after the 5-tick ramp
+  add(DeviceStatus::Error, pressing, 1);
+  add(DeviceStatus::Ok, pressing, 3);  // still pressing after the fault: held off
+  add(DeviceStatus::Ok, lifted, 1);
+  add(DeviceStatus::Ok, pressing, 6);
+  d.writes.reserve(256);
+  d.write_after_read.reserve(256);
+  LoopConfig c = quiet_config();
+  c.profile = &device_profile("falcon");
+  c.engage = EngageParams{0.2, 0.005};  // 5 ticks at 1 kHz
+  HapticLoop loop(model, d, c);
+  const int ticks = static_cast<int>(d.script.size());
+  for (int n = 0; n < ticks; ++n) loop.step(n * kPeriod, n * kPeriod + 20'000);
+  const std::vector<TickRecord> r = drain(loop);
+  ASSERT_EQ(r.size(), static_cast<std::size_t>(ticks));
+  for (int n = 0; n < 3; ++n) {
+    EXPECT_EQ(norm(r[n].force), 0.0) << n;  // in contact before engagement: nothing
+    EXPECT_NE(r[n].safety_status & kSafetyEngaging, 0u);
+  }
+  // Pressing after engagement: the force grows by at most the ramp's share each tick.
+  double previous = 0.0;
+  for (int n = 5; n < 13; ++n) {
+    const double f = norm(r[n].force);
+    EXPECT_LE(f - previous, 8.0 / 5.0 + 1e-9) << n;  // falcon's 8 N over the 5-tick ramp
+    previous = f;
+  }
+  EXPECT_GT(norm(r[12].force), 0.1);  // pushing back (the falcon profile lets it settle slowly)
+  EXPECT_EQ(r[12].safety_status & kSafetyEngaging, 0u);
+  EXPECT_NE(r[13].fault, 0u);
+  for (int n = 14; n < 17; ++n) EXPECT_EQ(norm(r[n].force), 0.0) << n;  // held off again
+  previous = 0.0;
+  for (int n = 18; n < ticks; ++n) {
+    const double f = norm(r[n].force);
+    EXPECT_LE(f - previous, 8.0 / 5.0 + 1e-9) << n;
+    previous = f;
+  }
+}
+
 TEST(HapticLoop, DeviceProfileLimitsTheForce) {
   auto model = testing::ball_model();
   ScriptedDevice d;

@@ -17,7 +17,7 @@ namespace palp {
 // datasheet class of each device (see docs and safety.cpp); they bound what palp sends, they do
 // not claim to describe a particular unit.
 struct DeviceProfile {
-  std::string_view name;  // "falcon", "phantom-premium", "omega"
+  std::string_view name;  // "touch", "falcon", "phantom-premium", "omega"
   std::string_view description;
   double max_force_N;             // peak force magnitude
   double max_stiffness_N_per_mm;  // largest stiffness the device renders stably at 1 kHz
@@ -26,7 +26,16 @@ struct DeviceProfile {
                                   // so a held force still reaches the model's while at rest
   int dof;                        // 3: force only (torque is dropped); 6: force and torque
   double max_torque_Nmm;          // torque magnitude limit (dof 6)
+  double damping_N_s_per_mm = 0;  // largest damping the device renders (CHAI3D's maxLinearDamping)
 };
+
+// The profile palpd applies to a device that declares nothing when no profile is named: the
+// most conservative class (Touch: 3.3 N).
+inline constexpr std::string_view kDefaultProfileName = "touch";
+const DeviceProfile& default_device_profile();
+// `profile` with its force (and the rates that scale with it) lowered to what the device itself
+// declares (`declared_max_force_N` > 0; 0 or less: nothing declared, `profile` unchanged).
+DeviceProfile with_declared_force(const DeviceProfile& profile, double declared_max_force_N);
 
 std::span<const DeviceProfile> device_profiles();
 // nullptr when unknown.
@@ -42,6 +51,7 @@ enum SafetyStatus : std::uint32_t {
   kSafetyRateLimited = 1u << 3,       // force change cut by the rate limit
   kSafetyTorqueClamped = 1u << 4,     // torque magnitude cut to max_torque_Nmm
   kSafetyTorqueDropped = 1u << 5,     // non-zero torque on a 3-DOF device
+  kSafetyEngaging = 1u << 6,          // force held off or ramping in (engagement.hpp)
 };
 
 struct Filtered {

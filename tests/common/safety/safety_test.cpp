@@ -1,6 +1,6 @@
 // Device profiles and the pure safety filters applied after the model: finite check, force
 // clamp keeping the direction, stiffness and rate limits bounding the step, torque handling.
-#include "model/safety.hpp"
+#include "safety/safety.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,18 +17,27 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
 
 TEST(DeviceProfiles, KnownProfiles) {
-  ASSERT_GE(device_profiles().size(), 3u);
+  ASSERT_GE(device_profiles().size(), 4u);
+  // CHAI3D's device specifications (safety.cpp names the file of each).
+  const DeviceProfile& touch = device_profile("touch");
+  EXPECT_EQ(touch.max_force_N, 3.3);
+  EXPECT_EQ(touch.max_stiffness_N_per_mm, 0.4);
+  EXPECT_EQ(touch.damping_N_s_per_mm, 0.004);
+  EXPECT_EQ(&default_device_profile(), &touch);
   const DeviceProfile& falcon = device_profile("falcon");
   EXPECT_EQ(falcon.dof, 3);
   EXPECT_NEAR(falcon.max_force_N, 8.0, 1.0);
   const DeviceProfile& phantom = device_profile("phantom-premium");
   EXPECT_EQ(phantom.dof, 6);
   EXPECT_DOUBLE_EQ(phantom.max_force_N, 8.5);
-  EXPECT_DOUBLE_EQ(phantom.max_stiffness_N_per_mm, 3.5);
+  EXPECT_DOUBLE_EQ(phantom.max_stiffness_N_per_mm, 0.8);
+  EXPECT_DOUBLE_EQ(phantom.max_torque_Nmm, 188.0);
   EXPECT_GT(phantom.max_torque_Nmm, 0.0);
   const DeviceProfile& omega = device_profile("omega");
   EXPECT_DOUBLE_EQ(omega.max_force_N, 12.0);
-  EXPECT_DOUBLE_EQ(omega.max_stiffness_N_per_mm, 14.5);
+  EXPECT_DOUBLE_EQ(omega.max_stiffness_N_per_mm, 5.0);
+  EXPECT_DOUBLE_EQ(falcon.max_stiffness_N_per_mm, 3.0);
+  EXPECT_DOUBLE_EQ(falcon.damping_N_s_per_mm, 0.020);
   for (const DeviceProfile& p : device_profiles()) {
     EXPECT_EQ(find_device_profile(p.name), &p);
     EXPECT_GT(p.max_force_N, 0.0);
@@ -36,9 +45,28 @@ TEST(DeviceProfiles, KnownProfiles) {
     EXPECT_GT(p.max_force_rate_N_per_s, 0.0);
     EXPECT_GE(p.settle_rate_N_per_s, 0.0);
     EXPECT_TRUE(p.dof == 3 || p.dof == 6);
+    EXPECT_GT(p.damping_N_s_per_mm, 0.0);
+    EXPECT_NEAR(p.max_force_rate_N_per_s * 0.005, p.max_force_N, 1e-9);  // full force in 5 ms
   }
   EXPECT_EQ(find_device_profile("sigma7"), nullptr);
   EXPECT_THROW(device_profile("sigma7"), UsageError);
+}
+
+TEST(DeviceProfiles, TheDeviceDeclaresLessOnlyLowersTheLimits) {
+  const DeviceProfile& falcon = device_profile("falcon");
+  const DeviceProfile three = with_declared_force(falcon, 3.0);
+  EXPECT_EQ(three.max_force_N, 3.0);
+  EXPECT_EQ(three.max_force_rate_N_per_s, 600.0);  // still the full force in 5 ms
+  EXPECT_EQ(three.settle_rate_N_per_s, 3.0);
+  EXPECT_EQ(three.max_stiffness_N_per_mm, falcon.max_stiffness_N_per_mm);
+  EXPECT_EQ(with_declared_force(falcon, 20.0).max_force_N, 8.0);  // more than the profile: no
+  EXPECT_EQ(with_declared_force(falcon, 0.0).max_force_N, 8.0);   // nothing declared
+  EXPECT_EQ(with_declared_force(falcon, std::nan("")).max_force_N, 8.0);
+  // Whatever comes in, the chain's output stays within the declared force.
+  SafetyInput in;
+  in.force = {0, 0, 500};
+  in.prev_force = {0, 0, 2.9};
+  EXPECT_LE(norm(apply_device_limits(three, in).force), 3.0);
 }
 
 TEST(SafetyFilters, FiniteOrZero) {

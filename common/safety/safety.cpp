@@ -1,4 +1,4 @@
-#include "model/safety.hpp"
+#include "safety/safety.hpp"
 
 #include <algorithm>
 #include <array>
@@ -10,19 +10,25 @@
 namespace palp {
 namespace {
 
-// Datasheet-class values:
-//   falcon           Novint Falcon class: rated above 2 lbf (about 8.9 N); driver libraries
-//                    commonly limit it to 8 N and 3 N/mm. 3-DOF force.
-//   phantom-premium  PHANToM Premium 1.5 (6-DOF output) class: 8.5 N peak (1.4 N continuous),
-//                    3.5 N/mm stiffness, 515 N·mm peak torque about the gimbal's x and y axes.
-//   omega            Force Dimension omega.3/.6/.7 class: 12 N continuous, 14.5 N/mm
-//                    closed-loop stiffness. 3-DOF force (the wrist is passive).
+// Datasheet-class values, from CHAI3D's device specifications (chai3d.org, BSD), which the
+// haptics community uses as the reference set (force N, stiffness N/m -> N/mm, damping
+// N s/m -> N s/mm):
+//   touch            3D Systems Touch (CHAI3D CPhantomDevices.cpp, "Touch"): 3.3 N,
+//                    400 N/m, 4 N s/m. 3-DOF force. palpd's default for a device that declares
+//                    nothing.
+//   falcon           Novint Falcon (CHAI3D CFalconDevice.cpp): 8 N, 3000 N/m, 20 N s/m.
+//                    3-DOF force.
+//   phantom-premium  PHANToM Premium 1.5 6DOF (CHAI3D CPhantomDevices.cpp): 8.5 N, 800 N/m,
+//                    5 N s/m, 0.188 N m = 188 N mm torque. 6-DOF output.
+//   omega            Force Dimension omega.3 (CHAI3D CDeltaDevices.cpp): 12 N, 5000 N/m,
+//                    40 N s/m. 3-DOF force.
 // No datasheet gives a force rate: palp allows the full force within 5 ms (5 ticks at 1 kHz)
 // and lets a stiffness-limited force settle at full force per second.
-constexpr std::array<DeviceProfile, 3> kProfiles{{
-    {"falcon", "Novint Falcon class, 3-DOF", 8.0, 3.0, 1600.0, 8.0, 3, 0.0},
-    {"phantom-premium", "PHANToM Premium 1.5 class, 6-DOF", 8.5, 3.5, 1700.0, 8.5, 6, 515.0},
-    {"omega", "Force Dimension omega.x class, 3-DOF", 12.0, 14.5, 2400.0, 12.0, 3, 0.0},
+constexpr std::array<DeviceProfile, 4> kProfiles{{
+    {"touch", "3D Systems Touch class, 3-DOF", 3.3, 0.4, 660.0, 3.3, 3, 0.0, 0.004},
+    {"falcon", "Novint Falcon class, 3-DOF", 8.0, 3.0, 1600.0, 8.0, 3, 0.0, 0.020},
+    {"phantom-premium", "PHANToM Premium 1.5 class, 6-DOF", 8.5, 0.8, 1700.0, 8.5, 6, 188.0, 0.005},
+    {"omega", "Force Dimension omega.3 class, 3-DOF", 12.0, 5.0, 2400.0, 12.0, 3, 0.0, 0.040},
 }};
 
 }  // namespace
@@ -43,6 +49,20 @@ const DeviceProfile& device_profile(std::string_view name) {
   for (const DeviceProfile& p : kProfiles)
     known += (known.empty() ? "" : ", ") + std::string(p.name);
   throw UsageError("device '" + std::string(name) + "' is not one of " + known);
+}
+
+const DeviceProfile& default_device_profile() {
+  return device_profile(kDefaultProfileName);
+}
+
+DeviceProfile with_declared_force(const DeviceProfile& profile, double declared_max_force_N) {
+  if (!(declared_max_force_N > 0.0) || declared_max_force_N >= profile.max_force_N) return profile;
+  DeviceProfile p = profile;
+  const double ratio = declared_max_force_N / profile.max_force_N;
+  p.max_force_N = declared_max_force_N;
+  p.max_force_rate_N_per_s *= ratio;  // still the full force within 5 ms, no faster
+  p.settle_rate_N_per_s *= ratio;
+  return p;
 }
 
 Filtered finite_or_zero(const Vec3d& v) {
