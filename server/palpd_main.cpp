@@ -488,6 +488,7 @@ int run(const cli::Arguments& argv_in) {
     engage.ramp_s = args.number("engage-ramp-s", engage.ramp_s);
     validate(engage);
     loop_config.engage = engage;
+    loop_config.passivity = true;
   }
   const Scene scene = cli::load_scene_for(args, "palpd", quiet);
   auto model = std::make_shared<const Model>(scene.fields, tool, params);

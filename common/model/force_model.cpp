@@ -245,20 +245,26 @@ ForceParams default_params(ToolKind kind) {
 }
 
 void validate(const ForceParams& p) {
+  // Physical ranges: every value that shapes the force is bounded, whichever way it comes in
+  // (command line, config file, a controller's SetParameter).
   auto check = [](bool ok, const char* what) {
     if (!ok) throw UsageError(std::string("force parameter ") + what);
   };
-  check(std::isfinite(p.c) && p.c >= 0.0, "c must be a finite number >= 0 (mm/N)");
-  check(std::isfinite(p.k) && p.k >= 0.0, "k must be a finite number >= 0 (N/mm)");
-  check(std::isfinite(p.bone_fmax) && p.bone_fmax >= 0.0,
-        "bone_fmax must be a finite number >= 0 (N)");
-  check(std::isfinite(p.bone_flip), "bone_flip must be finite");
-  check(std::isfinite(p.bone_k) && p.bone_k >= 0.0, "bone_k must be a finite number >= 0 (N/mm)");
+  const auto in = [](double v, double lo, double hi) {
+    return std::isfinite(v) && v >= lo && v <= hi;
+  };
+  check(in(p.c, 0.0, 20.0), "c must be in [0, 20] mm/N (fingertip 2, probe 0.4)");
+  check(in(p.k, 0.0, 5.0), "k must be in [0, 5] N/mm (fingertip 0.4, probe 0.3)");
+  check(in(p.bone_fmax, 0.0, 60.0), "bone_fmax must be in [0, 60] N (paper: 40)");
+  check(in(p.bone_flip, 0.0, 10.0), "bone_flip must be in [0, 10] (paper: 4)");
+  check(in(p.bone_k, 0.0, 100.0), "bone_k must be in [0, 100] N/mm (default 10)");
   check(p.bone_mode == BoneMode::Printed || p.bone_mode == BoneMode::Robust,
         "bone_mode must be printed (0) or robust (1)");
-  check(std::isfinite(p.grad_epsilon) && p.grad_epsilon > 0.0, "grad_epsilon must be > 0");
-  check(std::isfinite(p.direction_epsilon) && p.direction_epsilon > 0.0,
-        "direction_epsilon must be > 0");
+  check(std::isfinite(p.grad_epsilon) && p.grad_epsilon > 0.0 && p.grad_epsilon <= 0.1,
+        "grad_epsilon must be in (0, 0.1]");
+  check(
+      std::isfinite(p.direction_epsilon) && p.direction_epsilon > 0.0 && p.direction_epsilon <= 0.1,
+      "direction_epsilon must be in (0, 0.1]");
 }
 
 void set_param(ForceParams& params, std::string_view name, double value) {

@@ -78,7 +78,8 @@ ForceParams default_params(ToolKind kind);
 // UsageError for unknown names or unusable values.
 void set_param(ForceParams& params, std::string_view name, double value);
 
-// UsageError unless c, k, bone_fmax, bone_k >= 0, bone_flip, epsilons finite (epsilons > 0).
+// UsageError outside the physical ranges: c [0, 20] mm/N, k [0, 5] N/mm, bone_fmax [0, 60] N,
+// bone_flip [0, 10], bone_k [0, 100] N/mm, epsilons (0, 0.1].
 void validate(const ForceParams& params);
 
 // f_s(x) = 1.78e-2 x^3 + 3.82e-3 x^2 + 2.28e-4 x for x > 0, else 0 (mm -> N).

@@ -52,6 +52,7 @@ enum SafetyStatus : std::uint32_t {
   kSafetyTorqueClamped = 1u << 4,     // torque magnitude cut to max_torque_Nmm
   kSafetyTorqueDropped = 1u << 5,     // non-zero torque on a 3-DOF device
   kSafetyEngaging = 1u << 6,          // force held off or ramping in (engagement.hpp)
+  kSafetyPassivity = 1u << 7,         // the passivity controller damped (passivity.hpp)
 };
 
 struct Filtered {

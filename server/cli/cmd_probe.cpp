@@ -388,7 +388,13 @@ int cmd_probe(const Arguments& argv) {
       if (l.engage_threshold_n() > 0)
         std::printf(", engages below %.2f N over %.1f s", l.engage_threshold_n(),
                     l.engage_ramp_s());
-      if (r.have_stats) std::printf("; engagement gain now %.2f", r.stats.engage_gain());
+      if (l.max_damping_n_s_per_mm() > 0)
+        std::printf(", passivity controller up to %.3f N s/mm", l.max_damping_n_s_per_mm());
+      if (r.have_stats)
+        std::printf("; engagement gain now %.2f; passivity controller damped %llu ticks, %.3f mJ",
+                    r.stats.engage_gain(),
+                    static_cast<unsigned long long>(r.stats.passivity_ticks()),
+                    r.stats.passivity_dissipated_mj());
       std::printf("\n");
     } else if (r.have_scene) {
       std::printf("  limits    none (%s)\n", r.scene.device().c_str());

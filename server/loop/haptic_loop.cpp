@@ -144,6 +144,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       retired_.store(current_.release(), std::memory_order_release);
       current_.reset(fresh);
       engagement_ = Engagement{};  // a new tool or parameters: engage afresh
+      passivity_ = PassivityState{};
     }
   }
   Bundle& bundle = *current_;
@@ -260,6 +261,21 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       torque = torque * engagement_.gain;
       if (!engagement_.engaged()) safety |= kSafetyEngaging;
     }
+    if (config_.passivity && config_.profile) {  // passivity: damp what the port gave out
+      const Vec3d velocity =
+          prev_valid_ && dt_s_ > 0.0 ? (position - prev_position_) * (1.0 / dt_s_) : Vec3d{};
+      const PassivityOutput pc = passivity_control(passivity_, force, velocity, dt_s_,
+                                                   config_.profile->damping_N_s_per_mm);
+      passivity_ = pc.state;
+      if (pc.damping_N_s_per_mm > 0.0) {
+        force = clamp_force(pc.force, config_.profile->max_force_N).value;
+        safety |= kSafetyPassivity;
+        passivity_ticks_.fetch_add(1, std::memory_order_relaxed);
+        passivity_dissipated_mJ_.store(
+            passivity_dissipated_mJ_.load(std::memory_order_relaxed) + pc.dissipated_mJ,
+            std::memory_order_relaxed);  // one writer: the loop
+      }
+    }
     const DeviceStatus written = device_.write(DeviceCommand{force, torque});
     if (written == DeviceStatus::Ok || written == DeviceStatus::NoData) {
       prev_force_ = force;
@@ -280,6 +296,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     device_.write(DeviceCommand{});  // zero first, then report
     reset(bundle.state);
     engagement_ = Engagement{};  // and ramp back in after it
+    passivity_ = PassivityState{};
     prev_force_ = Vec3d{};
     prev_position_ = last_device_pose_.position;
     prev_valid_ = have_pose_;
@@ -375,6 +392,8 @@ LoopStats HapticLoop::stats() const {
   s.absent_events = absent_events_.load(std::memory_order_relaxed);
   s.recentres = recentres_.load(std::memory_order_relaxed);
   s.engage_gain = engage_gain_.load(std::memory_order_relaxed);
+  s.passivity_ticks = passivity_ticks_.load(std::memory_order_relaxed);
+  s.passivity_dissipated_mJ = passivity_dissipated_mJ_.load(std::memory_order_relaxed);
   s.net_published = net_ring_.published();
   s.net_dropped = net_ring_.dropped();
   s.record_published = record_ring_.published();

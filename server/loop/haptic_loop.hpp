@@ -43,6 +43,7 @@
 #include "model/registration.hpp"
 #include "rt/snapshot.hpp"
 #include "safety/engagement.hpp"
+#include "safety/passivity.hpp"
 #include "safety/safety.hpp"
 
 namespace palp::rt {
@@ -80,6 +81,9 @@ struct LoopConfig {
   // Force engagement (safety/engagement.hpp) after start and every reset; unset: none (offline
   // runs, tests of the raw model). palpd sets it whenever limits apply.
   std::optional<EngageParams> engage;
+  // The passivity observer/controller (safety/passivity.hpp) at the device port, damping up to
+  // the profile's damping; needs a profile. palpd sets it whenever limits apply.
+  bool passivity = false;
   // Device frame -> scene (model/registration.hpp): applied to every pose read and, transposed,
   // to every force written; the safety filters run in the device frame. Identity: skipped.
   Registration registration;
@@ -105,6 +109,8 @@ struct LoopStats {
   std::uint64_t absent_events = 0;                  // present -> absent transitions (unplugs)
   std::uint64_t recentres = 0;                      // re-centres done (request_recentre)
   double engage_gain = 1.0;                         // as of the last tick (1: no engagement)
+  std::uint64_t passivity_ticks = 0;                // ticks the passivity controller damped
+  double passivity_dissipated_mJ = 0.0;             // energy it took out, in all
   std::uint64_t net_published = 0, net_dropped = 0;
   std::uint64_t record_published = 0, record_dropped = 0;
 };
@@ -181,6 +187,7 @@ class HapticLoop {
   Pose last_pose_{};         // scene frame
   Pose last_device_pose_{};  // device frame (as read)
   Engagement engagement_;
+  PassivityState passivity_;
   Registration registration_;  // loop side: config_.registration, home moved by re-centres
   bool identity_ = true;
   bool have_pose_ = false;
@@ -200,6 +207,8 @@ class HapticLoop {
   std::atomic<std::uint64_t> absent_events_{0}, recentres_{0};
   std::atomic<bool> recentre_request_{false};
   std::atomic<double> engage_gain_{1.0};
+  std::atomic<std::uint64_t> passivity_ticks_{0};
+  std::atomic<double> passivity_dissipated_mJ_{0.0};
   std::array<std::atomic<double>, 3> home_{};
   std::atomic<std::uint8_t> device_state_{static_cast<std::uint8_t>(DeviceState::Present)};
   std::atomic<bool> paused_{false}, recording_{false}, stop_{false}, finished_{false};

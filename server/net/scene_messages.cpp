@@ -46,6 +46,7 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
       l->set_engage_threshold_n(loop.config().engage->threshold_N);
       l->set_engage_ramp_s(loop.config().engage->ramp_s);
     }
+    if (loop.config().passivity) l->set_max_damping_n_s_per_mm(profile->damping_N_s_per_mm);
   }
   if (scene.placement) {
     const SceneDescription::Placement& pl = *scene.placement;
@@ -143,6 +144,8 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_recentres(ls.recentres);
   st->set_declared_max_force_n(loop.device().declared_max_force_N());
   st->set_engage_gain(ls.engage_gain);
+  st->set_passivity_ticks(ls.passivity_ticks);
+  st->set_passivity_dissipated_mj(ls.passivity_dissipated_mJ);
 }
 
 }  // namespace palp::net

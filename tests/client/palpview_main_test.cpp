@@ -175,8 +175,12 @@ TEST(Palpview, DefaultViewIsThePatientsAnteriorHoweverStored) {
           shared_cli_dir() / "cache");
       ASSERT_EQ(made.exit_code, 0) << made.output;
     }
+    // A directory of its own per palpd: its log (where the port is read) starts empty, never
+    // holding the previous run's port.
+    const fs::path run_dir = dir / ("palpd_" + std::to_string(shots.size()));
+    fs::create_directories(run_dir);
     Palpd palpd("--scene " + ct.string() + " --device sim --port 0 --no-realtime --duration 300",
-                dir);
+                run_dir);
     ASSERT_GT(palpd.port(), 0) << palpd.log();
     const fs::path png = dir / ("view_" + stored + (code.size() > 3 ? "_posterior" : "") + ".png");
     const auto r = run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) +

@@ -332,6 +332,13 @@ TEST(Palpd, ProbeShowsTheForceLimits) {
   r = run_palpd("--config " + config.string() + " --scene phantom:sphere --device sim");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("command line only"), std::string::npos) << r.output;
+  // Force parameters outside their physical ranges, from a config file or the command line.
+  std::ofstream(config) << "param = [\"bone_fmax=400\"]\n";
+  r = run_palpd("--config " + config.string() + " --scene phantom:sphere --device sim");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bone_fmax must be in [0, 60] N"), std::string::npos) << r.output;
+  r = run_palpd("--scene phantom:sphere --device sim --param k=50");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
 TEST(Palpd, StatsJsonAndProbeArrivals) {

@@ -552,6 +552,12 @@ TEST(ForceModel, ParametersAndValidation) {
   EXPECT_THROW(set_param(p, "k", std::nan("")), UsageError);
   EXPECT_THROW(set_param(p, "grad_epsilon", 0.0), UsageError);
   EXPECT_THROW(set_param(p, "bone_enabled", 0.5), UsageError);
+  // Physical ranges: a parameter that would shape an absurd force is refused.
+  EXPECT_THROW(set_param(p, "k", 50.0), UsageError);
+  EXPECT_THROW(set_param(p, "c", 1e6), UsageError);
+  EXPECT_THROW(set_param(p, "bone_fmax", 400.0), UsageError);
+  EXPECT_THROW(set_param(p, "bone_k", 1e4), UsageError);
+  EXPECT_NO_THROW(set_param(p, "bone_fmax", 60.0));
   EXPECT_EQ(p.c, 1.5);  // a refused override leaves the parameters as they were
   Tool empty;
   EXPECT_THROW(Model(skin_only(), empty), UsageError);

@@ -326,6 +326,16 @@ TEST_F(ServerTest, ControllerNeedsTheTokenAndCommands) {
   EXPECT_TRUE(m.result().ok()) << m.result().message();
   EXPECT_EQ(loop_->model()->params().k, 0.25);
 
+  // Over the wire too, a parameter outside its physical range is refused.
+  cmd.mutable_command()->set_request_id(6);
+  cmd.mutable_command()->mutable_set_parameter()->set_name("k");
+  cmd.mutable_command()->mutable_set_parameter()->set_value(50.0);
+  c.send(cmd);
+  ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kResult, m));
+  EXPECT_FALSE(m.result().ok());
+  EXPECT_NE(m.result().message().find("[0, 5] N/mm"), std::string::npos) << m.result().message();
+  EXPECT_EQ(loop_->model()->params().k, 0.25);
+
   // Recentre reaches the control target, and its refusal comes back as the result.
   cmd.mutable_command()->set_request_id(5);
   cmd.mutable_command()->mutable_recentre();
