@@ -65,6 +65,15 @@ DeviceProfile with_declared_force(const DeviceProfile& profile, double declared_
   return p;
 }
 
+DeviceProfile with_declared(const DeviceProfile& profile, const DeclaredLimits& declared) {
+  DeviceProfile p = with_declared_force(profile, declared.max_force_N);
+  if (declared.max_stiffness_N_per_mm > 0.0)
+    p.max_stiffness_N_per_mm = std::min(p.max_stiffness_N_per_mm, declared.max_stiffness_N_per_mm);
+  if (declared.damping_N_s_per_mm > 0.0)
+    p.damping_N_s_per_mm = std::min(p.damping_N_s_per_mm, declared.damping_N_s_per_mm);
+  return p;
+}
+
 Filtered finite_or_zero(const Vec3d& v) {
   if (is_finite(v)) return {v, kSafetyOk};
   return {Vec3d{}, kSafetyNonFinite};

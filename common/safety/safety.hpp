@@ -37,6 +37,15 @@ const DeviceProfile& default_device_profile();
 // declares (`declared_max_force_N` > 0; 0 or less: nothing declared, `profile` unchanged).
 DeviceProfile with_declared_force(const DeviceProfile& profile, double declared_max_force_N);
 
+// What a device declares about itself (0: not declared).
+struct DeclaredLimits {
+  double max_force_N = 0;
+  double max_stiffness_N_per_mm = 0;
+  double damping_N_s_per_mm = 0;
+};
+// `profile` lowered, field by field, to what the device declares: never raised.
+DeviceProfile with_declared(const DeviceProfile& profile, const DeclaredLimits& declared);
+
 std::span<const DeviceProfile> device_profiles();
 // nullptr when unknown.
 const DeviceProfile* find_device_profile(std::string_view name);

@@ -380,8 +380,14 @@ int cmd_probe(const Arguments& argv) {
     if (r.have_scene && r.scene.has_limits()) {
       const v1::ForceLimits& l = r.scene.limits();
       std::printf("  limits    %s: %.2f N", l.profile().c_str(), l.max_force_n());
-      if (r.have_stats && r.stats.declared_max_force_n() > 0)
-        std::printf(" (the device declares %.2f N)", r.stats.declared_max_force_n());
+      if (r.have_stats && r.stats.declared_max_force_n() > 0) {
+        std::printf(" (the device declares %.2f N", r.stats.declared_max_force_n());
+        if (r.stats.declared_max_stiffness_n_per_mm() > 0)
+          std::printf(", %.2f N/mm", r.stats.declared_max_stiffness_n_per_mm());
+        if (r.stats.declared_damping_n_s_per_mm() > 0)
+          std::printf(", %.3f N s/mm", r.stats.declared_damping_n_s_per_mm());
+        std::printf(")");
+      }
       std::printf(
           ", %.2f N/mm, step <= %.2f N per tick", l.max_stiffness_n_per_mm(),
           r.scene.tick_rate_hz() > 0 ? l.max_force_rate_n_per_s() / r.scene.tick_rate_hz() : 0.0);

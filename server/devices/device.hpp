@@ -37,6 +37,7 @@
 #include "model/force_model.hpp"
 #include "model/tool.hpp"
 #include "rt/snapshot.hpp"
+#include "safety/safety.hpp"
 #include "scene/trajectory.hpp"
 
 namespace palp::rt {
@@ -94,9 +95,10 @@ class Device {
   virtual DeviceState state() const noexcept { return DeviceState::Present; }
   // Whether the device renders the force it is written (false: a pose source only).
   virtual bool renders_force() const noexcept { return true; }
-  // Real time (an atomic load): the largest force magnitude the device itself declares (N;
-  // 0: nothing declared). The loop never sends more.
-  virtual double declared_max_force_N() const noexcept { return 0.0; }
+  // Real time (atomic loads): what the device itself declares about its force, stiffness and
+  // damping (0: not declared). The loop's limits are lowered to these, never raised.
+  virtual DeclaredLimits declared_limits() const noexcept { return {}; }
+  double declared_max_force_N() const noexcept { return declared_limits().max_force_N; }
   // Not real time: the device's last event or error, for people ("" when nothing to say).
   virtual std::string status_message() const { return {}; }
 

@@ -102,6 +102,10 @@ std::string UsbHapticDevice::handshake(libusb_device_handle* handle) {
   info_ = info;
   declared_max_force_.store(static_cast<double>(info.max_force_uN) * 1e-6,
                             std::memory_order_relaxed);
+  declared_stiffness_.store(static_cast<double>(info.max_stiffness_N_per_m) * 1e-3,
+                            std::memory_order_relaxed);  // N/m -> N/mm
+  declared_damping_.store(static_cast<double>(info.max_damping_mN_s_per_m) * 1e-6,
+                          std::memory_order_relaxed);  // mN s/m -> N s/mm
   have_seq_ = false;
   clear_faults_ = false;
   prev_faults_ = 0;

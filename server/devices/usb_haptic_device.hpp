@@ -62,9 +62,12 @@ class UsbHapticDevice final : public Device {
   Counters counters() const noexcept;
   usb::LinkState link_state() const noexcept;
   const usb::ohp::Info& info() const { return info_; }  // valid once Present
-  // What GET_INFO declared (max_force_uN), from the first handshake on.
-  double declared_max_force_N() const noexcept override {
-    return declared_max_force_.load(std::memory_order_relaxed);
+  // What GET_INFO declared (force; stiffness and damping from protocol 1.1), from the first
+  // handshake on.
+  DeclaredLimits declared_limits() const noexcept override {
+    return {declared_max_force_.load(std::memory_order_relaxed),
+            declared_stiffness_.load(std::memory_order_relaxed),
+            declared_damping_.load(std::memory_order_relaxed)};
   }
 
  private:
@@ -100,7 +103,7 @@ class UsbHapticDevice final : public Device {
   std::atomic<std::uint64_t> frames_{0}, short_{0}, malformed_{0}, gaps_{0}, host_frames_{0},
       trips_{0};
   std::atomic<std::uint32_t> last_echo_{0};
-  std::atomic<double> declared_max_force_{0.0};
+  std::atomic<double> declared_max_force_{0.0}, declared_stiffness_{0.0}, declared_damping_{0.0};
   std::atomic<std::uint16_t> last_faults_{0}, last_status_{0}, buttons_{0};
 };
 

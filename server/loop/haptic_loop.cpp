@@ -251,8 +251,8 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       in.position = position;
       in.prev_position = prev_valid_ ? prev_position_ : position;
       in.dt = dt_s_;
-      const SafetyOutput out = apply_device_limits(
-          with_declared_force(*config_.profile, device_.declared_max_force_N()), in);
+      const SafetyOutput out =
+          apply_device_limits(with_declared(*config_.profile, device_.declared_limits()), in);
       force = out.force, torque = out.torque, safety = out.status;
     }
     if (config_.engage) {  // engagement: nothing until the model's force is small, then a ramp
@@ -264,8 +264,9 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     if (config_.passivity && config_.profile) {  // passivity: damp what the port gave out
       const Vec3d velocity =
           prev_valid_ && dt_s_ > 0.0 ? (position - prev_position_) * (1.0 / dt_s_) : Vec3d{};
-      const PassivityOutput pc = passivity_control(passivity_, force, velocity, dt_s_,
-                                                   config_.profile->damping_N_s_per_mm);
+      const double damping =
+          with_declared(*config_.profile, device_.declared_limits()).damping_N_s_per_mm;
+      const PassivityOutput pc = passivity_control(passivity_, force, velocity, dt_s_, damping);
       passivity_ = pc.state;
       if (pc.damping_N_s_per_mm > 0.0) {
         force = clamp_force(pc.force, config_.profile->max_force_N).value;

@@ -142,7 +142,10 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_device_message(loop.device().status_message());
   if (scene.placement) wire::to_proto(loop.registration_home(), st->mutable_registration_home());
   st->set_recentres(ls.recentres);
-  st->set_declared_max_force_n(loop.device().declared_max_force_N());
+  const DeclaredLimits declared = loop.device().declared_limits();
+  st->set_declared_max_force_n(declared.max_force_N);
+  st->set_declared_max_stiffness_n_per_mm(declared.max_stiffness_N_per_mm);
+  st->set_declared_damping_n_s_per_mm(declared.damping_N_s_per_mm);
   st->set_engage_gain(ls.engage_gain);
   st->set_passivity_ticks(ls.passivity_ticks);
   st->set_passivity_dissipated_mj(ls.passivity_dissipated_mJ);

@@ -94,7 +94,18 @@ bool decode_info(const std::uint8_t* data, std::size_t size, Info& out) noexcept
   out.firmware_version = get16(data + 22);
   std::memcpy(out.name.data(), data + 24, out.name.size());
   out.name.back() = '\0';
+  out.max_stiffness_N_per_m = 0;
+  out.max_damping_mN_s_per_m = 0;
+  if (size >= kInfoSize + kInfoExtensionSize) {
+    out.max_stiffness_N_per_m = get32(data + 48);
+    out.max_damping_mN_s_per_m = get32(data + 52);
+  }
   return true;
+}
+
+void encode_info_extension(const Info& info, std::uint8_t (&out)[kInfoExtensionSize]) noexcept {
+  put32(out, info.max_stiffness_N_per_m);
+  put32(out + 4, info.max_damping_mN_s_per_m);
 }
 
 void encode_device_frame(const DeviceFrame& f, std::uint8_t (&out)[kDeviceFrameSize]) noexcept {

@@ -88,6 +88,9 @@ inline constexpr std::uint8_t kFrameHost = 0x81;
 inline constexpr std::size_t kDeviceFrameSize = 64;
 inline constexpr std::size_t kHostFrameSize = 40;
 inline constexpr std::size_t kInfoSize = 48;
+// Protocol 1.1 appends 8 bytes (GET_INFO may answer 56): the device's own stable stiffness and
+// damping. A 1.0 device answers 48 and declares neither.
+inline constexpr std::size_t kInfoExtensionSize = 8;
 inline constexpr std::size_t kMaxJoints = 6;
 
 struct Info {
@@ -102,6 +105,9 @@ struct Info {
   std::uint8_t joint_count = 0;
   std::uint16_t firmware_version = 0;
   std::array<char, 24> name{};  // NUL-padded
+  // 1.1 extension (0: not declared).
+  std::uint32_t max_stiffness_N_per_m = 0;   // largest stiffness rendered stably
+  std::uint32_t max_damping_mN_s_per_m = 0;  // largest damping rendered stably
 };
 
 struct DeviceFrame {
@@ -133,7 +139,10 @@ enum class DecodeResult : std::uint8_t { Ok, Short, BadType, BadVersion, BadCrc 
 const char* to_string(DecodeResult result) noexcept;
 
 void encode_info(const Info& info, std::uint8_t (&out)[kInfoSize]) noexcept;
-// False when shorter than kInfoSize or without the "PALP" magic.
+// The 1.1 extension (bytes 48..55 of a 56-byte reply).
+void encode_info_extension(const Info& info, std::uint8_t (&out)[kInfoExtensionSize]) noexcept;
+// False when shorter than kInfoSize or without the "PALP" magic. The 1.1 extension is read when
+// `size` covers it.
 bool decode_info(const std::uint8_t* data, std::size_t size, Info& out) noexcept;
 
 void encode_device_frame(const DeviceFrame& frame, std::uint8_t (&out)[kDeviceFrameSize]) noexcept;

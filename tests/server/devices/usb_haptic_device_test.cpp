@@ -133,7 +133,15 @@ class Firmware {
         info.max_force_uN = max_force_uN_;
         std::uint8_t bytes[ohp::kInfoSize];
         ohp::encode_info(info, bytes);
-        return ControlReply::in(std::vector<std::uint8_t>(bytes, bytes + sizeof bytes));
+        std::vector<std::uint8_t> reply(bytes, bytes + sizeof bytes);
+        if (stiffness_N_per_m_ > 0) {  // a protocol 1.1 device: the extension follows
+          info.max_stiffness_N_per_m = stiffness_N_per_m_;
+          info.max_damping_mN_s_per_m = damping_mN_s_per_m_;
+          std::uint8_t extension[ohp::kInfoExtensionSize];
+          ohp::encode_info_extension(info, extension);
+          reply.insert(reply.end(), extension, extension + sizeof extension);
+        }
+        return ControlReply::in(reply);
       }
       case ohp::kSetWatchdog:
         if (r.value < 1 || r.value > 1000) return ControlReply::stalled();
@@ -210,6 +218,11 @@ class Firmware {
 
   std::uint8_t version_major_;
   std::uint32_t max_force_uN_;
+
+ public:
+  std::uint32_t stiffness_N_per_m_ = 0, damping_mN_s_per_m_ = 0;  // 0: a 1.0 device
+
+ private:
   EmulatedUsbDevice usb_;
   std::mutex mutex_;
   Pose pose_ = testing::press_pose(2.0);
@@ -562,6 +575,7 @@ TEST_F(UsbHapticTest, ADeviceDeclaring3NeverGetsMoreThan3N) {
     ASSERT_EQ(device->activate(), DeviceStatus::Ok);
     ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
     EXPECT_EQ(device->declared_max_force_N(), 3.0);
+    EXPECT_EQ(device->declared_limits().max_stiffness_N_per_mm, 0.0);  // a 1.0 device
     LoopConfig lc = loop_config();
     if (loop_limits) {
       lc.profile = &device_profile("falcon");
@@ -593,6 +607,29 @@ TEST_F(UsbHapticTest, ADeviceDeclaring3NeverGetsMoreThan3N) {
     device->deactivate();
     firmware.unplug();
   }
+}
+
+// A protocol 1.1 device declares its stable stiffness and damping in the InfoBlock's extension;
+// palpd reads them (and a 1.0 device's 48 bytes stay accepted, above).
+TEST_F(UsbHapticTest, ProtocolOneOneDeclaresStiffnessAndDamping) {
+  Firmware firmware(*testbed_, ohp::kVersionMajor, 3'300'000);
+  firmware.stiffness_N_per_m_ = 400;
+  firmware.damping_mN_s_per_m_ = 4000;
+  firmware.power_on(1000.0);
+  std::unique_ptr<Device> device = make_device("usb-haptic:1209:0001");
+  ASSERT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
+  const DeclaredLimits d = device->declared_limits();
+  EXPECT_DOUBLE_EQ(d.max_force_N, 3.3);
+  EXPECT_DOUBLE_EQ(d.max_stiffness_N_per_mm, 0.4);
+  EXPECT_DOUBLE_EQ(d.damping_N_s_per_mm, 0.004);
+  // The falcon profile, lowered to this device: the touch class's numbers.
+  const DeviceProfile p = with_declared(device_profile("falcon"), d);
+  EXPECT_DOUBLE_EQ(p.max_force_N, 3.3);
+  EXPECT_DOUBLE_EQ(p.max_stiffness_N_per_mm, 0.4);
+  EXPECT_DOUBLE_EQ(p.damping_N_s_per_mm, 0.004);
+  device->deactivate();
 }
 
 }  // namespace

@@ -111,6 +111,30 @@ TEST(OpenHapticProtocol, InfoBlock) {
   EXPECT_FALSE(decode_info(b, sizeof b, back));
 }
 
+// Protocol 1.1: 8 more bytes, stiffness (N/m) and damping (mN s/m), little-endian at 48 and 52;
+// a 48-byte (1.0) block leaves both 0.
+TEST(OpenHapticProtocol, InfoBlockExtension) {
+  Info info;
+  info.max_stiffness_N_per_m = 3000;
+  info.max_damping_mN_s_per_m = 20000;
+  std::uint8_t b[kInfoSize + kInfoExtensionSize];
+  std::uint8_t base[kInfoSize];
+  encode_info(info, base);
+  std::uint8_t extension[kInfoExtensionSize];
+  encode_info_extension(info, extension);
+  std::memcpy(b, base, kInfoSize);
+  std::memcpy(b + kInfoSize, extension, kInfoExtensionSize);
+  EXPECT_EQ(b[48], 0xB8);  // 3000 = 0x0BB8
+  EXPECT_EQ(b[49], 0x0B);
+  Info back;
+  ASSERT_TRUE(decode_info(b, sizeof b, back));
+  EXPECT_EQ(back.max_stiffness_N_per_m, 3000u);
+  EXPECT_EQ(back.max_damping_mN_s_per_m, 20000u);
+  ASSERT_TRUE(decode_info(b, kInfoSize, back));
+  EXPECT_EQ(back.max_stiffness_N_per_m, 0u);
+  EXPECT_EQ(back.max_damping_mN_s_per_m, 0u);
+}
+
 TEST(OpenHapticProtocol, CartesianRpyKinematics) {
   DeviceFrame f;
   f.type = kFrameJoints;
