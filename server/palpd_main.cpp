@@ -250,6 +250,9 @@ class App final : public net::ControlTarget {
     if (name.empty() || name.size() > 128 || name.find('/') != std::string::npos ||
         name.front() == '.')
       return "recording name must be a plain file name (no '/', not starting with '.')";
+    for (const char ch : name)
+      if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
+        return "recording name must not hold control characters";
     return start(std::filesystem::path(record_dir_) / name);
   }
   std::string start(const std::filesystem::path& path) {

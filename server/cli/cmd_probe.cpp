@@ -451,10 +451,10 @@ int cmd_probe(const Arguments& argv) {
       "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
       "\"server_rate_hz\":%s,\"overruns\":%llu,\"faults\":%llu,\"jitter_max_us\":%s,"
       "\"clients\":%u}\n",
-      r.failure.empty() ? "true" : "false", static_cast<unsigned long long>(r.frames),
-      json_number(fps).c_str(), json_number(delivered).c_str(),
-      static_cast<unsigned long long>(r.gaps), static_cast<unsigned long long>(r.gap_frames),
-      static_cast<unsigned long long>(r.max_gap),
+      r.failure.empty() && r.frames > 0 ? "true" : "false",
+      static_cast<unsigned long long>(r.frames), json_number(fps).c_str(),
+      json_number(delivered).c_str(), static_cast<unsigned long long>(r.gaps),
+      static_cast<unsigned long long>(r.gap_frames), static_cast<unsigned long long>(r.max_gap),
       json_number(static_cast<double>(r.max_interval_ns) * 1e-6).c_str(),
       static_cast<unsigned long long>(r.intervals_over_50ms), json_number(p50).c_str(),
       json_number(p90).c_str(), json_number(p99).c_str(), json_number(p999).c_str(),

@@ -1,8 +1,12 @@
 // Recording files: see recording.hpp for the format.
 #include "rt/recording.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
 #include <bit>
+#include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -161,11 +165,34 @@ void append_recording_csv_row(std::string& out, const TickRecord& r, std::int64_
   out += '\n';
 }
 
+namespace {
+
+// A new file, never an existing one and never through a symlink (O_EXCL | O_NOFOLLOW): a
+// recording never overwrites anything.
+std::FILE* create_exclusive(const std::string& path, const char* what) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    const int error = errno;
+    if (error == EEXIST)
+      throw Error(path + ": already exists; " + what +
+                  " is never written over an existing file: choose another name");
+    if (error == ELOOP) throw Error(path + ": is a symbolic link; " + what + " is not created");
+    throw Error(path + ": cannot create " + what + ": " + std::strerror(error));
+  }
+  std::FILE* file = ::fdopen(fd, "wb");
+  if (!file) {
+    ::close(fd);
+    throw Error(path + ": cannot create " + what);
+  }
+  return file;
+}
+
+}  // namespace
+
 RecordingWriter::RecordingWriter(std::string path, const RecordingMetadata& metadata, bool csv)
     : path_(std::move(path)) {
   const std::string meta = format_metadata(metadata);
-  file_ = std::fopen(path_.c_str(), "wb");
-  if (!file_) throw Error(path_ + ": cannot create the recording");
+  file_ = create_exclusive(path_, "the recording");
   unsigned char header[20];
   unsigned char* p = header;
   std::memcpy(p, kRecordingMagic, 8);
@@ -178,11 +205,13 @@ RecordingWriter::RecordingWriter(std::string path, const RecordingMetadata& meta
     failed_ = true;
   if (csv) {
     csv_path_ = csv_path_for(path_);
-    csv_ = std::fopen(csv_path_.c_str(), "wb");
-    if (!csv_) {
+    try {
+      csv_ = create_exclusive(csv_path_, "the recording's CSV export");
+    } catch (...) {
       std::fclose(file_);
       file_ = nullptr;
-      throw Error(csv_path_ + ": cannot create the recording's CSV export");
+      std::remove(path_.c_str());  // ours, just created: leave no half recording behind
+      throw;
     }
     csv_buffer_ = std::string(kRecordingCsvHeader) + "\n";
   }

@@ -123,6 +123,39 @@ TEST(Recording, RejectsOtherFiles) {
   EXPECT_THROW(read_recording((dir / "meta.palprec").string()), InputError);
 }
 
+// A recording is created, never written over: an existing file, an existing CSV or a symlink in
+// its place is refused, and nothing is left behind.
+TEST(Recording, NeverOverwritesOrFollowsSymlinks) {
+  const fs::path dir = temp_dir() / "exclusive";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path taken = dir / "taken.palprec";
+  std::ofstream(taken) << "precious";
+  try {
+    RecordingWriter w(taken.string(), {});
+    ADD_FAILURE() << "wrote over an existing file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("already exists"), std::string::npos) << e.what();
+  }
+  std::ifstream in(taken);
+  std::string text;
+  std::getline(in, text);
+  EXPECT_EQ(text, "precious");
+
+  const fs::path target = dir / "elsewhere.txt";
+  std::ofstream(target) << "also precious";
+  fs::create_symlink(target, dir / "link.palprec");
+  EXPECT_THROW(RecordingWriter((dir / "link.palprec").string(), {}), Error);
+  std::ifstream in2(target);
+  std::getline(in2, text);
+  EXPECT_EQ(text, "also precious");
+
+  // The CSV's name is taken: the binary just created is removed again.
+  std::ofstream(dir / "half.csv") << "x";
+  EXPECT_THROW(RecordingWriter((dir / "half.palprec").string(), {}, true), Error);
+  EXPECT_FALSE(fs::exists(dir / "half.palprec"));
+}
+
 TEST(Recording, CsvPathReplacesTheExtension) {
   EXPECT_EQ(csv_path_for("a/b.palprec"), "a/b.csv");
   EXPECT_EQ(csv_path_for("rec"), "rec.csv");
