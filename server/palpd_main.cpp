@@ -50,7 +50,9 @@ Devices:
                           slide across the ribs, lift; other scenes: press, slide, hold, lift)
   sim:FILE                a trajectory CSV (t,px,py,pz,qw,qx,qy,qz) at its timestamps, looping
   replay:FILE             a palpd recording, tick by tick, reproducing its forces exactly; scene,
-                          tool, rate, profile and parameters default to the recording's
+                          tool, rate, profile and parameters default to the recording's; a
+                          recording cut inside a record is refused (--allow-truncated: replay
+                          its whole ticks, with a warning)
   remote                  the pose comes from the CONTROLLER client (DevicePose messages)
   usb-haptic[:VID:PID]    a USB force-feedback device speaking the open haptic protocol
                           (docs/usb-protocol.md; VID:PID in hex, default 1209:0001); hot-plug:
@@ -112,7 +114,8 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   -h, --help              show this help
 )";
 
-const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits"};
+const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits",
+                                         "allow-truncated"};
 const std::vector<std::string> kValued = {
     "device",        "tool",           "device-profile", "rate",
     "port",          "bind",           "token",          "max-clients",
@@ -412,6 +415,17 @@ int run(const cli::Arguments& argv_in) {
   std::vector<std::string> defaults;
   if (device_spec->rfind("replay:", 0) == 0) {
     replay = rt::read_recording(device_spec->substr(7));
+    if (replay->truncated) {
+      const std::string what =
+          device_spec->substr(7) + " ends inside a record (cut short, e.g. by a crash): " +
+          std::to_string(replay->records.size()) + " whole ticks" +
+          (replay->records.empty()
+               ? std::string()
+               : ", the last seq " + std::to_string(replay->records.back().seq));
+      if (!args.has("allow-truncated"))
+        throw InputError(what + "; pass --allow-truncated to replay them");
+      std::fprintf(stderr, "palpd: warning: %s\n", what.c_str());
+    }
     const auto meta = [&](const std::string& key) -> std::optional<std::string> {
       const auto it = replay->metadata.find(key);
       if (it == replay->metadata.end() || it->second.empty()) return std::nullopt;

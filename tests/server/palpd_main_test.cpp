@@ -341,6 +341,36 @@ TEST(Palpd, ProbeShowsTheForceLimits) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
+// A recording cut inside a record is not replayed silently: refused, naming the last whole tick,
+// unless --allow-truncated (then replayed with a warning).
+TEST(Palpd, TruncatedRecordingIsRefusedUnlessAllowed) {
+  const fs::path dir = shared_cli_dir() / "truncated";
+  fs::create_directories(dir);
+  const fs::path rec = dir / "cut.palprec";
+  fs::remove(rec);
+  {
+    rt::RecordingWriter w(
+        rec.string(), {{"scene", "phantom:sphere"}, {"tool", "finger:7"}, {"rate", "1000"}}, false);
+    for (std::uint64_t i = 0; i < 40; ++i) {
+      rt::TickRecord t;
+      t.seq = i;
+      t.t_ns = static_cast<std::int64_t>(i) * 1'000'000;
+      t.pose.position = {50, 50, 90};
+      w.write(t);
+    }
+    w.finish();
+  }
+  fs::resize_file(rec, fs::file_size(rec) - 7);
+  auto r = run_palpd("--device replay:" + rec.string() + " --port 0 --no-realtime");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("39 whole ticks, the last seq 38"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--allow-truncated"), std::string::npos) << r.output;
+  r = run_palpd("--device replay:" + rec.string() +
+                " --allow-truncated --port 0 --no-realtime --duration 0.5");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning"), std::string::npos) << r.output;
+}
+
 TEST(Palpd, StatsJsonAndProbeArrivals) {
   const fs::path dir = shared_cli_dir() / "stats";
   fs::create_directories(dir);
