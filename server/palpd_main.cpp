@@ -25,6 +25,7 @@
 #include "cli/device_placement.hpp"
 #include "cli/model_setup.hpp"
 #include "devices/device.hpp"
+#include "io/gzip.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
@@ -134,6 +135,11 @@ std::string number_text(double v) {
 // The TOML file as "--key=value" arguments (placed before the command line's, which win).
 cli::Arguments config_arguments(const std::string& path) {
   toml::table table;
+  try {
+    require_regular_file(path);  // a FIFO would block palpd's start forever
+  } catch (const InputError& e) {
+    throw UsageError(std::string("--config: ") + e.what());
+  }
   try {
     table = toml::parse_file(path);
   } catch (const toml::parse_error& e) {

@@ -256,6 +256,7 @@ CtVolume read_ct(const std::string& input) {
   if (::stat(input.c_str(), &info) != 0) {
     if (errno == ENOENT || errno == ENOTDIR)
       throw InputError(input + ": no such file or directory");
+    if (errno == ELOOP) throw InputError(input + ": a loop of symbolic links");
     throw InputError(input + ": cannot access (" + std::strerror(errno) + ")");
   }
   if (S_ISDIR(info.st_mode)) return read_dicom_series(input);

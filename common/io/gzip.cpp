@@ -28,12 +28,32 @@ std::string errno_text(int error) {
 
 [[noreturn]] void throw_open_error(const std::string& path, int error) {
   if (error == ENOENT) throw InputError(path + ": no such file or directory");
+  if (error == ELOOP) throw InputError(path + ": a loop of symbolic links");
   throw InputError(path + ": cannot open (" + errno_text(error) + ")");
 }
 
+const char* kind_of(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+// Opens without blocking (a FIFO would wait for a writer forever), refuses anything that is not
+// a regular file, then reads blocking as usual.
 int open_for_reading(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
   if (fd < 0) throw_open_error(path, errno);
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    const mode_t mode = info.st_mode;
+    ::close(fd);
+    throw InputError(path + ": " + kind_of(mode) + ", not a regular file: palp reads files only");
+  }
+  const int flags = ::fcntl(fd, F_GETFL);
+  if (flags >= 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
   return fd;
 }
 
@@ -253,8 +273,14 @@ std::uint64_t DecodedReader::position() const {
 std::uint64_t file_size(const std::string& path) {
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0) throw_open_error(path, errno);
-  if (!S_ISREG(info.st_mode)) throw InputError(path + ": not a regular file");
+  if (!S_ISREG(info.st_mode))
+    throw InputError(path + ": " + kind_of(info.st_mode) +
+                     ", not a regular file: palp reads files only");
   return static_cast<std::uint64_t>(info.st_size);
+}
+
+void require_regular_file(const std::string& path) {
+  (void)file_size(path);
 }
 
 bool file_is_gzip(const std::string& path) {

@@ -53,6 +53,9 @@ class DecodedReader {
 
 // Size of a regular file in bytes; InputError when it cannot be examined.
 std::uint64_t file_size(const std::string& path);
+// InputError unless `path` (after symlinks) is a regular file: a FIFO, a device, a directory or
+// a socket would block or never end, a symlink loop is named as one. Checked before opening.
+void require_regular_file(const std::string& path);
 
 // True when the file starts with the gzip magic bytes 1f 8b.
 bool file_is_gzip(const std::string& path);

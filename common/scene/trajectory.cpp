@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "base/errors.hpp"
+#include "io/gzip.hpp"
 
 namespace palp {
 namespace {
@@ -147,8 +148,7 @@ Trajectory parse_trajectory_csv(std::string_view text, const std::string& name) 
 }
 
 Trajectory read_trajectory_csv(const std::string& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(path + ": no such trajectory file");
+  require_regular_file(path);  // a FIFO or a device would never end
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot be read");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -13,6 +13,7 @@
 #include <iterator>
 
 #include "base/errors.hpp"
+#include "io/gzip.hpp"
 #include "scene/trajectory.hpp"
 
 namespace palp::rt {
@@ -95,6 +96,7 @@ TickRecord decode_record(const unsigned char* in) {
 }
 
 Recording read_recording(const std::string& path) {
+  require_regular_file(path);  // a FIFO or a device would never end
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open the recording");
   const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};

@@ -3,6 +3,7 @@
 #include "io/ct_io.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -78,6 +79,24 @@ TEST(CtIo, UnreadableFile) {
   std::filesystem::permissions(dir.file("locked.nii"), std::filesystem::perms::none);
   EXPECT_PALP_ERROR(read_ct(dir.file("locked.nii")), InputError,
                     "locked.nii: cannot open (Permission denied)");
+}
+
+// Anything that is not a regular file is refused at once, never read forever: a FIFO named as
+// the CT (opening it would wait for a writer), a detached header whose data file is /dev/zero,
+// and a loop of symbolic links, named as such.
+TEST(CtIo, NonRegularFilesAreRefusedWithoutBlocking) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("pipe.nii").c_str(), 0600), 0);
+  EXPECT_PALP_ERROR(read_ct(dir.file("pipe.nii")), InputError,
+                    "pipe.nii: a FIFO, not a regular file: palp reads files only");
+  testing::write_text(dir.file("zero.mhd"),
+                      "ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_SHORT\n"
+                      "ElementDataFile = /dev/zero\n");
+  EXPECT_PALP_ERROR(read_ct(dir.file("zero.mhd")), InputError,
+                    "/dev/zero: a character device, not a regular file");
+  std::filesystem::create_symlink(dir.file("b.nii"), dir.file("a.nii"));
+  std::filesystem::create_symlink(dir.file("a.nii"), dir.file("b.nii"));
+  EXPECT_PALP_ERROR(read_ct(dir.file("a.nii")), InputError, "a.nii: a loop of symbolic links");
 }
 
 TEST(CtIo, EmptyFiles) {
