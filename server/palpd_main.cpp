@@ -94,16 +94,21 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   --port P                TCP port (default 7400; 0 = any free port, printed at start)
   --bind ADDR             address to listen on (default 127.0.0.1; 0.0.0.0 for a lab network)
   --token TOKEN           CONTROLLER clients must present it (prefer the config file)
-  --max-clients N         default 16
-  --queue N               haptic frames queued per client before the oldest is dropped (256)
-  --idle-timeout S        close clients that send nothing (Ping) for S s (30; 0 = never)
-  --hello-timeout S       close clients that send no Hello within S s (5)
-  --write-timeout S       close clients whose socket accepts nothing for S s (5; 0 = never)
-  --poll-us US            how often the network thread takes new frames from the loop (500)
+  --max-clients N         default 16 (1..1024)
+  --queue N               haptic frames queued per client before the oldest is dropped
+                          (256; 1..65536)
+  --idle-timeout S        close clients that send nothing (Ping) for S s (30; 0 = never;
+                          at most 86400)
+  --hello-timeout S       close clients that send no Hello within S s (5; 0.1..600)
+  --write-timeout S       close clients whose socket accepts nothing for S s (5; 0 = never;
+                          at most 600)
+  --poll-us US            how often the network thread takes new frames from the loop
+                          (500; 50..100000)
   --record FILE           record every tick (binary, see server/rt/recording.hpp) and FILE's .csv
   --record-dir DIR        where StartRecording commands write (default: the current directory)
-  --watchdog-ms MS        a tick starting MS later than its deadline zeroes the force (5; 0 off)
-  --device-timeout-ms MS  a device silent for MS zeroes the force (100; 0 = off)
+  --watchdog-ms MS        a tick starting MS later than its deadline zeroes the force (5; 0 off;
+                          at most 1000)
+  --device-timeout-ms MS  a device silent for MS zeroes the force (100; 0 = off; at most 10000)
   --priority N            SCHED_FIFO priority of the loop thread (80)
   --no-realtime           do not ask for SCHED_FIFO and locked memory
   --duration S            stop after S seconds (default: until SIGINT / SIGTERM)
@@ -395,6 +400,19 @@ double positive(const cli::Args& args, const std::string& key, double fallback) 
   return v;
 }
 
+// A number within [lo, hi], refused with the option's name and its range otherwise: no timeout
+// or interval can overflow a clock, no queue be sized by a typo.
+double within(const cli::Args& args, const std::string& key, double fallback, double lo,
+              double hi) {
+  const double v = args.number(key, fallback);
+  if (!(v >= lo && v <= hi)) {
+    char range[96];
+    std::snprintf(range, sizeof range, " must be in [%g, %g]", lo, hi);
+    throw UsageError("--" + key + range);
+  }
+  return v;
+}
+
 int run(const cli::Arguments& argv_in) {
   cli::Arguments argv;
   if (const auto path = config_path(argv_in)) argv = config_arguments(*path);
@@ -460,8 +478,8 @@ int run(const cli::Arguments& argv_in) {
     throw UsageError("--rate must be between 1 and 100000 Hz");
   loop_config.realtime = !args.has("no-realtime");
   loop_config.priority = static_cast<int>(args.number("priority", 80));
-  loop_config.watchdog_late_s = positive(args, "watchdog-ms", 5.0) * 1e-3;
-  loop_config.device_timeout_s = positive(args, "device-timeout-ms", 100.0) * 1e-3;
+  loop_config.watchdog_late_s = within(args, "watchdog-ms", 5.0, 0, 1000) * 1e-3;
+  loop_config.device_timeout_s = within(args, "device-timeout-ms", 100.0, 0, 10000) * 1e-3;
   net::ServerConfig server_config;
   server_config.bind = args.get("bind").value_or("127.0.0.1");
   const double port = args.number("port", 7400);
@@ -469,14 +487,14 @@ int run(const cli::Arguments& argv_in) {
     throw UsageError("--port must be an integer in 0..65535");
   server_config.port = static_cast<std::uint16_t>(port);
   server_config.token = args.get("token").value_or("");
-  server_config.max_clients = static_cast<std::size_t>(positive(args, "max-clients", 16));
+  server_config.max_clients = static_cast<std::size_t>(within(args, "max-clients", 16, 1, 1024));
   server_config.queue_frames =
-      std::max<std::size_t>(1, static_cast<std::size_t>(positive(args, "queue", 256)));
-  server_config.idle_timeout_s = positive(args, "idle-timeout", 30);
-  server_config.hello_timeout_s = positive(args, "hello-timeout", 5);
-  server_config.write_timeout_s = positive(args, "write-timeout", 5);
-  server_config.poll_interval_s = std::max(50.0, positive(args, "poll-us", 500)) * 1e-6;
-  const double duration = positive(args, "duration", 0);
+      std::max<std::size_t>(1, static_cast<std::size_t>(within(args, "queue", 256, 1, 65536)));
+  server_config.idle_timeout_s = within(args, "idle-timeout", 30, 0, 86400);
+  server_config.hello_timeout_s = within(args, "hello-timeout", 5, 0.1, 600);
+  server_config.write_timeout_s = within(args, "write-timeout", 5, 0, 600);
+  server_config.poll_interval_s = within(args, "poll-us", 500, 50, 100000) * 1e-6;
+  const double duration = within(args, "duration", 0, 0, 1e7);
   const std::string record_dir = args.get("record-dir").value_or(".");
   const std::string stats_json = args.get("stats-json").value_or("");
   (void)cli::scene_options(args);

@@ -29,10 +29,12 @@ void validate_grid(const Grid& grid, const std::string& what) {
           << " are not usable (each must be 1.." << kMaxVoxelsPerAxis << ")";
       throw InputError(msg.str());
     }
-    if (!std::isfinite(grid.spacing[a]) || grid.spacing[a] <= 0.0 || grid.spacing[a] > 1e4) {
+    if (!std::isfinite(grid.spacing[a]) || grid.spacing[a] < kMinSpacingMm ||
+        grid.spacing[a] > kMaxSpacingMm) {
       std::ostringstream msg;
       msg << what << ": spacing " << grid.spacing[0] << " x " << grid.spacing[1] << " x "
-          << grid.spacing[2] << " mm is not usable (each must be finite and in (0, 10000])";
+          << grid.spacing[2] << " mm is not usable (each must be in [" << kMinSpacingMm << ", "
+          << kMaxSpacingMm << "] mm)";
       throw InputError(msg.str());
     }
   }

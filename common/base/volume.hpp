@@ -60,6 +60,10 @@ std::size_t available_memory_bytes();
 std::size_t peak_rss_bytes();
 
 inline constexpr std::int64_t kMaxVoxelsPerAxis = 16384;
+// Voxel spacing palp accepts (mm): from micro-CT (1 µm) to a coarse planning scan's slices;
+// outside it a header lies or a unit is wrong, and distance transforms and ray marches would spin.
+inline constexpr double kMinSpacingMm = 0.001;
+inline constexpr double kMaxSpacingMm = 100.0;
 
 template <class T>
 struct Volume {
