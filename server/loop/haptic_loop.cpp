@@ -58,6 +58,8 @@ HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopC
   requested_ = std::move(model);
   device_state_.store(static_cast<std::uint8_t>(device_.state()), std::memory_order_relaxed);
   registration_ = config.registration;
+  chain_config_.engage = config.engage;
+  chain_config_.passivity = config.passivity;
   identity_ = registration_.is_identity();
   for (int a = 0; a < 3; ++a)
     home_[static_cast<std::size_t>(a)].store(a == 0   ? registration_.home.x
@@ -143,8 +145,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     if (Bundle* fresh = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
       retired_.store(current_.release(), std::memory_order_release);
       current_.reset(fresh);
-      engagement_ = Engagement{};  // a new tool or parameters: engage afresh
-      passivity_ = PassivityState{};
+      reset_force_chain(chain_);  // a new tool or parameters: engage afresh
     }
   }
   Bundle& bundle = *current_;
@@ -153,9 +154,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
     recording_on_ = request == 1;
     if (recording_on_) {
       reset(bundle.state);
-      engagement_ = Engagement{};
-      prev_force_ = Vec3d{};
-      prev_valid_ = false;
+      reset_force_chain(chain_);
     }
   }
   const std::int64_t late = now_ns - deadline_ns;
@@ -243,45 +242,21 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
       torque = torque_to_device(registration_, torque);
     }
     std::uint32_t safety = kSafetyOk;
-    if (config_.profile) {  // limits: the profile, lowered to what the device declares
-      SafetyInput in;
-      in.force = force;
-      in.torque = torque;
-      in.prev_force = prev_force_;
-      in.position = position;
-      in.prev_position = prev_valid_ ? prev_position_ : position;
-      in.dt = dt_s_;
-      const SafetyOutput out =
-          apply_device_limits(with_declared(*config_.profile, device_.declared_limits()), in);
+    if (config_.profile) {  // the force chain (safety/force_chain.hpp): limits, engagement,
+                            // passivity, step bound, clamp
+      const ForceChainOutput out = run_force_chain(
+          chain_, chain_config_, with_declared(*config_.profile, device_.declared_limits()), force,
+          torque, position, dt_s_);
       force = out.force, torque = out.torque, safety = out.status;
-    }
-    if (config_.engage) {  // engagement: nothing until the model's force is small, then a ramp
-      engagement_ = engage(engagement_, norm(bundle.state.f_device), dt_s_, *config_.engage);
-      force = force * engagement_.gain;
-      torque = torque * engagement_.gain;
-      if (!engagement_.engaged()) safety |= kSafetyEngaging;
-    }
-    if (config_.passivity && config_.profile) {  // passivity: damp what the port gave out
-      const Vec3d velocity =
-          prev_valid_ && dt_s_ > 0.0 ? (position - prev_position_) * (1.0 / dt_s_) : Vec3d{};
-      const double damping =
-          with_declared(*config_.profile, device_.declared_limits()).damping_N_s_per_mm;
-      const PassivityOutput pc = passivity_control(passivity_, force, velocity, dt_s_, damping);
-      passivity_ = pc.state;
-      if (pc.damping_N_s_per_mm > 0.0) {
-        force = clamp_force(pc.force, config_.profile->max_force_N).value;
-        safety |= kSafetyPassivity;
+      if (out.damping_N_s_per_mm > 0.0) {
         passivity_ticks_.fetch_add(1, std::memory_order_relaxed);
         passivity_dissipated_mJ_.store(
-            passivity_dissipated_mJ_.load(std::memory_order_relaxed) + pc.dissipated_mJ,
+            passivity_dissipated_mJ_.load(std::memory_order_relaxed) + out.dissipated_mJ,
             std::memory_order_relaxed);  // one writer: the loop
       }
     }
     const DeviceStatus written = device_.write(DeviceCommand{force, torque});
     if (written == DeviceStatus::Ok || written == DeviceStatus::NoData) {
-      prev_force_ = force;
-      prev_position_ = position;
-      prev_valid_ = true;
       rec.force = identity_ ? force : force_to_scene(registration_, force);
       rec.torque = identity_ ? torque : torque_to_scene(registration_, torque);
       rec.u = bundle.state.u;
@@ -296,11 +271,9 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   if (zero != 0) {
     device_.write(DeviceCommand{});  // zero first, then report
     reset(bundle.state);
-    engagement_ = Engagement{};  // and ramp back in after it
-    passivity_ = PassivityState{};
-    prev_force_ = Vec3d{};
-    prev_position_ = last_device_pose_.position;
-    prev_valid_ = have_pose_;
+    reset_force_chain(chain_);  // and ramp back in after it
+    chain_.position_prev = last_device_pose_.position;
+    chain_.have_prev = have_pose_;
     rec.fault = zero;
     if (zero & kFaultMask) {
       faults_.fetch_add(1, std::memory_order_relaxed);
@@ -309,7 +282,7 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   }
   last_contacts_ = rec.n_contact;
   if (config_.engage)
-    engage_gain_.store(zero != 0 ? 0.0 : engagement_.gain, std::memory_order_relaxed);
+    engage_gain_.store(zero != 0 ? 0.0 : chain_.engagement.gain, std::memory_order_relaxed);
   publish(rec, published_state, points, device_state);
   ticks_.fetch_add(1, std::memory_order_release);
   const std::int64_t spent = monotonic_ns() - begin;

@@ -43,7 +43,7 @@
 #include "model/registration.hpp"
 #include "rt/snapshot.hpp"
 #include "safety/engagement.hpp"
-#include "safety/passivity.hpp"
+#include "safety/force_chain.hpp"
 #include "safety/safety.hpp"
 
 namespace palp::rt {
@@ -186,16 +186,13 @@ class HapticLoop {
   std::uint64_t seq_ = 0;
   Pose last_pose_{};         // scene frame
   Pose last_device_pose_{};  // device frame (as read)
-  Engagement engagement_;
-  PassivityState passivity_;
+  ForceChainConfig chain_config_;
+  ForceChainState chain_;
   Registration registration_;  // loop side: config_.registration, home moved by re-centres
   bool identity_ = true;
   bool have_pose_ = false;
   std::int32_t last_contacts_ = 0;
   std::int64_t last_sample_ns_ = 0;
-  Vec3d prev_force_{};
-  Vec3d prev_position_{};
-  bool prev_valid_ = false;
   bool absent_ = false;  // the last tick found the device absent
 
   // Shared counters (relaxed atomics: written by the loop, read by anyone).

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Runs the force-model studies (speed against accuracy, pop-through, passivity), writes their
-# CSVs and logs into $PALP_BUILD_DIR/studies and renders the charts into docs/figures with
-# palpchart (under xvfb-run when there is no display). Prints the figures it measured.
+# Runs the force-model studies (speed against accuracy, pop-through, passivity, stability of the
+# default force chain), writes their CSVs and logs into $PALP_BUILD_DIR/studies and renders the
+# charts into docs/figures with palpchart (under xvfb-run when there is no display). Prints the
+# figures it measured. Naming studies (speed_accuracy, pop_through, passivity, stability) runs
+# and charts only those.
 #
-#   tests/bench/run_studies.sh [--quick] [--charts-only]
+#   tests/bench/run_studies.sh [--quick] [--charts-only] [STUDY...]
 #
 # Environment: PALP_BUILD_DIR (default build), PALP_FIGURES_DIR (default docs/figures),
 # PALP_STUDIES_DIR (CSVs and logs, default $PALP_BUILD_DIR/studies), PALP_JOBS (build
@@ -16,13 +18,17 @@ data=${PALP_STUDIES_DIR:-$build/studies}
 jobs=${PALP_JOBS:-1}
 quick=()
 charts_only=0
+studies=()
 for arg in "$@"; do
   case $arg in
     --quick) quick=(--quick) ;;
     --charts-only) charts_only=1 ;;
-    *) echo "usage: $0 [--quick] [--charts-only]" >&2; exit 2 ;;
+    speed_accuracy|pop_through|passivity|stability) studies+=("$arg") ;;
+    *) echo "usage: $0 [--quick] [--charts-only] [speed_accuracy|pop_through|passivity|stability]..." >&2; exit 2 ;;
   esac
 done
+[[ ${#studies[@]} -gt 0 ]] || studies=(speed_accuracy pop_through passivity stability)
+want() { [[ " ${studies[*]} " == *" $1 "* ]]; }
 chart=$build/client/palpchart
 
 charts() {
@@ -30,7 +36,7 @@ charts() {
   local c=(--size 1000x640)
   local sa_y=(--y err_rel_pct --ylabel "force error (% of the reference force)" --logy)
   local sa_x=(--x tick_ns --xlabel "median tick time (ns, finger:37, this 2-core VM)")
-  for phantom in sphere torso; do
+  want speed_accuracy && for phantom in sphere torso; do
     grep -q "^$phantom," "$data/speed_accuracy.csv" || continue
     local ref="exact distances at 0.25 mm"
     [[ $phantom == torso ]] && ref="0.25 mm maps of a 24 mm slab"
@@ -41,7 +47,7 @@ charts() {
       --out "$figures/speed_accuracy_$phantom.png"
   done
 
-  for tool in 1 37; do
+  want pop_through && for tool in 1 37; do
     "$chart" "${c[@]}" --csv "$data/pop_through_chart.csv" --where tool=finger:$tool \
       --x indentation_mm --y pct --group series --legend tl --yrange 0,140 \
       --xlabel "nominal indentation (mm; hand push = skin law force there)" \
@@ -55,13 +61,13 @@ charts() {
       --title "finger:$tool pushed onto a thin rib: printed bone law vs robust mode" \
       --out "$figures/pop_through_push_finger$tool.png"
   done
-  "$chart" "${c[@]}" --csv "$data/pop_through_speed.csv" --where tool=finger:37 \
+  want pop_through && "$chart" "${c[@]}" --csv "$data/pop_through_speed.csv" --where tool=finger:37 \
     --x speed_mm_s --y pct --group series --logx --legend bl --yrange 0,105 \
     --xlabel "slide speed (mm/s)" --ylabel "% of ticks over the rib" \
     --title "finger:37 across a thin rib at 12 mm indentation, against speed" \
     --out "$figures/pop_through_speed.png"
 
-  for profile in falcon phantom-premium omega; do
+  want passivity && for profile in falcon phantom-premium omega; do
     "$chart" "${c[@]}" --csv "$data/passivity_boundary.csv" --where profile=$profile \
       --where "limits=saturation|limiter" --x hand_N --y min_stable_rate_hz --group series \
       --logy --legend tr --xlabel "hand push (N)" \
@@ -69,12 +75,45 @@ charts() {
       --title "$profile: stable above each line (skin / bone 10 mm under skin)" \
       --out "$figures/passivity_$profile.png"
   done
-  "$chart" "${c[@]}" --csv "$data/passivity.csv" --where scene=bone --where hand_frac=0.2 \
+  want passivity && "$chart" "${c[@]}" --csv "$data/passivity.csv" --where scene=bone --where hand_frac=0.2 \
     --where "limits=saturation|limiter" --x rate_hz --y inj_mW --group profile,limits --logx \
     --logy --legend bl --xlabel "update rate (Hz)" \
     --ylabel "energy injected by the rendering (mW)" \
     --title "Hand pushing 20% of max force onto skin over bone (2.5 N step at contact)" \
     --out "$figures/passivity_energy.png"
+
+  # Stability of palpd's default chain (study_stability, docs/stability.md).
+  want stability || { ls -1 "$figures"/*.png; return; }
+  local chains="saturation|limiter|palpd|palpd-engaged"
+  for profile in touch falcon phantom-premium omega; do
+    "$chart" "${c[@]}" --csv "$data/stability_summary.csv" --where profile=$profile \
+      --where "chain=$chains" --x rate_hz --y p2p_worst_mm --group chain --logx --logy \
+      --legend bl --xlabel "update rate (Hz)" \
+      --ylabel "worst peak-to-peak over the last 0.5 s (mm; a, b30, b90, d)" \
+      --title "$profile: device motion at the end of a press (goal: < 0.1 mm at >= 1 kHz)" \
+      --out "$figures/stability_p2p_$profile.png"
+  done
+  "$chart" "${c[@]}" --csv "$data/stability_summary.csv" --where profile=all \
+    --where "chain=$chains" --x rate_hz --y inj_worst_mJ --group chain --logx --logy \
+    --legend bl --xlabel "update rate (Hz)" \
+    --ylabel "worst energy injected over 1.5-3 s (mJ; a, b30, b90, d; <= 0 not drawn)" \
+    --title "Energy the rendering injects, worst over the four profiles (goal: <= 0)" \
+    --out "$figures/stability_energy.png"
+  "$chart" "${c[@]}" --csv "$data/stability_summary.csv" --where profile=all \
+    --where "chain=$chains" --x rate_hz --y step_ratio_worst --group chain --logx --logy \
+    --legend tl --xlabel "update rate (Hz)" \
+    --ylabel "largest per-tick force step / (max_force_rate x tick)" \
+    --title "Largest force step against the profile's bound, worst over profiles (goal: <= 1)" \
+    --out "$figures/stability_step.png"
+  for run in "touch a" "falcon b90"; do
+    set -- $run
+    "$chart" "${c[@]}" --csv "$data/stability_trace.csv" --where profile=$1 --where scenario=$2 \
+      --x t_s --y depth_mm --group chain --style line --legend tr \
+      --xlabel "time (s); hand force ramped in over 0.5 s" \
+      --ylabel "pad depth under the skin (mm; the device's stop at 25 mm)" \
+      --title "$1, scenario $2, 1 kHz: depth of the press per chain" \
+      --out "$figures/stability_trace_${1}_$2.png"
+  done
   ls -1 "$figures"/*.png
 }
 
@@ -83,9 +122,9 @@ if [[ $charts_only == 0 ]]; then
     cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
   fi
   cmake --build "$build" --parallel "$jobs" \
-    --target study_speed_accuracy study_pop_through study_passivity
+    --target "${studies[@]/#/study_}"
   mkdir -p "$data"
-  for study in speed_accuracy pop_through passivity; do
+  for study in "${studies[@]}"; do
     echo "== study_$study ${quick[*]}"
     SECONDS=0
     "$build/tests/bench/study_$study" --out "$data" "${quick[@]}" | tee "$data/$study.log"
@@ -105,7 +144,7 @@ if [[ -n ${DISPLAY:-} ]]; then
 elif command -v xvfb-run >/dev/null; then
   # One virtual display for all charts.
   PALP_BUILD_DIR=$build PALP_FIGURES_DIR=$figures PALP_STUDIES_DIR=$data \
-    xvfb-run -a "$0" --charts-only
+    xvfb-run -a "$0" --charts-only "${studies[@]}"
 else
   echo "no display and no xvfb-run: install xvfb (deploy/install-deps.sh) to render charts" >&2
   exit 1
@@ -113,9 +152,14 @@ fi
 
 if [[ $charts_only == 0 ]]; then
   echo "== measured (this machine: $(nproc) cores, $(uname -m))"
-  sed -n '/Pareto front/,/^  [a-z]*: \|^wrote/p' "$data/speed_accuracy.log" | grep -v "^wrote" || true
-  grep -h -E "static threshold|push  finger" "$data/pop_through.log" || true
-  awk '/stable from/ { key = $1 " " $2 " " $3; n[key]++; if ($0 ~ /never/) bad[key]++ }
+  want speed_accuracy &&
+    { sed -n '/Pareto front/,/^  [a-z]*: \|^wrote/p' "$data/speed_accuracy.log" | grep -v "^wrote" || true; }
+  want pop_through && { grep -h -E "static threshold|push  finger" "$data/pop_through.log" || true; }
+  # (each line above is skipped when its study was not asked for)
+  want passivity && awk '/stable from/ { key = $1 " " $2 " " $3; n[key]++; if ($0 ~ /never/) bad[key]++ }
        END { for (k in n) printf "passivity %-32s %d of %d hand forces unstable at every rate\n",
                                  k, bad[k], n[k] }' "$data/passivity.log" | sort
+  want stability && awk -F, 'NR > 1 && $1 == "all" && $3 >= 1000 {
+       printf "stability %-13s %5d Hz: worst p2p %.3g mm (%s), worst step %.3g x bound, %d of %d runs not held\n",
+              $2, $3, $4, $5, $7, $8, $9 }' "$data/stability_summary.csv" || true
 fi

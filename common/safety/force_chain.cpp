@@ -1,0 +1,83 @@
+// The force chain from model to device: see force_chain.hpp.
+#include "safety/force_chain.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace palp {
+
+ForceChainOutput run_force_chain(ForceChainState& s, const ForceChainConfig& config,
+                                 const DeviceProfile& limits, const Vec3d& model_force,
+                                 const Vec3d& model_torque, const Vec3d& position, double dt) {
+  ForceChainOutput out;
+  const double t = std::isfinite(dt) ? std::clamp(dt, 0.0, kMaxFilterDt) : 0.0;
+
+  // limits, on the limiter's own previous output (engagement scales after it, not inside it)
+  SafetyInput in;
+  in.force = model_force;
+  in.torque = model_torque;
+  in.prev_force = s.limited_prev;
+  in.position = position;
+  in.prev_position = s.have_prev ? s.position_prev : position;
+  in.dt = t;
+  const SafetyOutput limited = apply_device_limits(limits, in);
+  out.status = limited.status;
+  s.limited_prev = limited.force;
+  Vec3d force = limited.force, torque = limited.torque;
+
+  // engagement: nothing until the model's force is small, then a ramp
+  if (config.engage) {
+    s.engagement = engage(s.engagement, norm(model_force), t, *config.engage);
+    force = force * s.engagement.gain;
+    torque = torque * s.engagement.gain;
+    if (!s.engagement.engaged()) out.status |= kSafetyEngaging;
+  }
+
+  // velocity, low-pass filtered (encoder steps differentiated are noise the damper must not see)
+  if (s.have_prev && t > 0.0 && is_finite(position)) {
+    const Vec3d raw = (position - s.position_prev) * (1.0 / t);
+    const double a = t / (config.velocity_filter_s + t);
+    s.velocity = s.velocity + (raw - s.velocity) * a;
+  }
+
+  // passivity: observe only once engaged; a damper that would reverse the force lets go instead
+  const bool engaged = !config.engage || s.engagement.engaged();
+  if (config.passivity && engaged) {
+    const PassivityOutput pc =
+        passivity_control(s.passivity, force, s.velocity, t, limits.damping_N_s_per_mm);
+    s.passivity = pc.state;
+    if (pc.damping_N_s_per_mm > 0.0) {
+      Vec3d damped = pc.force;
+      if (norm(force) > 0.0 && dot(damped, force) < 0.0) damped = Vec3d{};  // never pull
+      force = damped;
+      out.status |= kSafetyPassivity;
+      out.damping_N_s_per_mm = pc.damping_N_s_per_mm;
+      out.dissipated_mJ = pc.dissipated_mJ;
+    }
+  } else {
+    s.passivity = PassivityState{};
+  }
+
+  // the step bound on what reaches the device, then the clamp
+  const Filtered stepped = limit_rate(force, s.written_prev, t, limits.max_force_rate_N_per_s);
+  out.status |= stepped.status;
+  const Filtered clamped = clamp_force(stepped.value, limits.max_force_N);
+  out.status |= clamped.status;
+  out.force = clamped.value;
+  out.torque = torque;
+  s.written_prev = out.force;
+  s.position_prev = position;
+  s.have_prev = true;
+  return out;
+}
+
+void reset_force_chain(ForceChainState& s) {
+  s.limited_prev = Vec3d{};
+  s.written_prev = Vec3d{};
+  s.have_prev = false;
+  s.velocity = Vec3d{};
+  s.engagement = Engagement{};
+  s.passivity = PassivityState{};
+}
+
+}  // namespace palp

@@ -1,0 +1,56 @@
+// The chain between the force model and a device, every tick, as one pure step the real-time
+// loop and the closed-loop studies share (so a study measures exactly what a hand gets):
+//
+//   model force ─► limits (profile lowered to what the device declares: clamp, stiffness and rate
+//   limits on the limiter's own previous output) ─► engagement gain (from the model's force) ─►
+//   passivity controller (only once engaged; filtered velocity; never pulls: a damper that would
+//   reverse the force lets go instead) ─► step bound on what was written last ─► clamp ─► device
+//
+// The state is a value the caller keeps; reset_force_chain() after a fault or a model change
+// (zero written, engagement and observer restart).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "base/vec.hpp"
+#include "safety/engagement.hpp"
+#include "safety/passivity.hpp"
+#include "safety/safety.hpp"
+
+namespace palp {
+
+struct ForceChainConfig {
+  std::optional<EngageParams> engage;  // unset: no engagement
+  bool passivity = false;              // the passivity observer/controller
+  double velocity_filter_s = 0.005;    // time constant of the velocity the controller damps
+};
+
+struct ForceChainState {
+  Vec3d limited_prev{};  // the limiter's own last output (its step limits follow it)
+  Vec3d written_prev{};  // what the device was written last tick
+  Vec3d position_prev{};
+  bool have_prev = false;
+  Vec3d velocity{};  // filtered device velocity, mm/s
+  Engagement engagement;
+  PassivityState passivity;
+};
+
+struct ForceChainOutput {
+  Vec3d force{}, torque{};
+  std::uint32_t status = kSafetyOk;
+  double damping_N_s_per_mm = 0.0;  // the passivity controller's, this tick
+  double dissipated_mJ = 0.0;
+};
+
+// One tick: `limits` (the profile, already lowered to the device's declarations), the model's
+// device force and torque, the device position (mm, device frame), `dt` (s).
+ForceChainOutput run_force_chain(ForceChainState& state, const ForceChainConfig& config,
+                                 const DeviceProfile& limits, const Vec3d& model_force,
+                                 const Vec3d& model_torque, const Vec3d& position, double dt);
+
+// After a fault, a replug, a model change or a pause: zero written, engagement and observer
+// restart, the next position starts the velocity afresh.
+void reset_force_chain(ForceChainState& state);
+
+}  // namespace palp

@@ -1,0 +1,384 @@
+// Stability of palpd's default force chain in closed loop with a hand: the chain of
+// HapticLoop::step (device limits, engagement, passivity controller, clamp) against saturation
+// alone and against the stiffness limiter alone, per device profile, at update rates from 0.5 to
+// 10 kHz.
+//
+// The closed loop is that of study_passivity (closed_loop.hpp): one degree of freedom along the
+// skin normal, a device class (mass, viscous damping, encoder resolution), a hand coupled by the
+// grip and pushing with a set force (ramped in over 0.5 s), the force model (finger:1, printed
+// bone law, palp::tick) ticked on the quantised position, its force held over the period while
+// both masses move (integrated at 100 kHz). Added here: the device's workspace ends 25 mm under
+// the skin (a stiff stop, 10 N/mm and 20 N s/m, part of the mechanism, not rendered), so a hand
+// the rendered force cannot hold comes to rest there instead of travelling on.
+//
+// Chains (the force written to the device; the declared force is 0, so the profile is unchanged):
+//   saturation  clamp to the profile's max force only (the device's own limit);
+//   limiter     palp::apply_device_limits (clamp, stiffness limit, rate limit, clamp): palpd's
+//               chain when a profile was named, before engagement and passivity;
+//   palpd       the default chain, palp::run_force_chain as HapticLoop::step runs it: limits,
+//   engagement
+//               (EngageParams{0.2, 1.5}, gain from the model's force), passivity_control with the
+//               profile's damping on the encoder velocity, clamp_force when it damped.
+//   palpd-engaged  the same chain with its engagement ramp already over when the run starts (as
+//               after 1.5 s in free air), so the hand meets the chain fully engaged.
+// A fault zeroes the force and resets as the loop does: model state, engagement, passivity
+// state, previous force 0, previous position the current one.
+//
+// Scenarios (3 s each):
+//   a    skin, hand 50 % of max force
+//   b30  skin over a bone plate 10 mm deep, hand 30 % of max
+//   b90  the same, hand 90 % of max
+//   c    skin, hand 150 % of max (beyond what the device can render)
+//   d    skin, hand 50 %; the hand lets go (force 0) for 0.2 s at t = 1.5 s, then pushes again
+//   e    skin, hand 50 %; a watchdog fault zeroes the force for 10 ms at t = 1.5 s
+//
+// Per run (stability.csv):
+//   p2p_mm        peak-to-peak device position over the last 0.5 s (2.5-3 s)
+//   inj_mJ        energy injected by the rendered environment over 1.5-3 s: the work its force did
+//                 on the device plus the change of the potential of the static law clamped to the
+//                 max force (0 for a passive rendering of that law; nan while palpd holds the
+//                 force off, where that law is not what is rendered)
+//   max_step_N    largest change of the written force from one tick to the next (the fault's own
+//                 drop to zero left out), against step_bound_N = max_force_rate * tick
+//   engage_s      time from start until the written force first reaches 90 % of the hand force
+//                 (of the max force when the hand pushes more; nan: never)
+//   fault_step_N  (e) largest per-tick change once the fault has cleared
+//   max_depth_mm, end_depth_mm   deepest pad depth under the skin, and its mean over the last
+//                 0.5 s; depth_eq_mm: where the static law holds the hand force (nan beyond the
+//                 max force); held: end_depth_mm no more than 1 mm deeper than that
+//   engaged_end   the engagement gain at the end (1 for the other chains)
+//   min_force_N   the most negative written force (< 0: the device pulls the pad into the skin)
+//   pc_ticks, pc_mJ   ticks on which the passivity controller damped, and what it dissipated
+// the worst case per profile (and over all profiles), chain and rate (stability_summary.csv:
+// largest p2p and injected energy over a, b30, b90 and d, largest step / bound and the number of
+// runs not held over all six), and traces of the device depth and written force for the touch
+// and falcon at 1 kHz (stability_trace.csv, every 1 ms).
+//
+//   study_stability [--out DIR] [--quick]     (--quick: 0.5, 1 and 10 kHz only)
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "bench/closed_loop.hpp"
+#include "bench/study_util.hpp"
+#include "safety/engagement.hpp"
+#include "safety/force_chain.hpp"
+#include "safety/passivity.hpp"
+#include "safety/safety.hpp"
+
+namespace palp::study {
+namespace {
+
+constexpr double kRampS = 0.5, kEndS = 3.0;
+constexpr double kEnergyFromS = 1.5, kCycleFromS = 2.5;
+constexpr double kEventS = 1.5, kLetGoS = 0.2, kFaultS = 0.010;
+constexpr double kStopDepthMm = 25.0, kStopNPerMm = 10.0, kStopNsPerM = 20.0;
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+
+enum class Chain { Saturation, Limiter, Palpd, PalpdEngaged };
+const char* chain_name(Chain c) {
+  switch (c) {
+    case Chain::Saturation:
+      return "saturation";
+    case Chain::Limiter:
+      return "limiter";
+    case Chain::Palpd:
+      return "palpd";
+    case Chain::PalpdEngaged:
+      return "palpd-engaged";
+  }
+  return "?";
+}
+
+struct Scenario {
+  const char* name;
+  const char* what;
+  bool bone;
+  double hand_frac;
+  bool let_go;  // (d)
+  bool fault;   // (e)
+};
+constexpr Scenario kScenarios[] = {
+    {"a", "skin, hand 50%", false, 0.5, false, false},
+    {"b30", "bone 10 mm deep, hand 30%", true, 0.3, false, false},
+    {"b90", "bone 10 mm deep, hand 90%", true, 0.9, false, false},
+    {"c", "skin, hand 150%", false, 1.5, false, false},
+    {"d", "skin, hand 50%, lets go 0.2 s", false, 0.5, true, false},
+    {"e", "skin, hand 50%, fault 10 ms", false, 0.5, false, true},
+};
+
+struct RunResult {
+  double p2p_mm = 0.0, inj_mJ = 0.0, max_step_N = 0.0, engage_s = kNan, fault_step_N = kNan;
+  double max_depth_mm = 0.0, end_depth_mm = 0.0, engaged_end = 1.0;
+  long pc_ticks = 0;
+  double pc_mJ = 0.0;
+  double min_force_N = 0.0;  // most negative written force (pulling the pad into the skin)
+};
+
+// Worst case over the scenarios of one profile (or all of them), chain and rate.
+struct Worst {
+  double p2p_mm = 0.0, inj_mJ = -1e300, step_ratio = 0.0;
+  std::string p2p_scenario;
+  int not_held = 0, runs = 0;
+  void add(const std::string& scenario, const RunResult& r, double ratio, bool held,
+           bool cycle_scenario) {
+    ++runs;
+    if (cycle_scenario && r.p2p_mm > p2p_mm) p2p_mm = r.p2p_mm, p2p_scenario = scenario;
+    if (cycle_scenario && !std::isnan(r.inj_mJ)) inj_mJ = std::max(inj_mJ, r.inj_mJ);
+    step_ratio = std::max(step_ratio, ratio);
+    if (!held) ++not_held;
+  }
+};
+
+struct TracePoint {
+  double t_s, depth_mm, force_N;
+};
+
+RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass& dc,
+              const Hand& hand, double rate, Chain chain, const Scenario& sc,
+              std::vector<TracePoint>* trace) {
+  env.reset_state();
+  const double period = 1.0 / rate;
+  const int sub = std::max(1, static_cast<int>(std::lround(period / kSimDt)));
+  const double dt = period / sub;
+  const double push_N = sc.hand_frac * profile.max_force_N;
+  const double surface_z = env.device_z_for_depth(0.0);
+  const double stop_z = env.device_z_for_depth(kStopDepthMm);
+  const EngageParams engage_params{0.2, 1.5};
+  // Start at rest with the pad 0.5 mm above the skin.
+  double xd = env.device_z_for_depth(-0.5), vd = 0.0;
+  double xh = xd, vh = 0.0;
+  const double q = dc.encoder_mm;
+  // The loop's state: what was written last tick, the position then, engagement, passivity.
+  double prev_force = 0.0, prev_pos = xd;
+  bool prev_valid = false;
+  // palpd's chains run palp::run_force_chain, the very step HapticLoop::step runs.
+  ForceChainConfig chain_config;
+  chain_config.engage = engage_params;
+  chain_config.passivity = true;
+  ForceChainState chain_state;
+  if (chain == Chain::PalpdEngaged) chain_state.engagement = Engagement{false, 1.0};
+
+  RunResult r;
+  const double engage_target = 0.9 * std::min(push_N, profile.max_force_N);
+  double work = 0.0, u_start = 0.0;  // J, over the energy window
+  bool measuring = false, faulted = false, after_fault = false;
+  double cyc_min = 1e300, cyc_max = -1e300, depth_sum = 0.0;
+  long depth_n = 0;
+  double next_trace = 0.0;
+  const long ticks = std::lround(kEndS * rate);
+  for (long n = 0; n < ticks; ++n) {
+    const double t = static_cast<double>(n) * period;
+    const double xq = q * std::round(xd / q);
+    const bool fault_now = sc.fault && t >= kEventS && t < kEventS + kFaultS - 1e-9;
+    double f_out = 0.0;
+    if (fault_now) {
+      // The loop's fault path: zero, then reset everything that carries over.
+      env.reset_state();
+      reset_force_chain(chain_state);
+      chain_state.position_prev = {0.0, 0.0, xq};
+      chain_state.have_prev = true;
+      prev_force = 0.0;
+      prev_pos = xq;
+      prev_valid = true;
+      faulted = true;
+    } else {
+      const double f_model = env.tick_force(xq);
+      const bool palpd = chain == Chain::Palpd || chain == Chain::PalpdEngaged;
+      if (chain == Chain::Saturation) {
+        f_out = std::clamp(f_model, -profile.max_force_N, profile.max_force_N);
+      } else if (!palpd) {
+        SafetyInput in;
+        in.force = {0.0, 0.0, f_model};
+        in.prev_force = {0.0, 0.0, prev_force};
+        in.position = {0.0, 0.0, xq};
+        in.prev_position = {0.0, 0.0, prev_valid ? prev_pos : xq};
+        in.dt = period;
+        f_out = apply_device_limits(profile, in).force.z;
+      } else {
+        const ForceChainOutput out = run_force_chain(
+            chain_state, chain_config, profile, {0.0, 0.0, f_model}, {}, {0.0, 0.0, xq}, period);
+        f_out = out.force.z;
+        if (out.damping_N_s_per_mm > 0.0) {
+          ++r.pc_ticks;
+          r.pc_mJ += out.dissipated_mJ;
+        }
+      }
+      r.min_force_N = std::min(r.min_force_N, f_out);
+      const double step = std::fabs(f_out - prev_force);
+      r.max_step_N = std::max(r.max_step_N, step);
+      if (faulted) {
+        after_fault = true;
+        r.fault_step_N = std::isnan(r.fault_step_N) ? step : std::max(r.fault_step_N, step);
+      }
+      prev_force = f_out;
+      prev_pos = xq;
+      prev_valid = true;
+    }
+    if (std::isnan(r.engage_s) && std::fabs(f_out) >= engage_target) r.engage_s = t;
+    if (!measuring && t >= kEnergyFromS - 1e-9) {
+      measuring = true;
+      u_start = env.potential(xd, profile.max_force_N);
+    }
+    // Plant: device and hand, force held over the period.
+    double push = push_N * std::min(1.0, t / kRampS);
+    if (sc.let_go && t >= kEventS && t < kEventS + kLetGoS - 1e-9) push = 0.0;
+    for (int s = 0; s < sub; ++s) {
+      const double grip = hand.grip_N_per_mm * (xh - xd) + hand.grip_Ns_per_m * (vh - vd) * 1e-3;
+      const double stop = xd < stop_z ? kStopNPerMm * (stop_z - xd) - kStopNsPerM * vd * 1e-3 : 0.0;
+      const double fd = f_out + grip + stop - dc.damping_Ns_per_m * vd * 1e-3;
+      const double fh = -push - grip - hand.arm_Ns_per_m * vh * 1e-3;
+      vd += dt * 1e3 * fd / dc.mass_kg;
+      vh += dt * 1e3 * fh / hand.mass_kg;
+      const double dx = dt * vd;
+      xd += dx;
+      xh += dt * vh;
+      if (measuring) work += f_out * dx * 1e-3;
+      const double ts = t + (s + 1) * dt;
+      r.max_depth_mm = std::max(r.max_depth_mm, surface_z - xd);
+      if (ts > kCycleFromS) {
+        cyc_min = std::min(cyc_min, xd);
+        cyc_max = std::max(cyc_max, xd);
+        depth_sum += surface_z - xd;
+        ++depth_n;
+      }
+      if (trace && ts >= next_trace - 1e-12) {
+        trace->push_back({ts, surface_z - xd, f_out});
+        next_trace += 1e-3;
+      }
+    }
+  }
+  const double u_end = env.potential(xd, profile.max_force_N);
+  if (chain == Chain::Palpd || chain == Chain::PalpdEngaged)
+    r.engaged_end = chain_state.engagement.gain;
+  // Work done on the device plus what a passive rendering of the (clamped) law would have stored.
+  r.inj_mJ = r.engaged_end >= 1.0 ? (work - (u_start - u_end)) * 1e3 : kNan;
+  r.p2p_mm = cyc_max - cyc_min;
+  r.end_depth_mm = depth_n ? depth_sum / static_cast<double>(depth_n) : 0.0;
+  if (sc.fault && !after_fault) r.fault_step_N = 0.0;
+  return r;
+}
+
+std::string fmt(double v, const char* f) {
+  if (std::isnan(v)) return "n/a";
+  char b[32];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+}  // namespace palp::study
+
+int main(int argc, char** argv) {
+  using namespace palp;
+  using namespace palp::study;
+  const Flags flags = parse_flags(argc, argv, "study_stability [--out DIR] [--quick]");
+  const double t_start = now_seconds();
+
+  const PressScene press = make_press_scene();
+  const RibMaps& maps = press.maps;
+  Environment skin(std::make_shared<const FieldSampler>(maps.surf), maps.skin_level, press.cx,
+                   press.cy);
+  Environment bone(std::make_shared<const FieldSampler>(maps.surf, maps.bone), maps.skin_level,
+                   press.cx, press.cy);
+  std::printf("stability: skin at z = %.2f, bone plate top %.2f mm under it, stop at %.0f mm\n",
+              maps.skin_level, maps.skin_level - maps.rib_top, kStopDepthMm);
+
+  const std::vector<double> rates = flags.quick ? std::vector<double>{500, 1000, 10000}
+                                                : std::vector<double>{500, 1000, 2000, 4000, 10000};
+  const Hand hand;
+
+  Csv csv(flags.out_dir + "/stability.csv",
+          {"profile",  "chain",        "scenario",     "what",         "rate_hz",      "hand_frac",
+           "hand_N",   "p2p_mm",       "inj_mJ",       "max_step_N",   "step_bound_N", "step_ratio",
+           "engage_s", "fault_step_N", "max_depth_mm", "end_depth_mm", "engaged_end",  "pc_ticks",
+           "pc_mJ",    "depth_eq_mm",  "min_force_N",  "goal_p2p",     "goal_energy",  "goal_step",
+           "held",     "series"});
+  Csv trace_csv(flags.out_dir + "/stability_trace.csv",
+                {"profile", "chain", "scenario", "rate_hz", "t_s", "depth_mm", "force_N"});
+  Csv summary(flags.out_dir + "/stability_summary.csv",
+              {"profile", "chain", "rate_hz", "p2p_worst_mm", "p2p_worst_scenario", "inj_worst_mJ",
+               "step_ratio_worst", "not_held", "runs"});
+  std::map<std::tuple<std::string, std::string, double>, Worst> worst;
+  int runs = 0;
+  std::printf("  %-15s %-13s %-4s %6s %9s %9s %8s %8s %8s %8s %8s\n", "profile", "chain", "scen",
+              "rate", "p2p_mm", "inj_mJ", "step_N", "bound_N", "engage_s", "fault_N", "depth");
+  for (const DeviceClass& dc : kDeviceClasses) {
+    const DeviceProfile& profile = device_profile(dc.profile);
+    for (Chain chain : {Chain::Saturation, Chain::Limiter, Chain::Palpd, Chain::PalpdEngaged}) {
+      for (const Scenario& sc : kScenarios) {
+        Environment& env = sc.bone ? bone : skin;
+        for (double rate : rates) {
+          const bool traced = rate == 1000.0 && (std::string(dc.profile) == "touch" ||
+                                                 std::string(dc.profile) == "falcon");
+          std::vector<TracePoint> trace;
+          const RunResult r =
+              run(env, profile, dc, hand, rate, chain, sc, traced ? &trace : nullptr);
+          ++runs;
+          const double bound = profile.max_force_rate_N_per_s / rate;
+          const double push = sc.hand_frac * profile.max_force_N;
+          const bool goal_p2p = r.p2p_mm < 0.1;
+          const bool goal_energy = !(r.inj_mJ > 0.0);  // nan (force held off) counts as met
+          const bool goal_step = r.max_step_N <= bound * (1.0 + 1e-9);
+          // The static law's equilibrium for the hand force (none beyond the max force: the
+          // device then rests on its stop); "held": the press ends no more than 1 mm deeper.
+          double depth_eq = kNan, k_eq = kNan;
+          if (push < profile.max_force_N) env.equilibrium(push, depth_eq, k_eq);
+          const bool held = std::isnan(depth_eq) || r.end_depth_mm <= depth_eq + 1.0;
+          csv.row({std::string(dc.profile),
+                   chain_name(chain),
+                   std::string(sc.name),
+                   std::string(sc.what),
+                   rate,
+                   sc.hand_frac,
+                   push,
+                   r.p2p_mm,
+                   r.inj_mJ,
+                   r.max_step_N,
+                   bound,
+                   r.max_step_N / bound,
+                   r.engage_s,
+                   r.fault_step_N,
+                   r.max_depth_mm,
+                   r.end_depth_mm,
+                   r.engaged_end,
+                   static_cast<double>(r.pc_ticks),
+                   r.pc_mJ,
+                   depth_eq,
+                   r.min_force_N,
+                   goal_p2p ? 1.0 : 0.0,
+                   goal_energy ? 1.0 : 0.0,
+                   goal_step ? 1.0 : 0.0,
+                   held ? 1.0 : 0.0,
+                   std::string(dc.profile) + ", " + chain_name(chain)});
+          // Worst p2p and energy over the presses that should hold (a, b30, b90, d); steps and
+          // holding over all six.
+          const bool cycle_scenario = sc.name != std::string("c") && sc.name != std::string("e");
+          for (const std::string& who : {std::string(dc.profile), std::string("all")})
+            worst[{who, chain_name(chain), rate}].add(sc.name, r, r.max_step_N / bound, held,
+                                                      cycle_scenario);
+          for (const TracePoint& p : trace)
+            trace_csv.row({std::string(dc.profile), chain_name(chain), std::string(sc.name), rate,
+                           p.t_s, p.depth_mm, p.force_N});
+          std::printf("  %-15s %-13s %-4s %6.0f %9.4f %9s %8.3f %8.3f %8s %8s %8.2f\n", dc.profile,
+                      chain_name(chain), sc.name, rate, r.p2p_mm, fmt(r.inj_mJ, "%.4f").c_str(),
+                      r.max_step_N, bound, fmt(r.engage_s, "%.3f").c_str(),
+                      fmt(r.fault_step_N, "%.3f").c_str(), r.max_depth_mm);
+        }
+      }
+    }
+  }
+  for (const auto& [key, w] : worst)
+    summary.row({std::get<0>(key), std::get<1>(key), std::get<2>(key), w.p2p_mm, w.p2p_scenario,
+                 w.inj_mJ, w.step_ratio, static_cast<double>(w.not_held),
+                 static_cast<double>(w.runs)});
+  std::printf("stability: %d runs, %.1f s, wrote %s, %s, %s\n", runs, now_seconds() - t_start,
+              csv.path().c_str(), summary.path().c_str(), trace_csv.path().c_str());
+  return 0;
+}
