@@ -242,6 +242,14 @@ class UsbHapticTest : public ::testing::Test {
     if (!UsbTestbed::in_mock_environment()) GTEST_SKIP() << "needs umockdev-wrapper";
     testbed_ = std::make_unique<UsbTestbed>();
   }
+  // The default usb-haptic device, configured, activated and streaming (the firmware powered on).
+  static std::unique_ptr<Device> present_device() {
+    std::unique_ptr<Device> device = make_device("usb-haptic:1209:0001");
+    EXPECT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
+    EXPECT_EQ(device->activate(), DeviceStatus::Ok);
+    EXPECT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
+    return device;
+  }
   static LoopConfig loop_config() {
     LoopConfig c;
     c.realtime = false;
@@ -503,10 +511,8 @@ TEST_F(UsbHapticTest, ClientsAreToldWhenTheDeviceComesAndGoes) {
 TEST_F(UsbHapticTest, RegisteredDeviceFeelsTheSceneForceInItsOwnFrame) {
   Firmware firmware(*testbed_);
   firmware.power_on(1000.0);
-  std::unique_ptr<Device> device = make_device("usb-haptic:1209:0001");
-  ASSERT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
-  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
-  ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
+  std::unique_ptr<Device> device = present_device();
+  ASSERT_EQ(device->state(), DeviceState::Present);
   auto model = testing::ball_model();
   LoopConfig lc = loop_config();
   lc.registration.rotation = rotation_from_axes(PatientFrame{}, "IAR");
@@ -570,10 +576,8 @@ TEST_F(UsbHapticTest, ADeviceDeclaring3NeverGetsMoreThan3N) {
     SCOPED_TRACE(loop_limits ? "falcon profile in the loop" : "no limits in the loop");
     Firmware firmware(*testbed_, ohp::kVersionMajor, 3'000'000);
     firmware.power_on(1000.0);
-    std::unique_ptr<Device> device = make_device("usb-haptic:1209:0001");
-    ASSERT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
-    ASSERT_EQ(device->activate(), DeviceStatus::Ok);
-    ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
+    std::unique_ptr<Device> device = present_device();
+    ASSERT_EQ(device->state(), DeviceState::Present);
     EXPECT_EQ(device->declared_max_force_N(), 3.0);
     EXPECT_EQ(device->declared_limits().max_stiffness_N_per_mm, 0.0);  // a 1.0 device
     LoopConfig lc = loop_config();
@@ -616,10 +620,8 @@ TEST_F(UsbHapticTest, ProtocolOneOneDeclaresStiffnessAndDamping) {
   firmware.stiffness_N_per_m_ = 400;
   firmware.damping_mN_s_per_m_ = 4000;
   firmware.power_on(1000.0);
-  std::unique_ptr<Device> device = make_device("usb-haptic:1209:0001");
-  ASSERT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
-  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
-  ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
+  std::unique_ptr<Device> device = present_device();
+  ASSERT_EQ(device->state(), DeviceState::Present);
   const DeclaredLimits d = device->declared_limits();
   EXPECT_DOUBLE_EQ(d.max_force_N, 3.3);
   EXPECT_DOUBLE_EQ(d.max_stiffness_N_per_mm, 0.4);
