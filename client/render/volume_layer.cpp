@@ -31,15 +31,20 @@ VolumeLayer::VolumeLayer(vtkRenderer* renderer, PresetId preset, bool deformatio
 }
 
 bool VolumeLayer::is_new(const LatestState& state) const {
-  return state.volume && (state.volume != source_ || state.connection != connection_);
+  return state.volume && (state.volume != seen_ || state.connection != connection_);
 }
 
 bool VolumeLayer::load(const LatestState& state) {
-  source_ = state.volume;
+  seen_ = state.volume;
   connection_ = state.connection;
-  const RenderVolume& source = *source_;
+  const RenderVolume& source = *state.volume;
   const std::int64_t n = source.dims[0] * source.dims[1] * source.dims[2];
-  if (n <= 0 || static_cast<std::int64_t>(source.d_surf.size()) != n) return false;
+  // A volume whose arrays do not match its dimensions is never kept: everything that samples
+  // source() (the shadow, the deformer) indexes by the dimensions.
+  if (n <= 0 || static_cast<std::int64_t>(source.d_surf.size()) != n ||
+      (!source.d_bone.empty() && static_cast<std::int64_t>(source.d_bone.size()) != n))
+    return false;
+  source_ = state.volume;
   render_scalars_ = compose_render_scalar(source.d_surf, source.d_bone);
   image_->SetDimensions(static_cast<int>(source.dims[0]), static_cast<int>(source.dims[1]),
                         static_cast<int>(source.dims[2]));

@@ -63,6 +63,7 @@ class VolumeLayer {
   bool deformation_;
   DeformerParams deformer_params_;
   std::shared_ptr<const RenderVolume> source_;  // the volume the image was built from
+  std::shared_ptr<const RenderVolume> seen_;    // the last volume offered (kept or refused)
   std::uint64_t connection_ = 0;
   std::vector<float> render_scalars_;  // the mapper's buffer
   vtkNew<vtkImageData> image_;

@@ -307,6 +307,29 @@ TEST(RenderScene, PlacedDeviceShowsItsWorkspace) {
   EXPECT_GT(changed, 50u);
 }
 
+// A volume whose arrays do not match its dimensions is refused and never sampled (the shadow and
+// the deformer index by the dimensions): no volume, no crash, and a good one after it loads.
+TEST(RenderScene, VolumeWithMismatchedArraysIsRefused) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  SceneSettings settings = quiet_settings();
+  settings.tool_glyphs = true;  // the shadow samples the volume
+  Offscreen view(settings);
+  LatestState state = live_state();
+  auto bad = std::make_shared<RenderVolume>(*ball_volume());
+  bad->d_surf.resize(bad->d_surf.size() / 2);
+  state.volume = bad;
+  view.draw(state);
+  EXPECT_FALSE(view.scene->has_volume());
+  auto bad_bone = std::make_shared<RenderVolume>(*ball_volume());
+  bad_bone->d_bone.assign(3, 1.0f);
+  state.volume = bad_bone;
+  view.draw(state);
+  EXPECT_FALSE(view.scene->has_volume());
+  state.volume = ball_volume();
+  view.draw(state);
+  EXPECT_TRUE(view.scene->has_volume());
+}
+
 TEST(RenderScene, PressingDeformsTheSkinInsideTheRoiOnly) {
   if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
   Offscreen view(quiet_settings());
