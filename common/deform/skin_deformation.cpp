@@ -40,6 +40,8 @@ SkinDeformer::SkinDeformer(std::array<std::int64_t, 3> dims, std::array<double, 
                      std::to_string(original_.size()) + " values, not dims[0]*dims[1]*dims[2]");
   if (!(params_.roi_margin_mm >= 0.0 && std::isfinite(params_.roi_margin_mm)))
     throw UsageError("skin deformation: roi_margin_mm must be finite and non-negative");
+  if (!(params_.max_displacement_mm > 0.0 && std::isfinite(params_.max_displacement_mm)))
+    throw UsageError("skin deformation: max_displacement_mm must be finite and positive");
 }
 
 Vec3d SkinDeformer::displacement_at(std::int64_t i, std::int64_t j, std::int64_t k) const {
@@ -76,7 +78,10 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
       element[a] = inside ? static_cast<std::int64_t>(index) : 0;
     }
     if (!inside) continue;
-    const Vec3d displacement = contact.x - contact.p;
+    Vec3d displacement = contact.x - contact.p;
+    const double length = norm(displacement);
+    if (length > params_.max_displacement_mm)
+      displacement = displacement * (params_.max_displacement_mm / length);
     anchors_.push_back({element, displacement});
     result.mean_anchor_displacement += displacement;
     const std::array<double, 3> d{displacement.x, displacement.y, displacement.z};

@@ -27,6 +27,9 @@ struct DeformerParams {
   // The ROI: the anchors' bounding box grown by this much, and at least by what the largest
   // anchor displacement needs to fade to 0 through the links (plus the relaxation's reach).
   double roi_margin_mm = 20.0;
+  // An anchor moves at most this far (its direction kept): no tool presses deeper, and a contact
+  // far from its proxy (a hostile or broken stream) must not make the ROI the whole volume.
+  double max_displacement_mm = 40.0;
   ChainMailParams chainmail;
 };
 

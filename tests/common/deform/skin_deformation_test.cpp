@@ -209,6 +209,32 @@ TEST(SkinDeformer, SkipsContactsOutsideTheVolume) {
   EXPECT_EQ(std::memcmp(out.data(), deformer.original().data(), out.size() * sizeof(float)), 0);
 }
 
+// A contact a million millimetres from its proxy (a broken or hostile stream) moves its anchor
+// only max_displacement_mm, direction kept, and the ROI stays the size that needs.
+TEST(SkinDeformer, FarContactIsClampedToWhatAToolCanDo) {
+  DeformerParams params;
+  params.max_displacement_mm = 4.0;
+  SkinDeformer deformer(kDims, kSpacing, linear_volume(), params);
+  std::vector<float> out = deformer.original();
+  const Vec3d p{24.0, 22.0, 20.0};
+  const std::vector<DeformContact> far = {{p + Vec3d{0, 0, -1e6}, p}};
+  const DeformResult result = deformer.update(far, out);
+  ASSERT_TRUE(result.active);
+  const Index3 v = nearest_voxel(p);
+  EXPECT_EQ(deformer.displacement_at(v[0], v[1], v[2]), (Vec3d{0, 0, -4.0}));
+  DeformResult near_result;
+  {
+    SkinDeformer reference(kDims, kSpacing, linear_volume(), params);
+    std::vector<float> out2 = reference.original();
+    const std::vector<DeformContact> near = {{p + Vec3d{0, 0, -4.0}, p}};
+    near_result = reference.update(near, out2);
+  }
+  EXPECT_EQ(result.roi_lo, near_result.roi_lo);  // the same box as an honest 4 mm press
+  EXPECT_EQ(result.roi_hi, near_result.roi_hi);
+  params.max_displacement_mm = 0.0;
+  EXPECT_THROW(SkinDeformer(kDims, kSpacing, linear_volume(), params), UsageError);
+}
+
 TEST(SkinDeformer, NoAllocationPerUpdateAfterWarmUp) {
   SkinDeformer deformer(kDims, kSpacing, linear_volume());
   std::vector<float> out = deformer.original();
