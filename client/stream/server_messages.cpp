@@ -105,7 +105,7 @@ void StreamClient::Impl::on_scene(Connection& c, const v1::SceneInfo& s) {
 
 void StreamClient::Impl::on_volume(Connection& c, const v1::VolumeChunk& chunk) {
   net::VolumeAssembly::Added added =
-      c.assembly.add(chunk, opts.volume_max_dim > 0, c.scene_grid ? &*c.scene_grid : nullptr);
+      c.assembly.add(chunk, opts.volume_max_dim, c.scene_grid ? &*c.scene_grid : nullptr);
   std::lock_guard lock(shared_mutex);
   shared.link.volume_progress = added.progress;
   if (added.volume) shared.volume = std::move(added.volume);

@@ -34,8 +34,9 @@ void copy_floats(const std::string& bytes, float* out) {
 
 }  // namespace
 
-VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, bool requested,
+VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uint32_t max_dim,
                                           const SceneGrid* scene) {
+  const bool requested = max_dim > 0;
   const std::string where = "volume chunk " + std::to_string(chunk.chunk_index()) + ": ";
   const auto bad = [&](const std::string& why) { return ProtocolViolation(where + why); };
   if (chunk.dims_size() != 3 || chunk.spacing_size() != 3) throw bad("needs 3 dims and spacings");
@@ -68,6 +69,25 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, bool req
         const double sp = scene->spacing[i] * chunk.step();
         if (std::abs(spacing[i] - sp) > 1e-6 * sp) throw bad("spacing does not match the scene");
       }
+    // Within what this client asked for, and chunk 0's own bytes what its slices need, before
+    // anything is allocated.
+    for (int i = 0; i < 3; ++i)
+      if (dims[i] > static_cast<std::int64_t>(max_dim))
+        throw bad("dimension " + std::to_string(dims[i]) + " along axis " + std::to_string(i) +
+                  ": this client asked for at most " + std::to_string(max_dim) + " a side");
+    if (chunk.k_begin() != 0)
+      throw bad("k_begin " + std::to_string(chunk.k_begin()) + ", expected 0");
+    if (chunk.k_count() < 1 || chunk.k_count() > dims[2])
+      throw bad("slices 0+" + std::to_string(chunk.k_count()) + " outside 0.." +
+                std::to_string(dims[2]));
+    const std::size_t bytes0 =
+        static_cast<std::size_t>(dims[0] * dims[1]) * chunk.k_count() * sizeof(float);
+    if (chunk.d_surf().size() != bytes0)
+      throw bad("d_surf has " + std::to_string(chunk.d_surf().size()) + " bytes, expected " +
+                std::to_string(bytes0));
+    if (!chunk.d_bone().empty() && chunk.d_bone().size() != bytes0)
+      throw bad("d_bone has " + std::to_string(chunk.d_bone().size()) + " bytes, expected " +
+                std::to_string(bytes0));
     const std::size_t voxels = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
     *this = VolumeAssembly{};
     active_ = true;

@@ -24,9 +24,11 @@ class VolumeAssembly {
   };
 
   // Validates a chunk against the first one, the scene and the bytes present, then copies it in.
-  // `requested`: this client asked for a render volume; `scene`: null before SceneInfo. Throws
+  // `max_dim`: the voxels per axis this client asked for at most (0: it asked for no volume);
+  // `scene`: null before SceneInfo. Nothing is allocated before chunk 0 is known to be
+  // consistent (dimensions within max_dim, its own bytes those its slices need). Throws
   // ProtocolViolation, or ResourceError when the volume does not fit in memory.
-  Added add(const v1::VolumeChunk& chunk, bool requested, const SceneGrid* scene);
+  Added add(const v1::VolumeChunk& chunk, std::uint32_t max_dim, const SceneGrid* scene);
 
   bool active() const { return active_; }  // chunk 0 received, the last chunk not yet
 

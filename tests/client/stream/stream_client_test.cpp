@@ -667,7 +667,16 @@ TEST(StreamClient, MalformedServerInputDropsTheConnectionWithAClearMessage) {
   bad_grid.mutable_scene()->mutable_grid()->set_spacing(1, -1.0);
   v1::ServerMessage frame;
   frame.mutable_frame()->set_seq(1);
+  // A scene of 300^3 at step 1 and a first chunk that matches it: far more than the client's 8
+  // a side. Refused before the 200 MB it claims is allocated.
+  v1::ServerMessage big_scene = scene8();
+  v1::ServerMessage big_chunk = chunk(0, 300, 0, 1);
+  for (int a = 0; a < 3; ++a) {
+    big_scene.mutable_scene()->mutable_grid()->set_dims(a, 300);
+    big_chunk.mutable_volume()->set_dims(a, 300);
+  }
   const std::vector<Case> cases = {
+      {"more than asked", {enc(big_scene), enc(big_chunk)}, "asked for at most 8 a side"},
       {"short d_surf", {enc(scene8()), enc(chunk(0, 2, 0, 4, 10))}, "d_surf has 10 bytes"},
       {"long d_surf", {enc(scene8()), enc(chunk(0, 2, 0, 4, 1025))}, "d_surf has 1025 bytes"},
       {"gap", {enc(scene8()), enc(chunk(0, 2, 0, 4)), enc(chunk(1, 2, 5, 3))}, "k_begin 5"},
