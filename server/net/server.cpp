@@ -132,6 +132,7 @@ class Server::Impl {
     tcp::socket socket;
     std::uint64_t id = 0;
     std::string name;
+    std::string address;  // the remote address, for the per-address Hello budget
     v1::Role role = v1::ROLE_UNSPECIFIED;
     bool welcomed = false;  // Hello accepted
     bool ready = false;     // scene and volume sent: frames flow
@@ -177,13 +178,26 @@ class Server::Impl {
       s->socket.set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes), ec);
     s->id = ++next_id_;
     s->connected_ns = s->last_rx_ns = rt::monotonic_ns();
+    const tcp::endpoint remote = s->socket.remote_endpoint(ec);
+    s->address = ec ? std::string("?") : remote.address().to_string();
     accepted_.fetch_add(1);
     std::erase_if(sessions_, [](const SessionPtr& other) { return other->closed; });
+    // Before Hello a connection counts against the pending budgets, not against max_clients.
+    std::size_t pending = 0, pending_here = 0;
+    for (const SessionPtr& other : sessions_) {
+      if (other->welcomed || other->closing || other->closed) continue;
+      ++pending;
+      if (other->address == s->address) ++pending_here;
+    }
     sessions_.push_back(s);
     client_count_.store(sessions_.size());
-    if (sessions_.size() > config_.max_clients) {
+    if (pending_here >= config_.max_pending_per_address || pending >= config_.max_pending) {
       fatal(s, v1::Error::TOO_MANY_CLIENTS,
-            "the server is full (" + std::to_string(config_.max_clients) + " clients)");
+            pending_here >= config_.max_pending_per_address
+                ? "too many connections from " + s->address + " waiting to say Hello (at most " +
+                      std::to_string(config_.max_pending_per_address) + ")"
+                : "too many connections waiting to say Hello (at most " +
+                      std::to_string(config_.max_pending) + ")");
       return;
     }
     read(s);
@@ -294,6 +308,18 @@ class Server::Impl {
           fatal(s, v1::Error::CONTROLLER_BUSY, "another controller is connected");
           return;
         }
+    }
+    if (h.role() != v1::CONTROLLER) {  // observers fill max_clients; the controller's slot stays
+      std::size_t observers = 0;
+      for (const auto& other : sessions_)
+        if (other != s && other->welcomed && !other->closing && !other->closed &&
+            other->role != v1::CONTROLLER)
+          ++observers;
+      if (observers >= config_.max_clients) {
+        fatal(s, v1::Error::TOO_MANY_CLIENTS,
+              "the server is full (" + std::to_string(config_.max_clients) + " clients)");
+        return;
+      }
     }
     s->welcomed = true;
     s->role = h.role();

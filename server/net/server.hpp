@@ -32,8 +32,12 @@ namespace palp::net {
 
 struct ServerConfig {
   std::string bind = "127.0.0.1";
-  std::uint16_t port = 7400;  // 0: any free port (see Server::port())
-  std::size_t max_clients = 16;
+  std::uint16_t port = 7400;     // 0: any free port (see Server::port())
+  std::size_t max_clients = 16;  // admitted observers; the controller's slot is always kept free
+  // Connections that have not said Hello yet: a budget of their own, so silent sockets cannot
+  // fill max_clients, and a smaller one per remote address (one host cannot take them all).
+  std::size_t max_pending = 64;
+  std::size_t max_pending_per_address = 4;
   std::string token;                        // non-empty: CONTROLLER must present it
   std::size_t max_frame_bytes = 64 * 1024;  // client -> server
   std::size_t queue_frames = 256;           // HapticFrames queued per client before dropping

@@ -383,8 +383,41 @@ TEST_F(ServerTest, FullServerRefusesMoreClients) {
   v1::ServerMessage m;
   ASSERT_TRUE(a.wait_for_case(v1::ServerMessage::kFrame, m));
   TestClient b(port());
+  b.hello();
   expect_fatal(b, v1::Error::TOO_MANY_CLIENTS);
   EXPECT_TRUE(a.wait_for_case(v1::ServerMessage::kFrame, m));
+  // The controller's slot is kept: a full server of observers still admits it.
+  TestClient c(port());
+  c.hello(v1::CONTROLLER);
+  ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kWelcome, m));
+  EXPECT_EQ(m.welcome().role(), v1::CONTROLLER);
+}
+
+// Sockets that never say Hello have a budget of their own (per address and in all): they cannot
+// fill max_clients and lock observers and the controller out.
+TEST_F(ServerTest, SilentSocketsCannotLockClientsOut) {
+  ServerConfig config;
+  config.max_clients = 2;
+  config.max_pending_per_address = 3;
+  config.hello_timeout_s = 30;  // they stay for the whole test
+  start(config);
+  std::vector<std::unique_ptr<TestClient>> silent;
+  for (int i = 0; i < 3; ++i) silent.push_back(std::make_unique<TestClient>(port()));
+  TestClient over(port());  // a fourth from the same address: refused at once
+  expect_fatal(over, v1::Error::TOO_MANY_CLIENTS);
+  for (auto& c : silent) c->close();  // the pending budget frees as they go
+  ASSERT_TRUE(wait_clients(0));
+  TestClient a(port()), b(port());
+  a.hello();
+  b.hello();
+  v1::ServerMessage m;
+  ASSERT_TRUE(a.wait_for_case(v1::ServerMessage::kFrame, m));
+  ASSERT_TRUE(b.wait_for_case(v1::ServerMessage::kFrame, m));
+  std::vector<std::unique_ptr<TestClient>> more;
+  for (int i = 0; i < 2; ++i) more.push_back(std::make_unique<TestClient>(port()));  // silent
+  TestClient controller(port());
+  controller.hello(v1::CONTROLLER);
+  ASSERT_TRUE(controller.wait_for_case(v1::ServerMessage::kWelcome, m));
 }
 
 TEST_F(ServerTest, DisconnectAndReconnect) {
