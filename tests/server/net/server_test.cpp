@@ -393,6 +393,31 @@ TEST_F(ServerTest, FullServerRefusesMoreClients) {
   EXPECT_EQ(m.welcome().role(), v1::CONTROLLER);
 }
 
+// Guessing the token costs time: after three wrong tokens an address waits (100 ms, doubling),
+// whatever it sends; once the wait is over the right token is accepted again.
+TEST_F(ServerTest, WrongTokensBackOff) {
+  ServerConfig config;
+  config.token = "s3cret";
+  start(config);
+  v1::ServerMessage m;
+  for (int i = 0; i < 3; ++i) {
+    TestClient guess(port());
+    guess.hello(v1::CONTROLLER, "guess" + std::to_string(i));
+    ASSERT_TRUE(guess.wait_for_case(v1::ServerMessage::kError, m));
+    EXPECT_EQ(m.error().reason(), "CONTROLLER needs the server's token");
+  }
+  TestClient hurried(port());
+  hurried.hello(v1::CONTROLLER, "s3cret");  // even the right token waits now
+  ASSERT_TRUE(hurried.wait_for_case(v1::ServerMessage::kError, m));
+  EXPECT_EQ(m.error().code(), v1::Error::UNAUTHORIZED);
+  EXPECT_NE(m.error().reason().find("too many wrong tokens"), std::string::npos)
+      << m.error().reason();
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  TestClient patient(port());
+  patient.hello(v1::CONTROLLER, "s3cret");
+  ASSERT_TRUE(patient.wait_for_case(v1::ServerMessage::kWelcome, m));
+}
+
 // Sockets that never say Hello have a budget of their own (per address and in all): they cannot
 // fill max_clients and lock observers and the controller out.
 TEST_F(ServerTest, SilentSocketsCannotLockClientsOut) {
