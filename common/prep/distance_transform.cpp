@@ -316,8 +316,9 @@ DistanceMap signed_distance(const Mask& mask, const DistanceParams& params) {
 }
 
 void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap& out) {
-  if (!(params.band_mm > 0.0) || std::isnan(params.band_mm)) {
-    throw UsageError("distance band must be a positive number of mm");
+  if (!(params.band_mm > 0.0 && params.band_mm <= kMaxBandMm)) {
+    throw UsageError("distance band must be in (0, " +
+                     std::to_string(static_cast<int>(kMaxBandMm)) + "] mm (--band)");
   }
   const Grid& grid = mask.grid;
   validate_grid(grid, "mask");

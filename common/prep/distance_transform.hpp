@@ -11,6 +11,10 @@
 
 namespace palp {
 
+// The largest distance band (mm): 1 km means "no clamping" for any body; beyond it the crop's
+// integer arithmetic would overflow (--band 1e308).
+inline constexpr double kMaxBandMm = 1e6;
+
 struct DistanceParams {
   double band_mm = 60.0;  // |D| is clamped here; work is cropped to the mask's box + band
   unsigned threads = 0;   // 0 = hardware concurrency

@@ -27,7 +27,7 @@ matrix; an oblique volume (gantry tilt) is resampled onto the nearest axis-align
 Options:
   --out DIR               output directory (required; created if missing)
   --no-cache              recompute even if DIR already holds the result for this input
-  --band MM               clamp |distance| beyond this many mm (default %g)
+  --band MM               clamp |distance| beyond this many mm (default %g; at most 1e6)
   --threads N             worker threads (default: all cores, here %u)
   --body-threshold HU     voxels above this are not air (default %g)
   --min-body-part ML      drop separate parts smaller than this, except the patient (default %g)

@@ -207,5 +207,18 @@ TEST(SignedDistance, RejectsANonPositiveBand) {
   EXPECT_THROW(signed_distance(mask, {std::nan(""), 1}), UsageError);
 }
 
+TEST(DistanceTransform, AbsurdBandsAreRefused) {
+  Grid g;
+  g.dims = {4, 4, 4};
+  const Mask mask(g);
+  DistanceParams p;
+  for (double band : {0.0, -1.0, 1e308, std::nan("")}) {
+    p.band_mm = band;
+    EXPECT_THROW(signed_distance(mask, p), UsageError) << band;
+  }
+  p.band_mm = 1e6;  // "no clamping"
+  EXPECT_NO_THROW(signed_distance(mask, p));
+}
+
 }  // namespace
 }  // namespace palp
