@@ -22,6 +22,7 @@
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
+#include "cli/config_file.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/model_setup.hpp"
 #include "devices/device.hpp"
@@ -135,72 +136,6 @@ std::string number_text(double v) {
   std::string s;
   append_number(s, v);
   return s;
-}
-
-// The TOML file as "--key=value" arguments (placed before the command line's, which win).
-cli::Arguments config_arguments(const std::string& path) {
-  toml::table table;
-  try {
-    require_regular_file(path);  // a FIFO would block palpd's start forever
-  } catch (const InputError& e) {
-    throw UsageError(std::string("--config: ") + e.what());
-  }
-  try {
-    table = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    throw UsageError(path + ": " + std::string(e.description()) + " (line " +
-                     std::to_string(e.source().begin.line) + ")");
-  }
-  cli::Arguments out;
-  for (const auto& [key_node, node] : table) {
-    const std::string key(key_node.str());
-    const auto scalar = [&](const toml::node& n) -> std::string {
-      if (const auto s = n.value<std::string>()) return *s;
-      if (const auto i = n.value<std::int64_t>()) return std::to_string(*i);
-      if (const auto d = n.value<double>()) return number_text(*d);
-      throw UsageError(path + ": '" + key + "' must be a string or a number");
-    };
-    if (key == "config") throw UsageError(path + ": 'config' cannot be set in a config file");
-    if (key == "no-force-limits")
-      throw UsageError(path +
-                       ": 'no-force-limits' cannot be set in a config file (command line only)");
-    if (key == "param") {
-      if (const toml::array* a = node.as_array()) {
-        for (const toml::node& item : *a) out.push_back("--param=" + scalar(item));
-      } else if (const toml::table* t = node.as_table()) {
-        for (const auto& [name, value] : *t)
-          out.push_back("--param=" + std::string(name.str()) + "=" + scalar(value));
-      } else {
-        throw UsageError(path + ": 'param' must be an array of \"NAME=VALUE\" or a table");
-      }
-      continue;
-    }
-    if (std::find(kFlags.begin(), kFlags.end(), key) != kFlags.end() || key == "realtime") {
-      const auto b = node.value<bool>();
-      if (!b) throw UsageError(path + ": '" + key + "' must be true or false");
-      if (key == "realtime") {
-        if (!*b) out.push_back("--no-realtime");
-      } else if (*b) {
-        out.push_back("--" + key);
-      }
-      continue;
-    }
-    if (std::find(kValued.begin(), kValued.end(), key) == kValued.end() &&
-        std::find(cli::kSceneOptions.begin(), cli::kSceneOptions.end(), key) ==
-            cli::kSceneOptions.end())
-      throw UsageError(path + ": unknown key '" + key + "'");
-    out.push_back("--" + key + "=" + scalar(node));
-  }
-  return out;
-}
-
-// Finds "--config FILE" / "--config=FILE" in argv without parsing the rest.
-std::optional<std::string> config_path(const cli::Arguments& argv) {
-  for (std::size_t i = 0; i < argv.size(); ++i) {
-    if (argv[i] == "--config" && i + 1 < argv.size()) return argv[i + 1];
-    if (argv[i].rfind("--config=", 0) == 0) return argv[i].substr(9);
-  }
-  return std::nullopt;
 }
 
 std::vector<std::string> param_assignments(const ForceParams& p) {
@@ -415,7 +350,8 @@ double within(const cli::Args& args, const std::string& key, double fallback, do
 
 int run(const cli::Arguments& argv_in) {
   cli::Arguments argv;
-  if (const auto path = config_path(argv_in)) argv = config_arguments(*path);
+  if (const auto path = cli::config_path(argv_in))
+    argv = cli::config_arguments(*path, kFlags, kValued);
   argv.insert(argv.end(), argv_in.begin(), argv_in.end());
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;

@@ -16,6 +16,7 @@
 #include "base/errors.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
+#include "net/token_guard.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::net {
@@ -302,19 +303,21 @@ class Server::Impl {
     }
     if (h.role() == v1::CONTROLLER) {
       const std::int64_t now = rt::monotonic_ns();
-      const auto failed = token_failures_.find(s->address);
-      if (failed != token_failures_.end() && now < failed->second.retry_ns) {
+      if (const std::int64_t wait_ns = token_guard_.wait_ns(s->address, now); wait_ns > 0) {
         fatal(s, v1::Error::UNAUTHORIZED,
               "too many wrong tokens from " + s->address + ": wait " +
-                  std::to_string((failed->second.retry_ns - now) / 1'000'000) + " ms");
+                  std::to_string(wait_ns / 1'000'000) + " ms");
         return;
       }
       if (!config_.token.empty() && !same_token(h.token(), config_.token)) {
-        note_token_failure(s->address, now);
+        if (token_guard_.failed(s->address, now))
+          std::fprintf(stderr,
+                       "palpd: wrong controller token from %s (%llu wrong tokens in all so far)\n",
+                       s->address.c_str(), static_cast<unsigned long long>(token_guard_.total()));
         fatal(s, v1::Error::UNAUTHORIZED, "CONTROLLER needs the server's token");
         return;
       }
-      token_failures_.erase(s->address);
+      token_guard_.succeeded(s->address);
       for (const auto& other : sessions_)
         if (other != s && other->role == v1::CONTROLLER && !other->closed) {
           fatal(s, v1::Error::CONTROLLER_BUSY, "another controller is connected");
@@ -352,41 +355,6 @@ class Server::Impl {
     plan_volume(*s, h.volume_step(), h.volume_max_dim());
     if (s->volume.chunks == 0) s->ready = true;
     pump(s);
-  }
-
-  // After three wrong tokens, the address waits before it may try again: 100 ms, doubling with
-  // each further failure up to 30 s (a mistyped token costs nothing, guessing costs time). The
-  // table is bounded (the oldest entry goes); attempts are logged at most once a second.
-  struct TokenFailures {
-    std::uint32_t count = 0;
-    std::int64_t retry_ns = 0;
-    std::int64_t last_ns = 0;
-  };
-  static constexpr std::size_t kMaxTokenFailureAddresses = 1024;
-  static constexpr std::uint32_t kFreeTokenAttempts = 3;
-  void note_token_failure(const std::string& address, std::int64_t now) {
-    if (token_failures_.size() >= kMaxTokenFailureAddresses && !token_failures_.count(address)) {
-      auto oldest = token_failures_.begin();
-      for (auto it = token_failures_.begin(); it != token_failures_.end(); ++it)
-        if (it->second.last_ns < oldest->second.last_ns) oldest = it;
-      token_failures_.erase(oldest);
-    }
-    TokenFailures& f = token_failures_[address];
-    f.count = std::min<std::uint32_t>(f.count + 1, 20);
-    if (f.count >= kFreeTokenAttempts) {
-      const std::int64_t wait_ns = std::min<std::int64_t>(
-          std::int64_t{100'000'000} << std::min<std::uint32_t>(f.count - kFreeTokenAttempts, 9),
-          30'000'000'000);
-      f.retry_ns = now + wait_ns;
-    }
-    f.last_ns = now;
-    ++token_failures_total_;
-    if (now - last_token_log_ns_ >= 1'000'000'000) {
-      last_token_log_ns_ = now;
-      std::fprintf(stderr,
-                   "palpd: wrong controller token from %s (%llu wrong tokens in all so far)\n",
-                   address.c_str(), static_cast<unsigned long long>(token_failures_total_));
-    }
   }
 
   void command(const SessionPtr& s, const v1::Command& c) {
@@ -644,9 +612,7 @@ class Server::Impl {
   std::vector<SessionPtr> sessions_;
   std::uint16_t port_ = 0;
   std::uint64_t next_id_ = 0;
-  std::map<std::string, TokenFailures> token_failures_;
-  std::uint64_t token_failures_total_ = 0;
-  std::int64_t last_token_log_ns_ = 0;
+  TokenGuard token_guard_;
   std::int64_t last_stats_ns_ = 0;
   rt::DeviceState last_device_state_ = rt::DeviceState::Present;
   std::uint64_t last_stats_ticks_ = 0;

@@ -1,0 +1,90 @@
+// palpd's configuration file: see config_file.hpp.
+#include "cli/config_file.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+
+#include "base/errors.hpp"
+#include "cli/model_setup.hpp"
+#include "io/gzip.hpp"
+#include "scene/trajectory.hpp"
+
+namespace palp::cli {
+namespace {
+
+std::string number_text(double v) {
+  std::string s;
+  append_number(s, v);
+  return s;
+}
+
+}  // namespace
+
+// The TOML file as "--key=value" arguments (placed before the command line's, which win).
+Arguments config_arguments(const std::string& path, const std::vector<std::string>& flags,
+                           const std::vector<std::string>& valued) {
+  toml::table table;
+  try {
+    require_regular_file(path);  // a FIFO would block palpd's start forever
+  } catch (const InputError& e) {
+    throw UsageError(std::string("--config: ") + e.what());
+  }
+  try {
+    table = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw UsageError(path + ": " + std::string(e.description()) + " (line " +
+                     std::to_string(e.source().begin.line) + ")");
+  }
+  Arguments out;
+  for (const auto& [key_node, node] : table) {
+    const std::string key(key_node.str());
+    const auto scalar = [&](const toml::node& n) -> std::string {
+      if (const auto s = n.value<std::string>()) return *s;
+      if (const auto i = n.value<std::int64_t>()) return std::to_string(*i);
+      if (const auto d = n.value<double>()) return number_text(*d);
+      throw UsageError(path + ": '" + key + "' must be a string or a number");
+    };
+    if (key == "config") throw UsageError(path + ": 'config' cannot be set in a config file");
+    if (key == "no-force-limits")
+      throw UsageError(path +
+                       ": 'no-force-limits' cannot be set in a config file (command line only)");
+    if (key == "param") {
+      if (const toml::array* a = node.as_array()) {
+        for (const toml::node& item : *a) out.push_back("--param=" + scalar(item));
+      } else if (const toml::table* t = node.as_table()) {
+        for (const auto& [name, value] : *t)
+          out.push_back("--param=" + std::string(name.str()) + "=" + scalar(value));
+      } else {
+        throw UsageError(path + ": 'param' must be an array of \"NAME=VALUE\" or a table");
+      }
+      continue;
+    }
+    if (std::find(flags.begin(), flags.end(), key) != flags.end() || key == "realtime") {
+      const auto b = node.value<bool>();
+      if (!b) throw UsageError(path + ": '" + key + "' must be true or false");
+      if (key == "realtime") {
+        if (!*b) out.push_back("--no-realtime");
+      } else if (*b) {
+        out.push_back("--" + key);
+      }
+      continue;
+    }
+    if (std::find(valued.begin(), valued.end(), key) == valued.end() &&
+        std::find(kSceneOptions.begin(), kSceneOptions.end(), key) == kSceneOptions.end())
+      throw UsageError(path + ": unknown key '" + key + "'");
+    out.push_back("--" + key + "=" + scalar(node));
+  }
+  return out;
+}
+
+// Finds "--config FILE" / "--config=FILE" in argv without parsing the rest.
+std::optional<std::string> config_path(const Arguments& argv) {
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    if (argv[i] == "--config" && i + 1 < argv.size()) return argv[i + 1];
+    if (argv[i].rfind("--config=", 0) == 0) return argv[i].substr(9);
+  }
+  return std::nullopt;
+}
+
+}  // namespace palp::cli
