@@ -39,6 +39,16 @@ TEST(Grid, RefusesUnusableDimensionsAndSpacing) {
   EXPECT_THROW(validate_grid(grid_of({5, -1, 5}, {1, 1, 1}), "x"), InputError);
   EXPECT_THROW(validate_grid(grid_of({5, 5, kMaxVoxelsPerAxis + 1}, {1, 1, 1}), "x"), InputError);
   EXPECT_THROW(validate_grid(grid_of({5, 5, 5}, {1, 0, 1}), "x"), InputError);
+  // Absurd spacings (a lying header or a wrong unit) are refused, naming the range.
+  for (double sp : {1e-9, 1e-30, 1e300, 0.0009, 100.5}) {
+    try {
+      validate_grid(grid_of({5, 5, 5}, {1, sp, 1}), "x");
+      ADD_FAILURE() << sp;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("[0.001, 100] mm"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(validate_grid(grid_of({5, 5, 5}, {0.001, 100, 1}), "x"));
   EXPECT_THROW(validate_grid(grid_of({5, 5, 5}, {1, std::nan(""), 1}), "x"), InputError);
   EXPECT_THROW(validate_grid(grid_of({5, 5, 5}, {1, 1, INFINITY}), "x"), InputError);
   try {
