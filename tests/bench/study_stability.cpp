@@ -15,10 +15,9 @@
 //   saturation  clamp to the profile's max force only (the device's own limit);
 //   limiter     palp::apply_device_limits (clamp, stiffness limit, rate limit, clamp): palpd's
 //               chain when a profile was named, before engagement and passivity;
-//   palpd       the default chain, palp::run_force_chain as HapticLoop::step runs it: limits,
-//   engagement
-//               (EngageParams{0.2, 1.5}, gain from the model's force), passivity_control with the
-//               profile's damping on the encoder velocity, clamp_force when it damped.
+//   palpd       the default chain: palp::run_force_chain, the function HapticLoop::step calls
+//               (limits on the limiter's own output, engagement EngageParams{0.2, 1.5}, the
+//               passivity controller on a filtered velocity once engaged, step bound, clamp).
 //   palpd-engaged  the same chain with its engagement ramp already over when the run starts (as
 //               after 1.5 s in free air), so the hand meets the chain fully engaged.
 // A fault zeroes the force and resets as the loop does: model state, engagement, passivity
