@@ -9,12 +9,6 @@
 
 namespace palp::view {
 
-Quat multiply(const Quat& a, const Quat& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 ControllerInput::ControllerInput(Pose start, ControllerSettings settings)
     : settings_(settings), start_(start), pose_(start) {}
 

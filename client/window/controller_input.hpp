@@ -68,9 +68,6 @@ inline constexpr const char* kFingerTool = "finger:37";
 inline constexpr const char* kTwoFingerTool = "twofinger:19";
 inline constexpr const char* kProbeTool = "probe:9x3";
 
-// Quaternion product a * b (apply b first, then a).
-Quat multiply(const Quat& a, const Quat& b);
-
 class ControllerInput {
  public:
   explicit ControllerInput(Pose start = {}, ControllerSettings settings = {});

@@ -3,6 +3,7 @@
 // (std::array, volume.hpp) stays the grid's type and converts with to_vec3d / to_vec3.
 #pragma once
 
+#include <array>
 #include <cmath>
 
 #include "base/volume.hpp"
@@ -91,6 +92,33 @@ constexpr Vec3d rotate(const Quat& q, const Vec3d& v) {
 inline Quat axis_angle(const Vec3d& axis, double angle) {
   const double s = std::sin(0.5 * angle);
   return {std::cos(0.5 * angle), axis.x * s, axis.y * s, axis.z * s};
+}
+
+// Quaternion product a * b (apply b first, then a).
+constexpr Quat multiply(const Quat& a, const Quat& b) {
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+}
+
+// The unit quaternion of a proper rotation matrix (row-major; Shepperd's branches), normalized.
+inline Quat rotation_quaternion(const std::array<double, 9>& m) {
+  const double trace = m[0] + m[4] + m[8];
+  Quat q;
+  if (trace > 0.0) {
+    const double s = 2.0 * std::sqrt(trace + 1.0);
+    q = {0.25 * s, (m[7] - m[5]) / s, (m[2] - m[6]) / s, (m[3] - m[1]) / s};
+  } else if (m[0] > m[4] && m[0] > m[8]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[0] - m[4] - m[8]);
+    q = {(m[7] - m[5]) / s, 0.25 * s, (m[1] + m[3]) / s, (m[2] + m[6]) / s};
+  } else if (m[4] > m[8]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[4] - m[0] - m[8]);
+    q = {(m[2] - m[6]) / s, (m[1] + m[3]) / s, 0.25 * s, (m[5] + m[7]) / s};
+  } else {
+    const double s = 2.0 * std::sqrt(1.0 + m[8] - m[0] - m[4]);
+    q = {(m[3] - m[1]) / s, (m[2] + m[6]) / s, (m[5] + m[7]) / s, 0.25 * s};
+  }
+  return normalized(q);
 }
 
 // A rigid pose: where the device point is and how the tool is turned.

@@ -24,32 +24,6 @@ double determinant(const std::array<double, 9>& m) {
          m[2] * (m[3] * m[7] - m[4] * m[6]);
 }
 
-// The unit quaternion of a proper rotation matrix (Shepperd's method).
-Quat quaternion(const std::array<double, 9>& m) {
-  const double trace = m[0] + m[4] + m[8];
-  Quat q;
-  if (trace > 0) {
-    const double s = 2.0 * std::sqrt(1.0 + trace);
-    q = {0.25 * s, (m[7] - m[5]) / s, (m[2] - m[6]) / s, (m[3] - m[1]) / s};
-  } else if (m[0] > m[4] && m[0] > m[8]) {
-    const double s = 2.0 * std::sqrt(1.0 + m[0] - m[4] - m[8]);
-    q = {(m[7] - m[5]) / s, 0.25 * s, (m[1] + m[3]) / s, (m[2] + m[6]) / s};
-  } else if (m[4] > m[8]) {
-    const double s = 2.0 * std::sqrt(1.0 + m[4] - m[0] - m[8]);
-    q = {(m[2] - m[6]) / s, (m[1] + m[3]) / s, 0.25 * s, (m[5] + m[7]) / s};
-  } else {
-    const double s = 2.0 * std::sqrt(1.0 + m[8] - m[0] - m[4]);
-    q = {(m[3] - m[1]) / s, (m[2] + m[6]) / s, (m[5] + m[7]) / s, 0.25 * s};
-  }
-  return normalized(q);
-}
-
-Quat multiply(const Quat& a, const Quat& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 }  // namespace
 
 bool Registration::is_identity() const {
@@ -85,13 +59,13 @@ Pose to_scene(const Registration& r, const Pose& device) {
   Pose p;
   p.position = r.home + times(r.rotation, device.position) * r.scale;
   if (determinant(r.rotation) > 0) {
-    p.orientation = multiply(quaternion(r.rotation), device.orientation);
+    p.orientation = multiply(rotation_quaternion(r.rotation), device.orientation);
   } else {
     // A mirrored registration: turn by the rotation part of -R; the mirror itself cannot turn a
     // tool (its contact points are symmetric enough for palp's tools).
     std::array<double, 9> proper{};
     for (std::size_t i = 0; i < 9; ++i) proper[i] = -r.rotation[i];
-    p.orientation = multiply(quaternion(proper), device.orientation);
+    p.orientation = multiply(rotation_quaternion(proper), device.orientation);
   }
   return p;
 }

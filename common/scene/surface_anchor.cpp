@@ -250,27 +250,9 @@ Quat surface_orientation(const Vec3d& normal, const Vec3d& slide) {
   }
   y = unit(y);
   const Vec3d x = cross(y, z);
-  // Rotation matrix with columns x, y, z -> quaternion (Shepperd's branches).
-  const double m00 = x.x, m01 = y.x, m02 = z.x;
-  const double m10 = x.y, m11 = y.y, m12 = z.y;
-  const double m20 = x.z, m21 = y.z, m22 = z.z;
-  const double trace = m00 + m11 + m22;
-  Quat q;
-  if (trace > 0.0) {
-    const double s = 2.0 * std::sqrt(trace + 1.0);
-    q = {0.25 * s, (m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s};
-  } else if (m00 > m11 && m00 > m22) {
-    const double s = 2.0 * std::sqrt(1.0 + m00 - m11 - m22);
-    q = {(m21 - m12) / s, 0.25 * s, (m01 + m10) / s, (m02 + m20) / s};
-  } else if (m11 > m22) {
-    const double s = 2.0 * std::sqrt(1.0 + m11 - m00 - m22);
-    q = {(m02 - m20) / s, (m01 + m10) / s, 0.25 * s, (m12 + m21) / s};
-  } else {
-    const double s = 2.0 * std::sqrt(1.0 + m22 - m00 - m11);
-    q = {(m10 - m01) / s, (m02 + m20) / s, (m12 + m21) / s, 0.25 * s};
-  }
-  if (q.w < 0.0) q = {-q.w, -q.x, -q.y, -q.z};
-  return normalized(q);
+  // Rotation matrix with columns x, y, z -> quaternion, w >= 0.
+  const Quat q = rotation_quaternion({x.x, y.x, z.x, x.y, y.y, z.y, x.z, y.z, z.z});
+  return q.w < 0.0 ? Quat{-q.w, -q.x, -q.y, -q.z} : q;
 }
 
 Pose pad_pose(const Vec3d& pad_centre, const Vec3d& normal, const Quat& orientation,

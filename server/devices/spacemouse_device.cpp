@@ -40,12 +40,6 @@ bool read_axes(const std::uint8_t* payload, int first, int count, Axes& axes) {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
-Quat multiply(const Quat& a, const Quat& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 // The rotation by the rotation vector `v` (axis × angle, radians).
 Quat from_rotation_vector(const Vec3d& v) {
   const double angle = norm(v);

@@ -138,12 +138,6 @@ inline Quat rotation_between(const Vec3d& a, const Vec3d& b) {
   return palp::normalized(q);
 }
 
-inline Quat multiply(const Quat& a, const Quat& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 // A flat skin and one thin rib under it, on an isotropic grid of spacing h (mm):
 //   skin: the plane z = skin_z, body below (D_surf from the voxelised half space);
 //   rib:  a bar along y of width `width` (x) and height `height` (z) whose top lies `depth` mm
