@@ -142,6 +142,29 @@ PatientFrame patient_frame(const Grid& grid) {
   return patient_frame(grid.world);
 }
 
+namespace {
+
+// Column a of the row-major direction: where index axis a points in the patient.
+Vec3d direction_column(const Grid& grid, int a) {
+  const auto& d = grid.world.direction;
+  return {d[static_cast<std::size_t>(a)], d[static_cast<std::size_t>(3 + a)],
+          d[static_cast<std::size_t>(6 + a)]};
+}
+
+}  // namespace
+
+Vec3d world_of_scene(const Grid& grid, const Vec3d& scene_mm) {
+  Vec3d w = to_vec3d(grid.world.origin);
+  for (int a = 0; a < 3; ++a) w += direction_column(grid, a) * component(scene_mm, a);
+  return w;
+}
+
+Vec3d scene_of_world(const Grid& grid, const Vec3d& world_mm) {
+  const Vec3d r = world_mm - to_vec3d(grid.world.origin);
+  return {dot(direction_column(grid, 0), r), dot(direction_column(grid, 1), r),
+          dot(direction_column(grid, 2), r)};
+}
+
 bool parse_anatomy(std::string_view text, Anatomy* out) {
   for (Anatomy a : {Anatomy::Left, Anatomy::Right, Anatomy::Posterior, Anatomy::Anterior,
                     Anatomy::Superior, Anatomy::Inferior}) {

@@ -57,6 +57,11 @@ struct PatientFrame {
 PatientFrame patient_frame(const Grid& grid);
 PatientFrame patient_frame(const WorldPlacement& world);
 
+// The patient (LPS world) point of a scene point: origin + D·x.
+Vec3d world_of_scene(const Grid& grid, const Vec3d& scene_mm);
+// The scene point of a patient point: Dᵀ (w − origin) (the direction is orthonormal).
+Vec3d scene_of_world(const Grid& grid, const Vec3d& world_mm);
+
 // Parses "anterior", "posterior", "left", "right", "superior", "inferior" (or A P L R S I).
 // Returns false for anything else.
 bool parse_anatomy(std::string_view text, Anatomy* out);

@@ -25,18 +25,13 @@ double comp(const Vec3d& v, int i) {
 
 // World (LPS) of the continuous index ijk.
 Vec3d to_world(const Grid& g, const Vec3d& ijk) {
-  Vec3d w = to_vec3d(g.world.origin);
-  for (int a = 0; a < 3; ++a)
-    w += column(g.world.direction, a) * (comp(ijk, a) * g.spacing[static_cast<std::size_t>(a)]);
-  return w;
+  return world_of_scene(g, {ijk.x * g.spacing[0], ijk.y * g.spacing[1], ijk.z * g.spacing[2]});
 }
 
-// Continuous index of a world point (the direction is orthonormal: its inverse is Dᵀ).
+// Continuous index of a world point.
 Vec3d to_index(const Grid& g, const Vec3d& w) {
-  const Vec3d r = w - to_vec3d(g.world.origin);
-  return {dot(column(g.world.direction, 0), r) / g.spacing[0],
-          dot(column(g.world.direction, 1), r) / g.spacing[1],
-          dot(column(g.world.direction, 2), r) / g.spacing[2]};
+  const Vec3d x = scene_of_world(g, w);
+  return {x.x / g.spacing[0], x.y / g.spacing[1], x.z / g.spacing[2]};
 }
 
 }  // namespace

@@ -28,14 +28,6 @@ bool parse_point(std::string_view text, Vec3d* out) {
   return true;
 }
 
-// Scene position of a patient (LPS world) point: Dᵀ (w - origin).
-Vec3d scene_of_world(const Grid& g, const Vec3d& w) {
-  const auto& d = g.world.direction;
-  const Vec3d r = w - to_vec3d(g.world.origin);
-  return {d[0] * r.x + d[3] * r.y + d[6] * r.z, d[1] * r.x + d[4] * r.y + d[7] * r.z,
-          d[2] * r.x + d[5] * r.y + d[8] * r.z};
-}
-
 // The skin point nearest to x along the distance map's gradient (a few Newton steps).
 void project_to_skin(const FieldSampler& fields, Vec3d x, HomeSite* site) {
   for (int i = 0; i < 20; ++i) {

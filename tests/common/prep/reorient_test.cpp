@@ -13,15 +13,8 @@
 namespace palp {
 namespace {
 
-Vec3d column(const Grid& g, int a) {
-  const auto& d = g.world.direction;
-  return {d[static_cast<std::size_t>(a)], d[static_cast<std::size_t>(3 + a)],
-          d[static_cast<std::size_t>(6 + a)]};
-}
-
 Vec3d world(const Grid& g, double i, double j, double k) {
-  return to_vec3d(g.world.origin) + column(g, 0) * (i * g.spacing[0]) +
-         column(g, 1) * (j * g.spacing[1]) + column(g, 2) * (k * g.spacing[2]);
+  return world_of_scene(g, {i * g.spacing[0], j * g.spacing[1], k * g.spacing[2]});
 }
 
 // 4 x 3 x 2 voxels of 1 x 2 x 3 mm, value 100 i + 10 j + k, stored LPS.

@@ -34,8 +34,7 @@ Vec3d column(const Grid& g, int a) {
 }
 
 Vec3d world_of(const Grid& g, const Vec3d& scene) {
-  return to_vec3d(g.world.origin) + column(g, 0) * scene.x + column(g, 1) * scene.y +
-         column(g, 2) * scene.z;
+  return world_of_scene(g, scene);
 }
 
 void set_column(Grid& g, int a, const Vec3d& c) {
