@@ -539,10 +539,9 @@ int run(const cli::Arguments& argv_in) {
                 device_spec->c_str(), tool.name.c_str(), loop_config.rate_hz,
                 profile ? (std::string(", profile ") + std::string(profile->name)).c_str() : "");
     const PatientFrame frame = patient_frame(scene.grid);
-    const SignedAxis anterior = frame.nearest_axis(Anatomy::Anterior);
-    std::printf("palpd: patient stored %s: anterior is %c%c in the scene frame\n",
-                frame.orientation_code().c_str(), anterior.sign > 0 ? '+' : '-',
-                "xyz"[anterior.axis]);
+    std::printf("palpd: patient stored %s: anterior is %s in the scene frame\n",
+                frame.orientation_code().c_str(),
+                to_string(frame.nearest_axis(Anatomy::Anterior)).c_str());
     std::fflush(stdout);
   }
 

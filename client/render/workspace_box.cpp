@@ -1,6 +1,8 @@
 // The registered device's workspace box in the scene: see workspace_box.hpp.
 #include "render/workspace_box.hpp"
 
+#include "model/registration.hpp"
+
 #include <vtkCellArray.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
@@ -8,15 +10,13 @@
 namespace palp::view {
 
 std::array<Vec3d, 8> workspace_corners(const SceneDescription::Placement& p, const Vec3d& home) {
-  const auto& r = p.rotation;
+  const Registration r{p.rotation, p.scale, home};
   std::array<Vec3d, 8> out{};
   for (int c = 0; c < 8; ++c) {
     const Vec3d d{(c & 1) ? p.workspace_half_mm.x : -p.workspace_half_mm.x,
                   (c & 2) ? p.workspace_half_mm.y : -p.workspace_half_mm.y,
                   (c & 4) ? p.workspace_half_mm.z : -p.workspace_half_mm.z};
-    const Vec3d turned{r[0] * d.x + r[1] * d.y + r[2] * d.z, r[3] * d.x + r[4] * d.y + r[5] * d.z,
-                       r[6] * d.x + r[7] * d.y + r[8] * d.z};
-    out[static_cast<std::size_t>(c)] = home + turned * p.scale;
+    out[static_cast<std::size_t>(c)] = point_to_scene(r, d);
   }
   return out;
 }

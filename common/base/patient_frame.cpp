@@ -54,6 +54,10 @@ char letter(Anatomy direction) {
   return static_cast<char>(std::toupper(static_cast<unsigned char>(to_string(direction)[0])));
 }
 
+std::string to_string(SignedAxis axis) {
+  return std::string(axis.sign > 0 ? "+" : "-") + "xyz"[axis.axis];
+}
+
 Anatomy opposite(Anatomy direction) {
   switch (direction) {
     case Anatomy::Left:

@@ -32,6 +32,7 @@ struct SignedAxis {
   int sign = 1;
   bool operator==(const SignedAxis&) const = default;
 };
+std::string to_string(SignedAxis axis);  // "+x", "-y", ...
 
 struct PatientFrame {
   // Unit vectors in the scene frame toward the patient's left, posterior and superior.

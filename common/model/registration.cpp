@@ -55,9 +55,13 @@ std::array<double, 9> rotation_from_axes(const PatientFrame& frame, std::string_
   return m;
 }
 
+Vec3d point_to_scene(const Registration& r, const Vec3d& device_point) {
+  return r.home + times(r.rotation, device_point) * r.scale;
+}
+
 Pose to_scene(const Registration& r, const Pose& device) {
   Pose p;
-  p.position = r.home + times(r.rotation, device.position) * r.scale;
+  p.position = point_to_scene(r, device.position);
   if (determinant(r.rotation) > 0) {
     p.orientation = multiply(rotation_quaternion(r.rotation), device.orientation);
   } else {

@@ -33,6 +33,8 @@ struct Registration {
 std::array<double, 9> rotation_from_axes(const PatientFrame& frame, std::string_view axes);
 
 Pose to_scene(const Registration& r, const Pose& device);
+// home + scale · R · device point: where a device point lands in the scene.
+Vec3d point_to_scene(const Registration& r, const Vec3d& device_point);
 Vec3d scene_point_to_device(const Registration& r, const Vec3d& scene_point);
 Vec3d force_to_device(const Registration& r, const Vec3d& scene_force);
 Vec3d force_to_scene(const Registration& r, const Vec3d& device_force);

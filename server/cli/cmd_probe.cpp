@@ -352,11 +352,10 @@ int cmd_probe(const Arguments& argv) {
       for (int i = 0; i < 9; ++i)
         world.direction[static_cast<std::size_t>(i)] = r.scene.grid().direction(i);
       const PatientFrame frame = patient_frame(world);
-      const SignedAxis anterior = frame.nearest_axis(Anatomy::Anterior);
-      std::printf("  patient   CT stored %s: anterior is %c%c, superior %c%c in the scene frame\n",
-                  frame.orientation_code().c_str(), anterior.sign > 0 ? '+' : '-',
-                  "xyz"[anterior.axis], frame.nearest_axis(Anatomy::Superior).sign > 0 ? '+' : '-',
-                  "xyz"[frame.nearest_axis(Anatomy::Superior).axis]);
+      std::printf("  patient   CT stored %s: anterior is %s, superior %s in the scene frame\n",
+                  frame.orientation_code().c_str(),
+                  to_string(frame.nearest_axis(Anatomy::Anterior)).c_str(),
+                  to_string(frame.nearest_axis(Anatomy::Superior)).c_str());
     }
     if (r.have_scene && r.scene.has_registration()) {
       const v1::Registration& g = r.scene.registration();

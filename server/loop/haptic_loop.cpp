@@ -205,9 +205,8 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   if (recentre_request_.load(std::memory_order_relaxed) && have_pose_ && last_contacts_ == 0 &&
       !identity_) {
     recentre_request_.store(false, std::memory_order_relaxed);
-    const Vec3d moved =
-        to_scene(Registration{registration_.rotation, registration_.scale, {}}, last_device_pose_)
-            .position;
+    const Vec3d moved = point_to_scene(
+        Registration{registration_.rotation, registration_.scale, {}}, last_device_pose_.position);
     registration_.home = config_.registration.home - moved;
     last_pose_ = to_scene(registration_, last_device_pose_);
     home_[0].store(registration_.home.x, std::memory_order_relaxed);

@@ -24,6 +24,7 @@ TEST(PatientFrame, IdentityIsLps) {
   EXPECT_EQ(f.toward(Anatomy::Anterior), (Vec3d{0, -1, 0}));
   EXPECT_EQ(f.nearest_axis(Anatomy::Anterior), (SignedAxis{1, -1}));
   EXPECT_EQ(f.nearest_axis(Anatomy::Superior), (SignedAxis{2, 1}));
+  EXPECT_EQ(to_string(f.nearest_axis(Anatomy::Anterior)), "-y");
   EXPECT_EQ(f.obliquity_deg(), 0.0);
 }
 
