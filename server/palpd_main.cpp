@@ -132,12 +132,6 @@ const std::vector<std::string> kValued = {
     "stats-json",    "device-axes",    "device-scale",   "home",
     "engage-ramp-s", "home-clearance", "workspace-mm"};
 
-std::string number_text(double v) {
-  std::string s;
-  append_number(s, v);
-  return s;
-}
-
 std::vector<std::string> param_assignments(const ForceParams& p) {
   return {"c=" + number_text(p.c),
           "k=" + number_text(p.k),

@@ -117,6 +117,12 @@ void append_number(std::string& out, double value) {
   out.append(text, end);
 }
 
+std::string number_text(double value) {
+  std::string s;
+  append_number(s, value);
+  return s;
+}
+
 Trajectory parse_trajectory_csv(std::string_view text, const std::string& name) {
   Trajectory out;
   std::size_t number = 0;

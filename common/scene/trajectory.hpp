@@ -87,5 +87,7 @@ class ForceCsvWriter {
 
 // Appends the shortest round-trip decimal form of `value` (-0 written as 0).
 void append_number(std::string& out, double value);
+// The same as a string.
+std::string number_text(double value);
 
 }  // namespace palp

@@ -11,15 +11,6 @@
 #include "scene/trajectory.hpp"
 
 namespace palp::cli {
-namespace {
-
-std::string number_text(double v) {
-  std::string s;
-  append_number(s, v);
-  return s;
-}
-
-}  // namespace
 
 // The TOML file as "--key=value" arguments (placed before the command line's, which win).
 Arguments config_arguments(const std::string& path, const std::vector<std::string>& flags,
