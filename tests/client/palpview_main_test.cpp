@@ -14,6 +14,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -194,6 +195,9 @@ TEST(Palpview, DefaultViewIsThePatientsAnteriorHoweverStored) {
   const double ras = mean_abs_difference(shots["LPS"], shots["RAS"]);
   const double pir = mean_abs_difference(shots["LPS"], shots["PIR"]);
   const double back = mean_abs_difference(shots["LPS"], shots["LPS posterior"]);
+  std::printf("mean |difference| from the LPS default view (grey levels): RAS %.4f, PIR %.4f, "
+              "LPS posterior %.4f\n",
+              ras, pir, back);
   EXPECT_LT(ras, 0.5) << "RAS differs from LPS";
   EXPECT_LT(pir, 0.5) << "PIR differs from LPS";
   EXPECT_GT(back, 2.0) << "the posterior view looks like the anterior one: the test cannot fail";
