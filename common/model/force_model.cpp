@@ -74,6 +74,7 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
   std::uint32_t status = pose_ok ? kTickOk : kTickBadPose;
 
   Vec3d f_sum{}, tau_sum{}, u_sum{};
+  double k_sum = 0.0;
   int n_contact = 0;
   const std::size_t n = points.size();
   for (std::size_t i = 0; i < n; ++i) {
@@ -101,6 +102,7 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
 
     // (4, 5) f_structures = f_b(-D_bone) d_bone / |d_bone|, d_bone never pointing into the skin.
     Vec3d f_struct{};
+    double k_struct = 0.0;  // the bone term's slope (N/mm)
     if (bone_on) {
       const FieldSample bone = fields.bone_at(x);
       const double bone_grad_norm = norm(bone.grad);
@@ -108,6 +110,7 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
       const Vec3d v_b = has_vb ? bone.grad * (-1.0 / bone_grad_norm) : Vec3d{};
       const bool inside_bone = bone.value > 0.0;
       if (inside_bone) status |= kTickInsideBone;
+      k_struct = bone_force_slope(-bone.value, prm.bone_fmax);
       if (prm.bone_mode == BoneMode::Printed) {
         f_struct = printed_bone_force(prm, bone, v_b, has_vb, v_s);
       } else {
@@ -136,6 +139,7 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
             latch = kBoneFree;
           } else {
             f_struct = (prm.bone_fmax + prm.bone_k * pen) * normal;
+            k_struct = prm.bone_k;
             status |= kTickBoneLatched;
           }
         }
@@ -203,6 +207,7 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
     f_sum += f;
     tau_sum += cross(x - xd, f);
     u_sum += p - x;
+    k_sum += surface_force_slope(depth) + k_struct + prm.k;
     ++n_contact;
   }
 
@@ -211,6 +216,7 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
   st.f_device = f_sum * inv;
   st.tau_device = tau_sum * inv;
   st.u = u_sum * inv;
+  st.stiffness = std::isfinite(k_sum) ? k_sum * inv : 0.0;
   if (!is_finite(st.f_device) || !is_finite(st.tau_device) || !is_finite(st.u)) {
     status |= kTickNonFinite;
     st.f_device = st.tau_device = st.u = Vec3d{};
@@ -343,6 +349,7 @@ void reset(State& st) {
   std::fill(st.bone_normal.begin(), st.bone_normal.end(), Vec3d{});
   std::fill(st.bone_latch.begin(), st.bone_latch.end(), std::uint8_t{kBoneFree});
   st.f_device = st.tau_device = st.u = Vec3d{};
+  st.stiffness = 0.0;
   st.n_contact = 0;
   st.status = kTickOk;
   st.ticks = 0;
@@ -357,6 +364,7 @@ void tick(const Model& model, State& state, const Pose& device_pose) {
       state.bone_latch.size() != n) {
     // Not a State of this model: touch nothing per contact, report nothing.
     state.f_device = state.tau_device = state.u = Vec3d{};
+    state.stiffness = 0.0;
     state.n_contact = 0;
     state.status = kTickBadState;
     return;

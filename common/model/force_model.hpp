@@ -87,11 +87,24 @@ constexpr double surface_force(double depth_mm) {
   return depth_mm > 0.0 ? ((1.78e-2 * depth_mm + 3.82e-3) * depth_mm + 2.28e-4) * depth_mm : 0.0;
 }
 
+// df_s/dx (N/mm): the skin law's slope at depth x.
+constexpr double surface_force_slope(double depth_mm) {
+  return depth_mm > 0.0 ? (3 * 1.78e-2 * depth_mm + 2 * 3.82e-3) * depth_mm + 2.28e-4 : 0.0;
+}
+
 // f_b(x) = 20 (x / 5)^-3 for x > 0, else 0, capped at fmax (N). x = -D_bone (mm outside bone).
 constexpr double bone_force(double distance_mm, double fmax) {
   if (!(distance_mm > 0.0)) return 0.0;
   const double f = 2500.0 / (distance_mm * distance_mm * distance_mm);  // 20 * 5^3 / x^3
   return f < fmax ? f : fmax;  // x^3 underflowing to 0 gives +inf, capped here
+}
+
+// |df_b/dx| (N/mm) where the bone law is below its cap, else 0.
+constexpr double bone_force_slope(double distance_mm, double fmax) {
+  if (!(distance_mm > 0.0)) return 0.0;
+  const double x2 = distance_mm * distance_mm;
+  if (!(2500.0 / (x2 * distance_mm) < fmax)) return 0.0;
+  return 7500.0 / (x2 * x2);
 }
 
 class Model {
@@ -152,6 +165,11 @@ struct State {
   Vec3d f_device{};    // N
   Vec3d tau_device{};  // N·mm, about the device point
   Vec3d u{};           // mean of p - x over points in contact (mm)
+  // Mean over the points in contact of the slopes of their force laws (skin law at its depth,
+  // bone law at its distance or the bone proxy's spring, plus the friction spring k), N/mm: a
+  // bound on how fast f_device changes per millimetre the tool moves (the curvature of the
+  // surfaces aside). The virtual coupling (safety/virtual_coupling.hpp) steps its tool with it.
+  double stiffness = 0.0;
   int n_contact = 0;
   std::uint32_t status = kTickOk;
   std::uint64_t ticks = 0;

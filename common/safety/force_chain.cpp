@@ -6,31 +6,54 @@
 
 namespace palp {
 
+Vec3d force_chain_tool(const ForceChainState& s, const ForceChainConfig& config,
+                       const Vec3d& device_position) {
+  return config.coupling ? coupled_tool(s.coupling, device_position) : device_position;
+}
+
 ForceChainOutput run_force_chain(ForceChainState& s, const ForceChainConfig& config,
                                  const DeviceProfile& limits, const Vec3d& model_force,
-                                 const Vec3d& model_torque, const Vec3d& position, double dt) {
+                                 const Vec3d& model_torque, double model_stiffness,
+                                 const Vec3d& position, double dt) {
   ForceChainOutput out;
   const double t = std::isfinite(dt) ? std::clamp(dt, 0.0, kMaxFilterDt) : 0.0;
 
-  // limits, on the limiter's own previous output (engagement scales after it, not inside it)
-  SafetyInput in;
-  in.force = model_force;
-  in.torque = model_torque;
-  in.prev_force = s.limited_prev;
-  in.position = position;
-  in.prev_position = s.have_prev ? s.position_prev : position;
-  in.dt = t;
-  const SafetyOutput limited = apply_device_limits(limits, in);
-  out.status = limited.status;
-  s.limited_prev = limited.force;
-  Vec3d force = limited.force, torque = limited.torque;
+  Vec3d force, torque;
+  if (config.coupling) {
+    // model force at the virtual tool -> coupling spring-damper -> clamp (and torque limits)
+    const CouplingGains gains = coupling_gains(limits, t);
+    const CouplingOutput coupled =
+        couple(s.coupling, gains, model_force, model_stiffness, position, t);
+    const SafetyOutput limited = apply_output_limits(limits, coupled.force, model_torque);
+    out.status = limited.status;
+    out.coupling_stiffness_N_per_mm = gains.stiffness_N_per_mm;
+    force = limited.force, torque = limited.torque;
+  } else {
+    // limits, on the limiter's own previous output (engagement scales after it, not inside it)
+    SafetyInput in;
+    in.force = model_force;
+    in.torque = model_torque;
+    in.prev_force = s.limited_prev;
+    in.position = position;
+    in.prev_position = s.have_prev ? s.position_prev : position;
+    in.dt = t;
+    const SafetyOutput limited = apply_device_limits(limits, in);
+    out.status = limited.status;
+    s.limited_prev = limited.force;
+    force = limited.force, torque = limited.torque;
+  }
 
   // engagement: nothing until the model's force is small, then a ramp
   if (config.engage) {
     s.engagement = engage(s.engagement, norm(model_force), t, *config.engage);
     force = force * s.engagement.gain;
     torque = torque * s.engagement.gain;
-    if (!s.engagement.engaged()) out.status |= kSafetyEngaging;
+    if (!s.engagement.engaged()) {
+      out.status |= kSafetyEngaging;
+      // Not engaged: the virtual tool stays on the device, so engagement waits on the model's
+      // force where the device is, and the coupling starts from rest once it engages.
+      reset_coupling(s.coupling);
+    }
   }
 
   // velocity, low-pass filtered (encoder steps differentiated are noise the damper must not see)
@@ -41,8 +64,10 @@ ForceChainOutput run_force_chain(ForceChainState& s, const ForceChainConfig& con
   }
 
   // passivity: observe only once engaged; a damper that would reverse the force lets go instead
+  // (with nothing rendered there is nothing to damp: the observer restarts with the next contact,
+  // and a damper alone would brake, or pull, a hand moving in free space)
   const bool engaged = !config.engage || s.engagement.engaged();
-  if (config.passivity && engaged) {
+  if (config.passivity && engaged && !(force == Vec3d{})) {
     const PassivityOutput pc =
         passivity_control(s.passivity, force, s.velocity, t, limits.damping_N_s_per_mm);
     s.passivity = pc.state;
@@ -78,6 +103,7 @@ void reset_force_chain(ForceChainState& s) {
   s.velocity = Vec3d{};
   s.engagement = Engagement{};
   s.passivity = PassivityState{};
+  reset_coupling(s.coupling);
 }
 
 }  // namespace palp

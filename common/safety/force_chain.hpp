@@ -1,10 +1,16 @@
 // The chain between the force model and a device, every tick, as one pure step the real-time
 // loop and the closed-loop studies share (so a study measures exactly what a hand gets):
 //
-//   model force ─► limits (profile lowered to what the device declares: clamp, stiffness and rate
-//   limits on the limiter's own previous output) ─► engagement gain (from the model's force) ─►
-//   passivity controller (only once engaged; filtered velocity; never pulls: a damper that would
-//   reverse the force lets go instead) ─► step bound on what was written last ─► clamp ─► device
+//   model force at the virtual tool ─► virtual coupling (spring-damper to the device, at most the
+//   device's stable stiffness: virtual_coupling.hpp) ─► clamp ─► engagement gain (from the
+//   model's force) ─► passivity controller (only once engaged and while a force is rendered;
+//   filtered velocity; never pulls: a damper that would reverse the force lets go instead) ─► step
+//   bound on what was written last ─► clamp ─► device
+//
+// With the coupling on, the model is to be evaluated at force_chain_tool() (the virtual tool),
+// not at the device. With it off (the chain before the coupling, kept for the studies), the
+// first stage is the stiffness limiter instead: clamp, stiffness and rate limits on the
+// limiter's own previous output (apply_device_limits), with the model at the device.
 //
 // The state is a value the caller keeps; reset_force_chain() after a fault or a model change
 // (zero written, engagement and observer restart).
@@ -17,6 +23,7 @@
 #include "safety/engagement.hpp"
 #include "safety/passivity.hpp"
 #include "safety/safety.hpp"
+#include "safety/virtual_coupling.hpp"
 
 namespace palp {
 
@@ -24,6 +31,8 @@ struct ForceChainConfig {
   std::optional<EngageParams> engage;  // unset: no engagement
   bool passivity = false;              // the passivity observer/controller
   double velocity_filter_s = 0.005;    // time constant of the velocity the controller damps
+  // The virtual coupling (the default in palpd); false: the stiffness limiter instead.
+  bool coupling = true;
 };
 
 struct ForceChainState {
@@ -34,6 +43,7 @@ struct ForceChainState {
   Vec3d velocity{};  // filtered device velocity, mm/s
   Engagement engagement;
   PassivityState passivity;
+  CouplingState coupling;
 };
 
 struct ForceChainOutput {
@@ -41,13 +51,21 @@ struct ForceChainOutput {
   std::uint32_t status = kSafetyOk;
   double damping_N_s_per_mm = 0.0;  // the passivity controller's, this tick
   double dissipated_mJ = 0.0;
+  double coupling_stiffness_N_per_mm = 0.0;  // the coupling's K_c this tick (0: off)
 };
 
+// Where the model is to be evaluated this tick (device frame, mm): the virtual tool when the
+// coupling is on and engaged, else the device itself.
+Vec3d force_chain_tool(const ForceChainState& state, const ForceChainConfig& config,
+                       const Vec3d& device_position);
+
 // One tick: `limits` (the profile, already lowered to the device's declarations), the model's
-// device force and torque, the device position (mm, device frame), `dt` (s).
+// device force, torque and stiffness (State::stiffness, N/mm) at force_chain_tool(), the device
+// position (mm, device frame), `dt` (s).
 ForceChainOutput run_force_chain(ForceChainState& state, const ForceChainConfig& config,
                                  const DeviceProfile& limits, const Vec3d& model_force,
-                                 const Vec3d& model_torque, const Vec3d& position, double dt);
+                                 const Vec3d& model_torque, double model_stiffness,
+                                 const Vec3d& position, double dt);
 
 // After a fault, a replug, a model change or a pause: zero written, engagement and observer
 // restart, the next position starts the velocity afresh.

@@ -112,6 +112,33 @@ Filtered limit_rate(const Vec3d& f, const Vec3d& f_prev, double dt, double max_r
   return limit_step(f, f_prev, max_rate_N_per_s * t, kSafetyRateLimited);
 }
 
+SafetyOutput limit_torque(const DeviceProfile& profile, const Vec3d& torque) {
+  SafetyOutput out;
+  if (profile.dof < 6) {  // none on a 3-DOF device
+    if (norm(torque) > 0.0) out.status |= kSafetyTorqueDropped;
+    return out;
+  }
+  const Filtered t = clamp_magnitude(torque, profile.max_torque_Nmm, kSafetyTorqueClamped);
+  out.status |= t.status;
+  out.torque = t.value;
+  return out;
+}
+
+SafetyOutput apply_output_limits(const DeviceProfile& profile, const Vec3d& force,
+                                 const Vec3d& torque) {
+  SafetyOutput out;
+  if (!is_finite(force) || !is_finite(torque)) {
+    out.status = kSafetyNonFinite;
+    return out;
+  }
+  const Filtered f = clamp_force(force, profile.max_force_N);
+  const SafetyOutput t = limit_torque(profile, torque);
+  out.force = f.value;
+  out.torque = t.torque;
+  out.status = f.status | t.status;
+  return out;
+}
+
 SafetyOutput apply_device_limits(const DeviceProfile& profile, const SafetyInput& in) {
   SafetyOutput out;
   // Non-finite input: let go at once.
@@ -135,15 +162,9 @@ SafetyOutput apply_device_limits(const DeviceProfile& profile, const SafetyInput
   out.status |= f.status;
   out.force = f.value;
 
-  // Torque: none on a 3-DOF device, clamped on a 6-DOF one.
-  if (profile.dof < 6) {
-    if (norm(in.torque) > 0.0) out.status |= kSafetyTorqueDropped;
-    out.torque = Vec3d{};
-  } else {
-    const Filtered t = clamp_magnitude(in.torque, profile.max_torque_Nmm, kSafetyTorqueClamped);
-    out.status |= t.status;
-    out.torque = t.value;
-  }
+  const SafetyOutput torque = limit_torque(profile, in.torque);
+  out.status |= torque.status;
+  out.torque = torque.torque;
   return out;
 }
 

@@ -104,6 +104,15 @@ struct SafetyOutput {
   std::uint32_t status = kSafetyOk;
 };
 
+// Torque: dropped (kSafetyTorqueDropped when non-zero) on a 3-DOF device, magnitude-clamped on
+// a 6-DOF one; the force of the output is zero.
+SafetyOutput limit_torque(const DeviceProfile& profile, const Vec3d& torque);
+// What holds for any output, with no memory: a non-finite force or torque zeroes both; force
+// clamp; torque as limit_torque. (The coupled chain's limits: the virtual coupling bounds the
+// stiffness, so no stiffness or rate limit on the model's force.)
+SafetyOutput apply_output_limits(const DeviceProfile& profile, const Vec3d& force,
+                                 const Vec3d& torque);
+
 // The whole chain, in order: a non-finite force or torque zeroes both at once (and stops);
 // force clamp; stiffness limit; rate limit; force clamp again (prev may exceed a new profile);
 // torque dropped on 3-DOF devices, clamped on 6-DOF ones.

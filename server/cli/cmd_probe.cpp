@@ -390,6 +390,9 @@ int cmd_probe(const Arguments& argv) {
       std::printf(
           ", %.2f N/mm, step <= %.2f N per tick", l.max_stiffness_n_per_mm(),
           r.scene.tick_rate_hz() > 0 ? l.max_force_rate_n_per_s() / r.scene.tick_rate_hz() : 0.0);
+      if (l.coupling_stiffness_n_per_mm() > 0)
+        std::printf(", virtual coupling %.2f N/mm and %.4f N s/mm", l.coupling_stiffness_n_per_mm(),
+                    l.coupling_damping_n_s_per_mm());
       if (l.engage_threshold_n() > 0)
         std::printf(", engages below %.2f N over %.1f s", l.engage_threshold_n(),
                     l.engage_ramp_s());

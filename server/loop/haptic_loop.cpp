@@ -60,6 +60,7 @@ HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopC
   registration_ = config.registration;
   chain_config_.engage = config.engage;
   chain_config_.passivity = config.passivity;
+  chain_config_.coupling = config.coupling;
   identity_ = registration_.is_identity();
   for (int a = 0; a < 3; ++a)
     home_[static_cast<std::size_t>(a)].store(a == 0   ? registration_.home.x
@@ -232,9 +233,16 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   const auto points = static_cast<std::uint32_t>(bundle.model->contact_count());
   const State* published_state = nullptr;
   if (zero == 0) {
-    // scene pose -> model tick -> scene force -> device frame -> safety (device frame) -> write
-    tick(*bundle.model, bundle.state, last_pose_);
+    // tool pose (the virtual coupling's tool, device frame) -> scene pose -> model tick ->
+    // scene force -> device frame -> force chain (device frame) -> write
     const Vec3d position = last_device_pose_.position;
+    Pose model_pose = last_pose_;
+    if (config_.profile && chain_config_.coupling) {
+      const Pose tool{force_chain_tool(chain_, chain_config_, position),
+                      last_device_pose_.orientation};
+      model_pose = identity_ ? tool : to_scene(registration_, tool);
+    }
+    tick(*bundle.model, bundle.state, model_pose);
     Vec3d force = bundle.state.f_device, torque = bundle.state.tau_device;
     if (!identity_) {
       force = force_to_device(registration_, force);
@@ -245,7 +253,9 @@ void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
                             // passivity, step bound, clamp
       const ForceChainOutput out = run_force_chain(
           chain_, chain_config_, with_declared(*config_.profile, device_.declared_limits()), force,
-          torque, position, dt_s_);
+          torque,
+          // N per scene mm -> N per device mm (a device mm moves the tool `scale` scene mm)
+          bundle.state.stiffness * (identity_ ? 1.0 : registration_.scale), position, dt_s_);
       force = out.force, torque = out.torque, safety = out.status;
       if (out.damping_N_s_per_mm > 0.0) {
         passivity_ticks_.fetch_add(1, std::memory_order_relaxed);

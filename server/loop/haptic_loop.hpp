@@ -13,7 +13,7 @@
 // the force first - the device is written zero before anything else happens - and then the
 // fault is reported: counted, its bits kept in LoopStats::last_fault and in the tick's snapshot.
 // The model state is reset (proxies forgotten), so contact restarts cleanly when the fault
-// clears; with a device profile the rate limit then ramps the force back in.
+// clears; with a device profile engagement then ramps the force back in.
 //
 // Zeroed ticks that are not faults (paused, no pose yet, device absent) carry their own bits too,
 // so a replay reproduces them (DeviceSample::forced_fault).
@@ -27,6 +27,9 @@
 // Parameters change without the loop allocating: the new Model and its State are built by the
 // caller and handed over through an atomic pointer; the loop swaps them in at the start of a
 // tick and hands the old one back to be freed outside the loop.
+//
+// With a device profile the model is evaluated at the virtual coupling's tool, not at the device
+// (safety/force_chain.hpp); the published pose stays the device's, the contacts the model's.
 #pragma once
 
 #include <array>
@@ -84,6 +87,10 @@ struct LoopConfig {
   // The passivity observer/controller (safety/passivity.hpp) at the device port, damping up to
   // the profile's damping; needs a profile. palpd sets it whenever limits apply.
   bool passivity = false;
+  // The virtual coupling (safety/virtual_coupling.hpp) between the model and the device: the
+  // model is evaluated at the coupling's tool, the device gets the coupling's spring-damper (at
+  // most the profile's stiffness). Needs a profile; false: the stiffness limiter instead.
+  bool coupling = true;
   // Device frame -> scene (model/registration.hpp): applied to every pose read and, transposed,
   // to every force written; the safety filters run in the device frame. Identity: skipped.
   Registration registration;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "net/protocol.hpp"
+#include "safety/virtual_coupling.hpp"
 #include "wire/messages.hpp"
 
 namespace palp::net {
@@ -47,6 +48,11 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
       l->set_engage_ramp_s(loop.config().engage->ramp_s);
     }
     if (loop.config().passivity) l->set_max_damping_n_s_per_mm(profile->damping_N_s_per_mm);
+    if (loop.config().coupling) {
+      const CouplingGains gains = coupling_gains(*profile, 1.0 / loop.config().rate_hz);
+      l->set_coupling_stiffness_n_per_mm(gains.stiffness_N_per_mm);
+      l->set_coupling_damping_n_s_per_mm(gains.damping_N_s_per_mm);
+    }
   }
   if (scene.placement) {
     const SceneDescription::Placement& pl = *scene.placement;

@@ -75,12 +75,32 @@ class Environment {
     tick(model_, state_, Pose{{cx_, cy_, z}, Quat{}});
     return state_.f_device.z;
   }
+  // The model's stiffness (State::stiffness, N/mm) at the last tick_force.
+  double stiffness() const { return state_.stiffness; }
   void reset_state() { reset(state_); }
   // Static law with a force clamp and its potential (J), by table.
   double potential(double z, double clamp_N) const {
     // The clamp changes the potential only where |F| > clamp: integrate the clamped table.
     if (clamp_N != cached_clamp_) rebuild_clamped(clamp_N);
     return lookup(clamped_potential_, z);
+  }
+  // The potential (J) of the law as a virtual coupling of stiffness k_c (N/mm) renders it at
+  // device height z: the tool rests at z_v where the coupling's spring holds the (clamped) law,
+  // z_v - F(z_v) / k_c = z (a tool held at a jump of the law stretches the spring between), and
+  // the potential is the law's at z_v plus the spring's, s^2 / (2 k_c), s = k_c (z_v - z).
+  double coupled_potential(double z, double k_c, double clamp_N) const {
+    if (clamp_N != cached_clamp_) rebuild_clamped(clamp_N);
+    const auto g = [&](double zv) { return zv - std::min(lookup(force_, zv), clamp_N) / k_c; };
+    double lo = z_bottom_, hi = z_top_;                    // g is increasing in z_v
+    if (g(hi) <= z) return lookup(clamped_potential_, z);  // above the law: free
+    if (g(lo) >= z) lo = z - 1e3;                          // below the table: spring only
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (g(mid) < z ? lo : hi) = mid;
+    }
+    const double zv = hi;
+    const double spring = std::min(k_c * (zv - z), clamp_N);
+    return lookup(clamped_potential_, zv) + spring * spring / (2.0 * k_c) * 1e-3;
   }
   // Depth where the static law's force equals f (N), and the law's stiffness there (N/mm).
   void equilibrium(double f, double& depth, double& stiffness) const {

@@ -1,29 +1,30 @@
 // Stability of palpd's default force chain in closed loop with a hand: the chain of
-// HapticLoop::step (device limits, engagement, passivity controller, clamp) against saturation
-// alone and against the stiffness limiter alone, per device profile, at update rates from 0.5 to
-// 10 kHz.
+// HapticLoop::step (virtual coupling, engagement, passivity controller, step bound, clamp) against
+// saturation alone, the stiffness limiter alone and the chain before the coupling, per device
+// profile, at update rates from 0.5 to 10 kHz.
 //
 // The closed loop is that of study_passivity (closed_loop.hpp): one degree of freedom along the
 // skin normal, a device class (mass, viscous damping, encoder resolution), a hand coupled by the
 // grip and pushing with a set force (ramped in over 0.5 s), the force model (finger:1, printed
-// bone law, palp::tick) ticked on the quantised position, its force held over the period while
-// both masses move (integrated at 100 kHz). Added here: the device's workspace ends 25 mm under
-// the skin (a stiff stop, 10 N/mm and 20 N s/m, part of the mechanism, not rendered), so a hand
-// the rendered force cannot hold comes to rest there instead of travelling on.
+// bone law, palp::tick) ticked on the quantised position (palpd's chains: at the coupling's
+// tool), its force held over the period while both masses move (integrated at 100 kHz). The
+// device's workspace ends 25 mm under the skin (a stiff stop, 10 N/mm and 20 N s/m, part of the
+// mechanism, not rendered), so a hand the rendered force cannot hold comes to rest there.
 //
 // Chains (the force written to the device; the declared force is 0, so the profile is unchanged):
-//   saturation  clamp to the profile's max force only (the device's own limit);
-//   limiter     palp::apply_device_limits (clamp, stiffness limit, rate limit, clamp): palpd's
-//               chain when a profile was named, before engagement and passivity;
-//   palpd       the default chain: palp::run_force_chain, the function HapticLoop::step calls
-//               (limits on the limiter's own output, engagement EngageParams{0.2, 1.5}, the
-//               passivity controller on a filtered velocity once engaged, step bound, clamp).
+//   saturation     clamp to the profile's max force only (the device's own limit);
+//   limiter        palp::apply_device_limits (clamp, stiffness limit, rate limit, clamp);
+//   palpd-limiter  palp::run_force_chain with the coupling off: the default chain before the
+//                  virtual coupling (limiter on its own output, engagement, passivity, step bound);
+//   palpd          the default chain: palp::run_force_chain, the function HapticLoop::step calls
+//                  (virtual coupling, engagement EngageParams{0.2, 1.5}, the passivity controller
+//                  once engaged, step bound, clamp), the model evaluated at the coupling's tool;
 //   palpd-engaged  the same chain with its engagement ramp already over when the run starts (as
-//               after 1.5 s in free air), so the hand meets the chain fully engaged.
+//                  after 1.5 s in free air), so the hand meets the chain fully engaged.
 // A fault zeroes the force and resets as the loop does: model state, engagement, passivity
-// state, previous force 0, previous position the current one.
+// state, coupling, previous force 0, previous position the current one.
 //
-// Scenarios (3 s each):
+// Scenarios (4 s each):
 //   a    skin, hand 50 % of max force
 //   b30  skin over a bone plate 10 mm deep, hand 30 % of max
 //   b90  the same, hand 90 % of max
@@ -32,19 +33,23 @@
 //   e    skin, hand 50 %; a watchdog fault zeroes the force for 10 ms at t = 1.5 s
 //
 // Per run (stability.csv):
-//   p2p_mm        peak-to-peak device position over the last 0.5 s (2.5-3 s)
-//   inj_mJ        energy injected by the rendered environment over 1.5-3 s: the work its force did
+//   p2p_mm        peak-to-peak device position over the last 0.5 s (3.5-4 s): a sustained cycle
+//   ring_p2p_mm   the same over 2.5-3 s (the first version's window: 0.8 s after d's re-press)
+//   inj_mJ        energy injected by the rendered environment over 1.5-4 s: the work its force did
 //                 on the device plus the change of the potential of the static law clamped to the
-//                 max force (0 for a passive rendering of that law; nan while palpd holds the
-//                 force off, where that law is not what is rendered)
+//                 max force (with the coupling: the law in series with the coupling's spring) (0
+//                 for a passive rendering of that law; nan while palpd holds the force off, where
+//                 that law is not what is rendered); energy_resolution_mJ: F_hand q / 2, what
+//                 a passive rendering on a q-quantised encoder may read either way
 //   max_step_N    largest change of the written force from one tick to the next (the fault's own
 //                 drop to zero left out), against step_bound_N = max_force_rate * tick
 //   engage_s      time from start until the written force first reaches 90 % of the hand force
 //                 (of the max force when the hand pushes more; nan: never)
 //   fault_step_N  (e) largest per-tick change once the fault has cleared
 //   max_depth_mm, end_depth_mm   deepest pad depth under the skin, and its mean over the last
-//                 0.5 s; depth_eq_mm: where the static law holds the hand force (nan beyond the
-//                 max force); held: end_depth_mm no more than 1 mm deeper than that
+//                 0.5 s; depth_eq_mm: where the rendered static law holds the hand force (nan
+//                 beyond the max force; with the coupling, its spring's stretch added); held:
+//                 end_depth_mm within 1 mm of that
 //   engaged_end   the engagement gain at the end (1 for the other chains)
 //   min_force_N   the most negative written force (< 0: the device pulls the pad into the skin)
 //   pc_ticks, pc_mJ   ticks on which the passivity controller damped, and what it dissipated
@@ -74,19 +79,21 @@
 namespace palp::study {
 namespace {
 
-constexpr double kRampS = 0.5, kEndS = 3.0;
-constexpr double kEnergyFromS = 1.5, kCycleFromS = 2.5;
+constexpr double kRampS = 0.5, kEndS = 4.0;
+constexpr double kEnergyFromS = 1.5, kRingFromS = 2.5, kRingToS = 3.0, kCycleFromS = 3.5;
 constexpr double kEventS = 1.5, kLetGoS = 0.2, kFaultS = 0.010;
 constexpr double kStopDepthMm = 25.0, kStopNPerMm = 10.0, kStopNsPerM = 20.0;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
-enum class Chain { Saturation, Limiter, Palpd, PalpdEngaged };
+enum class Chain { Saturation, Limiter, PalpdLimiter, Palpd, PalpdEngaged };
 const char* chain_name(Chain c) {
   switch (c) {
     case Chain::Saturation:
       return "saturation";
     case Chain::Limiter:
       return "limiter";
+    case Chain::PalpdLimiter:
+      return "palpd-limiter";
     case Chain::Palpd:
       return "palpd";
     case Chain::PalpdEngaged:
@@ -114,6 +121,8 @@ constexpr Scenario kScenarios[] = {
 
 struct RunResult {
   double p2p_mm = 0.0, inj_mJ = 0.0, max_step_N = 0.0, engage_s = kNan, fault_step_N = kNan;
+  double ring_p2p_mm = 0.0;         // peak-to-peak over 2.5-3 s (the window of the first version)
+  double coupling_N_per_mm = kNan;  // the virtual coupling's stiffness (coupled chains)
   double max_depth_mm = 0.0, end_depth_mm = 0.0, engaged_end = 1.0;
   long pc_ticks = 0;
   double pc_mJ = 0.0;
@@ -150,6 +159,13 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   const double surface_z = env.device_z_for_depth(0.0);
   const double stop_z = env.device_z_for_depth(kStopDepthMm);
   const EngageParams engage_params{0.2, 1.5};
+  const bool coupled = chain == Chain::Palpd || chain == Chain::PalpdEngaged;
+  const double k_c = coupling_gains(profile, period).stiffness_N_per_mm;
+  // The static law the chain renders: the model's, or with the coupling's spring in series.
+  const auto potential = [&](double z) {
+    return coupled ? env.coupled_potential(z, k_c, profile.max_force_N)
+                   : env.potential(z, profile.max_force_N);
+  };
   // Start at rest with the pad 0.5 mm above the skin.
   double xd = env.device_z_for_depth(-0.5), vd = 0.0;
   double xh = xd, vh = 0.0;
@@ -161,6 +177,7 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   ForceChainConfig chain_config;
   chain_config.engage = engage_params;
   chain_config.passivity = true;
+  chain_config.coupling = chain != Chain::PalpdLimiter;
   ForceChainState chain_state;
   if (chain == Chain::PalpdEngaged) chain_state.engagement = Engagement{false, 1.0};
 
@@ -169,6 +186,7 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   double work = 0.0, u_start = 0.0;  // J, over the energy window
   bool measuring = false, faulted = false, after_fault = false;
   double cyc_min = 1e300, cyc_max = -1e300, depth_sum = 0.0;
+  double ring_min = 1e300, ring_max = -1e300;
   long depth_n = 0;
   double next_trace = 0.0;
   const long ticks = std::lround(kEndS * rate);
@@ -188,8 +206,12 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
       prev_valid = true;
       faulted = true;
     } else {
-      const double f_model = env.tick_force(xq);
-      const bool palpd = chain == Chain::Palpd || chain == Chain::PalpdEngaged;
+      const bool palpd =
+          chain == Chain::Palpd || chain == Chain::PalpdEngaged || chain == Chain::PalpdLimiter;
+      // the model at the coupling's tool (palpd's chains) or at the device
+      const double model_z =
+          palpd ? force_chain_tool(chain_state, chain_config, {0.0, 0.0, xq}).z : xq;
+      const double f_model = env.tick_force(model_z);
       if (chain == Chain::Saturation) {
         f_out = std::clamp(f_model, -profile.max_force_N, profile.max_force_N);
       } else if (!palpd) {
@@ -201,8 +223,9 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
         in.dt = period;
         f_out = apply_device_limits(profile, in).force.z;
       } else {
-        const ForceChainOutput out = run_force_chain(
-            chain_state, chain_config, profile, {0.0, 0.0, f_model}, {}, {0.0, 0.0, xq}, period);
+        const ForceChainOutput out =
+            run_force_chain(chain_state, chain_config, profile, {0.0, 0.0, f_model}, {},
+                            env.stiffness(), {0.0, 0.0, xq}, period);
         f_out = out.force.z;
         if (out.damping_N_s_per_mm > 0.0) {
           ++r.pc_ticks;
@@ -223,7 +246,7 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
     if (std::isnan(r.engage_s) && std::fabs(f_out) >= engage_target) r.engage_s = t;
     if (!measuring && t >= kEnergyFromS - 1e-9) {
       measuring = true;
-      u_start = env.potential(xd, profile.max_force_N);
+      u_start = potential(xd);
     }
     // Plant: device and hand, force held over the period.
     double push = push_N * std::min(1.0, t / kRampS);
@@ -241,6 +264,10 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
       if (measuring) work += f_out * dx * 1e-3;
       const double ts = t + (s + 1) * dt;
       r.max_depth_mm = std::max(r.max_depth_mm, surface_z - xd);
+      if (ts > kRingFromS && ts <= kRingToS) {
+        ring_min = std::min(ring_min, xd);
+        ring_max = std::max(ring_max, xd);
+      }
       if (ts > kCycleFromS) {
         cyc_min = std::min(cyc_min, xd);
         cyc_max = std::max(cyc_max, xd);
@@ -253,8 +280,10 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
       }
     }
   }
-  const double u_end = env.potential(xd, profile.max_force_N);
-  if (chain == Chain::Palpd || chain == Chain::PalpdEngaged)
+  const double u_end = potential(xd);
+  if (coupled) r.coupling_N_per_mm = k_c;
+  r.ring_p2p_mm = ring_max - ring_min;
+  if (chain == Chain::Palpd || chain == Chain::PalpdEngaged || chain == Chain::PalpdLimiter)
     r.engaged_end = chain_state.engagement.gain;
   // Work done on the device plus what a passive rendering of the (clamped) law would have stored.
   r.inj_mJ = r.engaged_end >= 1.0 ? (work - (u_start - u_end)) * 1e3 : kNan;
@@ -293,12 +322,35 @@ int main(int argc, char** argv) {
                                                 : std::vector<double>{500, 1000, 2000, 4000, 10000};
   const Hand hand;
 
-  Csv csv(flags.out_dir + "/stability.csv",
-          {"profile",  "chain",        "scenario",     "what",         "rate_hz",      "hand_frac",
-           "hand_N",   "p2p_mm",       "inj_mJ",       "max_step_N",   "step_bound_N", "step_ratio",
-           "engage_s", "fault_step_N", "max_depth_mm", "end_depth_mm", "engaged_end",  "pc_ticks",
-           "pc_mJ",    "depth_eq_mm",  "min_force_N",  "goal_p2p",     "goal_energy",  "goal_step",
-           "held",     "series"});
+  Csv csv(flags.out_dir + "/stability.csv", {"profile",
+                                             "chain",
+                                             "scenario",
+                                             "what",
+                                             "rate_hz",
+                                             "hand_frac",
+                                             "hand_N",
+                                             "p2p_mm",
+                                             "inj_mJ",
+                                             "max_step_N",
+                                             "step_bound_N",
+                                             "step_ratio",
+                                             "engage_s",
+                                             "fault_step_N",
+                                             "max_depth_mm",
+                                             "end_depth_mm",
+                                             "engaged_end",
+                                             "pc_ticks",
+                                             "pc_mJ",
+                                             "depth_eq_mm",
+                                             "min_force_N",
+                                             "goal_p2p",
+                                             "goal_energy",
+                                             "goal_step",
+                                             "held",
+                                             "ring_p2p_mm",
+                                             "coupling_N_per_mm",
+                                             "energy_resolution_mJ",
+                                             "series"});
   Csv trace_csv(flags.out_dir + "/stability_trace.csv",
                 {"profile", "chain", "scenario", "rate_hz", "t_s", "depth_mm", "force_N"});
   Csv summary(flags.out_dir + "/stability_summary.csv",
@@ -310,7 +362,8 @@ int main(int argc, char** argv) {
               "rate", "p2p_mm", "inj_mJ", "step_N", "bound_N", "engage_s", "fault_N", "depth");
   for (const DeviceClass& dc : kDeviceClasses) {
     const DeviceProfile& profile = device_profile(dc.profile);
-    for (Chain chain : {Chain::Saturation, Chain::Limiter, Chain::Palpd, Chain::PalpdEngaged}) {
+    for (Chain chain : {Chain::Saturation, Chain::Limiter, Chain::PalpdLimiter, Chain::Palpd,
+                        Chain::PalpdEngaged}) {
       for (const Scenario& sc : kScenarios) {
         Environment& env = sc.bone ? bone : skin;
         for (double rate : rates) {
@@ -323,13 +376,19 @@ int main(int argc, char** argv) {
           const double bound = profile.max_force_rate_N_per_s / rate;
           const double push = sc.hand_frac * profile.max_force_N;
           const bool goal_p2p = r.p2p_mm < 0.1;
-          const bool goal_energy = !(r.inj_mJ > 0.0);  // nan (force held off) counts as met
+          // The energy is read against the static law at the true position while the chain
+          // renders it at the encoder's: a passive rendering may read up to F q / 2 (the hand
+          // force over half an encoder step) either way. Above that it counts as injected.
+          const double energy_resolution = 0.5 * dc.encoder_mm * push * 1.0;  // N mm = mJ
+          const bool goal_energy = !(r.inj_mJ > energy_resolution);           // nan (held off): met
           const bool goal_step = r.max_step_N <= bound * (1.0 + 1e-9);
           // The static law's equilibrium for the hand force (none beyond the max force: the
           // device then rests on its stop); "held": the press ends no more than 1 mm deeper.
           double depth_eq = kNan, k_eq = kNan;
           if (push < profile.max_force_N) env.equilibrium(push, depth_eq, k_eq);
-          const bool held = std::isnan(depth_eq) || r.end_depth_mm <= depth_eq + 1.0;
+          // with the coupling, the device rests deeper than the tool by the spring's stretch
+          if (!std::isnan(r.coupling_N_per_mm)) depth_eq += push / r.coupling_N_per_mm;
+          const bool held = std::isnan(depth_eq) || std::fabs(r.end_depth_mm - depth_eq) <= 1.0;
           csv.row({std::string(dc.profile),
                    chain_name(chain),
                    std::string(sc.name),
@@ -355,6 +414,9 @@ int main(int argc, char** argv) {
                    goal_energy ? 1.0 : 0.0,
                    goal_step ? 1.0 : 0.0,
                    held ? 1.0 : 0.0,
+                   r.ring_p2p_mm,
+                   r.coupling_N_per_mm,
+                   energy_resolution,
                    std::string(dc.profile) + ", " + chain_name(chain)});
           // Worst p2p and energy over the presses that should hold (a, b30, b90, d); steps and
           // holding over all six.

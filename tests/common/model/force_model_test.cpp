@@ -122,6 +122,32 @@ TEST(ForceLaws, BoneForce) {
   EXPECT_NEAR(bone_force(3.97, 40.0), 39.96, 0.01);
 }
 
+TEST(ForceLaws, SlopesAreTheDerivatives) {
+  for (double x : {0.1, 1.0, 4.0, 10.0, 30.0}) {
+    const double h = 1e-6;
+    EXPECT_NEAR(surface_force_slope(x), (surface_force(x + h) - surface_force(x - h)) / (2 * h),
+                1e-6 * (1 + x * x))
+        << x;
+  }
+  EXPECT_EQ(surface_force_slope(0.0), 0.0);
+  EXPECT_DOUBLE_EQ(surface_force_slope(10.0), 3 * 1.78e-2 * 100 + 2 * 3.82e-3 * 10 + 2.28e-4);
+  EXPECT_DOUBLE_EQ(bone_force_slope(10.0, 40.0), 7500.0 / 1e4);  // |d/dx 2500 / x^3|
+  EXPECT_EQ(bone_force_slope(3.0, 40.0), 0.0);                   // capped: flat
+  EXPECT_EQ(bone_force_slope(0.0, 40.0), 0.0);
+  EXPECT_EQ(bone_force_slope(-1.0, 40.0), 0.0);
+}
+
+TEST(ForceModel, StiffnessIsTheMeanSlopeOfThePointsInContact) {
+  // Flat skin, no bone: every point at the same depth has slope f_s'(d) plus the friction
+  // spring k; out of contact, 0.
+  const Model model(skin_only(), parse_tool("finger:7"));
+  State st = make_state(model);
+  tick(model, st, press(4.0));
+  EXPECT_NEAR(st.stiffness, surface_force_slope(4.0) + model.params().k, 1e-9);
+  tick(model, st, press(-1.0));
+  EXPECT_EQ(st.stiffness, 0.0);
+}
+
 TEST(ForceModel, FlatFaceGivesSurfaceLawAlongNormalForEveryN) {
   for (Storage storage : kStorages)
     for (GradientScheme scheme : kSchemes) {

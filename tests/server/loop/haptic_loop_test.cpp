@@ -239,14 +239,18 @@ TEST(HapticLoop, DeviceProfileLimitsTheForce) {
   HapticLoop loop(model, d, c);
   loop.step(0, 0);
   const TickRecord r = drain(loop).at(0);
+  // The loop runs the force chain (coupling on, no engagement or passivity configured) on the
+  // model's force at the coupling's tool, which starts at the device.
   State state = make_state(*model);
   tick(*model, state, d.script[0].pose);
-  SafetyInput in;
-  in.force = state.f_device;
-  in.torque = state.tau_device;
-  in.position = in.prev_position = d.script[0].pose.position;
-  in.dt = 0.001;  // the nominal period, never the measured one
-  const SafetyOutput expected = apply_device_limits(device_profile("falcon"), in);
+  ForceChainState chain;
+  ForceChainConfig chain_config;
+  EXPECT_EQ(force_chain_tool(chain, chain_config, d.script[0].pose.position),
+            d.script[0].pose.position);
+  const ForceChainOutput expected =
+      run_force_chain(chain, chain_config, device_profile("falcon"), state.f_device,
+                      state.tau_device, state.stiffness, d.script[0].pose.position,
+                      0.001);  // the nominal period, never the measured one
   EXPECT_GT(norm(state.f_device), 1.0);
   EXPECT_EQ(r.force, expected.force);
   EXPECT_EQ(r.safety_status, expected.status);
