@@ -75,6 +75,12 @@ class Environment {
     tick(model_, state_, Pose{{cx_, cy_, z}, Quat{}});
     return state_.f_device.z;
   }
+  // The model's force at (x, cy, z): one tick, state kept (a slide across the scene).
+  Vec3d tick_force_at(double x, double z) {
+    tick(model_, state_, Pose{{x, cy_, z}, Quat{}});
+    return state_.f_device;
+  }
+  double cx() const { return cx_; }
   // The model's stiffness (State::stiffness, N/mm) at the last tick_force.
   double stiffness() const { return state_.stiffness; }
   void reset_state() { reset(state_); }

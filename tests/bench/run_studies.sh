@@ -84,19 +84,19 @@ charts() {
 
   # Stability of palpd's default chain (study_stability, docs/stability.md).
   want stability || { ls -1 "$figures"/*.png; return; }
-  local chains="saturation|limiter|palpd|palpd-engaged"
+  local chains="saturation|limiter|palpd-limiter|palpd|palpd-engaged"
   for profile in touch falcon phantom-premium omega; do
     "$chart" "${c[@]}" --csv "$data/stability_summary.csv" --where profile=$profile \
       --where "chain=$chains" --x rate_hz --y p2p_worst_mm --group chain --logx --logy \
       --legend bl --xlabel "update rate (Hz)" \
-      --ylabel "worst peak-to-peak over the last 0.5 s (mm; a, b30, b90, d)" \
+      --ylabel "worst peak-to-peak over 3.5-4 s (mm; a, b30, b90, d, r, s)" \
       --title "$profile: device motion at the end of a press (goal: < 0.1 mm at >= 1 kHz)" \
       --out "$figures/stability_p2p_$profile.png"
   done
   "$chart" "${c[@]}" --csv "$data/stability_summary.csv" --where profile=all \
     --where "chain=$chains" --x rate_hz --y inj_worst_mJ --group chain --logx --logy \
     --legend bl --xlabel "update rate (Hz)" \
-    --ylabel "worst energy injected over 1.5-3 s (mJ; a, b30, b90, d; <= 0 not drawn)" \
+    --ylabel "worst energy injected (mJ; a, b30, b90, d, r, s; <= 0 not drawn)" \
     --title "Energy the rendering injects, worst over the four profiles (goal: <= 0)" \
     --out "$figures/stability_energy.png"
   "$chart" "${c[@]}" --csv "$data/stability_summary.csv" --where profile=all \
@@ -105,11 +105,11 @@ charts() {
     --ylabel "largest per-tick force step / (max_force_rate x tick)" \
     --title "Largest force step against the profile's bound, worst over profiles (goal: <= 1)" \
     --out "$figures/stability_step.png"
-  for run in "touch a" "falcon b90"; do
+  for run in "touch b30" "touch s" "phantom-premium d"; do
     set -- $run
     "$chart" "${c[@]}" --csv "$data/stability_trace.csv" --where profile=$1 --where scenario=$2 \
       --x t_s --y depth_mm --group chain --style line --legend tr \
-      --xlabel "time (s); hand force ramped in over 0.5 s" \
+      --xlabel "time (s); hand force ramped in over 0.5 s" --where "chain=$chains" \
       --ylabel "pad depth under the skin (mm; the device's stop at 25 mm)" \
       --title "$1, scenario $2, 1 kHz: depth of the press per chain" \
       --out "$figures/stability_trace_${1}_$2.png"

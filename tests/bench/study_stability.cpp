@@ -31,6 +31,10 @@
 //   c    skin, hand 150 % of max (beyond what the device can render)
 //   d    skin, hand 50 %; the hand lets go (force 0) for 0.2 s at t = 1.5 s, then pushes again
 //   e    skin, hand 50 %; a watchdog fault zeroes the force for 10 ms at t = 1.5 s
+//   r    a round rib (6 mm wide, 4 mm high) 8 mm under the skin, pressed on its crest, hand 30 %
+//   s    the same rib: the hand presses 15 mm beside it (30 %) and, from t = 1 s, slides across
+//        it 30 mm at 30 mm/s and back (the lateral motion prescribed, the friction proxy active),
+//        then rests; its energy is the work over the closed slide (1-4 s), negative with friction
 //
 // Per run (stability.csv):
 //   p2p_mm        peak-to-peak device position over the last 0.5 s (3.5-4 s): a sustained cycle
@@ -41,7 +45,8 @@
 //                 for a passive rendering of that law; nan while palpd holds the force off, where
 //                 that law is not what is rendered); energy_resolution_mJ: F_hand q / 2, what
 //                 a passive rendering on a q-quantised encoder may read either way
-//   max_step_N    largest change of the written force from one tick to the next (the fault's own
+//   max_step_N    largest change of the written force vector from one tick to the next (the fault's
+//   own
 //                 drop to zero left out), against step_bound_N = max_force_rate * tick
 //   engage_s      time from start until the written force first reaches 90 % of the hand force
 //                 (of the max force when the hand pushes more; nan: never)
@@ -54,9 +59,9 @@
 //   min_force_N   the most negative written force (< 0: the device pulls the pad into the skin)
 //   pc_ticks, pc_mJ   ticks on which the passivity controller damped, and what it dissipated
 // the worst case per profile (and over all profiles), chain and rate (stability_summary.csv:
-// largest p2p and injected energy over a, b30, b90 and d, largest step / bound and the number of
-// runs not held over all six), and traces of the device depth and written force for the touch
-// and falcon at 1 kHz (stability_trace.csv, every 1 ms).
+// largest p2p and injected energy over a, b30, b90, d, r and s, largest step / bound and the number
+// of runs not held over all eight), and traces of the device depth and written force for the touch,
+// falcon and phantom-premium at 1 kHz (stability_trace.csv, every 1 ms).
 //
 //   study_stability [--out DIR] [--quick]     (--quick: 0.5, 1 and 10 kHz only)
 #include <algorithm>
@@ -102,22 +107,33 @@ const char* chain_name(Chain c) {
   return "?";
 }
 
+enum class Scene { Skin, Plate, RibOn, RibOff };
 struct Scenario {
   const char* name;
   const char* what;
-  bool bone;
+  Scene scene;
   double hand_frac;
   bool let_go;  // (d)
   bool fault;   // (e)
+  bool slide;   // (s)
 };
 constexpr Scenario kScenarios[] = {
-    {"a", "skin, hand 50%", false, 0.5, false, false},
-    {"b30", "bone 10 mm deep, hand 30%", true, 0.3, false, false},
-    {"b90", "bone 10 mm deep, hand 90%", true, 0.9, false, false},
-    {"c", "skin, hand 150%", false, 1.5, false, false},
-    {"d", "skin, hand 50%, lets go 0.2 s", false, 0.5, true, false},
-    {"e", "skin, hand 50%, fault 10 ms", false, 0.5, false, true},
+    {"a", "skin, hand 50%", Scene::Skin, 0.5, false, false, false},
+    {"b30", "bone 10 mm deep, hand 30%", Scene::Plate, 0.3, false, false, false},
+    {"b90", "bone 10 mm deep, hand 90%", Scene::Plate, 0.9, false, false, false},
+    {"c", "skin, hand 150%", Scene::Skin, 1.5, false, false, false},
+    {"d", "skin, hand 50%, lets go 0.2 s", Scene::Skin, 0.5, true, false, false},
+    {"e", "skin, hand 50%, fault 10 ms", Scene::Skin, 0.5, false, true, false},
+    {"r", "on a rib 8 mm deep, hand 30%", Scene::RibOn, 0.3, false, false, false},
+    {"s", "slides across a rib and back, hand 30%", Scene::RibOff, 0.3, false, false, true},
 };
+// (s): from t = 1 s the hand slides 30 mm across the rib at 30 mm/s and back, then rests (1 s).
+constexpr double kSlideFromS = 1.0, kSlideMm = 30.0, kSlideMmPerS = 30.0;
+double slide_offset(const Scenario& sc, double t) {
+  if (!sc.slide || t < kSlideFromS) return 0.0;
+  const double s = (t - kSlideFromS) * kSlideMmPerS;
+  return s < kSlideMm ? s : std::max(0.0, 2.0 * kSlideMm - s);
+}
 
 struct RunResult {
   double p2p_mm = 0.0, inj_mJ = 0.0, max_step_N = 0.0, engage_s = kNan, fault_step_N = kNan;
@@ -171,8 +187,9 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   double xh = xd, vh = 0.0;
   const double q = dc.encoder_mm;
   // The loop's state: what was written last tick, the position then, engagement, passivity.
-  double prev_force = 0.0, prev_pos = xd;
+  Vec3d prev_vec{}, prev_device{env.cx(), 0.0, xd};
   bool prev_valid = false;
+  double lat_prev = env.cx();
   // palpd's chains run palp::run_force_chain, the very step HapticLoop::step runs.
   ForceChainConfig chain_config;
   chain_config.engage = engage_params;
@@ -193,58 +210,65 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   for (long n = 0; n < ticks; ++n) {
     const double t = static_cast<double>(n) * period;
     const double xq = q * std::round(xd / q);
+    // the lateral position (prescribed: the hand leads the device across), quantised too
+    const double lat = env.cx() + slide_offset(sc, t);
+    const double latq = q * std::round(lat / q);
     const bool fault_now = sc.fault && t >= kEventS && t < kEventS + kFaultS - 1e-9;
     double f_out = 0.0;
+    Vec3d f_vec{};
     if (fault_now) {
       // The loop's fault path: zero, then reset everything that carries over.
       env.reset_state();
       reset_force_chain(chain_state);
-      chain_state.position_prev = {0.0, 0.0, xq};
+      chain_state.position_prev = {latq, 0.0, xq};
       chain_state.have_prev = true;
-      prev_force = 0.0;
-      prev_pos = xq;
+      prev_vec = Vec3d{};
+      prev_device = {latq, 0.0, xq};
       prev_valid = true;
       faulted = true;
     } else {
       const bool palpd =
           chain == Chain::Palpd || chain == Chain::PalpdEngaged || chain == Chain::PalpdLimiter;
       // the model at the coupling's tool (palpd's chains) or at the device
-      const double model_z =
-          palpd ? force_chain_tool(chain_state, chain_config, {0.0, 0.0, xq}).z : xq;
-      const double f_model = env.tick_force(model_z);
+      const Vec3d device{latq, 0.0, xq};
+      const Vec3d tool = palpd ? force_chain_tool(chain_state, chain_config, device) : device;
+      const Vec3d f_model = env.tick_force_at(tool.x, tool.z);
       if (chain == Chain::Saturation) {
-        f_out = std::clamp(f_model, -profile.max_force_N, profile.max_force_N);
+        f_vec = clamp_force(f_model, profile.max_force_N).value;
       } else if (!palpd) {
         SafetyInput in;
-        in.force = {0.0, 0.0, f_model};
-        in.prev_force = {0.0, 0.0, prev_force};
-        in.position = {0.0, 0.0, xq};
-        in.prev_position = {0.0, 0.0, prev_valid ? prev_pos : xq};
+        in.force = f_model;
+        in.prev_force = prev_vec;
+        in.position = device;
+        in.prev_position = prev_valid ? prev_device : device;
         in.dt = period;
-        f_out = apply_device_limits(profile, in).force.z;
+        f_vec = apply_device_limits(profile, in).force;
       } else {
-        const ForceChainOutput out =
-            run_force_chain(chain_state, chain_config, profile, {0.0, 0.0, f_model}, {},
-                            env.stiffness(), {0.0, 0.0, xq}, period);
-        f_out = out.force.z;
+        const ForceChainOutput out = run_force_chain(chain_state, chain_config, profile, f_model,
+                                                     {}, env.stiffness(), device, period);
+        f_vec = out.force;
         if (out.damping_N_s_per_mm > 0.0) {
           ++r.pc_ticks;
           r.pc_mJ += out.dissipated_mJ;
         }
       }
+      f_out = f_vec.z;
       r.min_force_N = std::min(r.min_force_N, f_out);
-      const double step = std::fabs(f_out - prev_force);
+      const double step = norm(f_vec - prev_vec);
       r.max_step_N = std::max(r.max_step_N, step);
       if (faulted) {
         after_fault = true;
         r.fault_step_N = std::isnan(r.fault_step_N) ? step : std::max(r.fault_step_N, step);
       }
-      prev_force = f_out;
-      prev_pos = xq;
+      prev_vec = f_vec;
+      prev_device = device;
       prev_valid = true;
     }
     if (std::isnan(r.engage_s) && std::fabs(f_out) >= engage_target) r.engage_s = t;
-    if (!measuring && t >= kEnergyFromS - 1e-9) {
+    // the lateral work of the force over this tick (the hand leads the device across)
+    if (measuring) work += f_vec.x * (lat - lat_prev) * 1e-3;
+    lat_prev = lat;
+    if (!measuring && t >= (sc.slide ? kSlideFromS : kEnergyFromS) - 1e-9) {
       measuring = true;
       u_start = potential(xd);
     }
@@ -315,6 +339,12 @@ int main(int argc, char** argv) {
                    press.cy);
   Environment bone(std::make_shared<const FieldSampler>(maps.surf, maps.bone), maps.skin_level,
                    press.cx, press.cy);
+  // A round rib (6 mm wide, 4 mm high, 8 mm under the skin, along y at x = 40): pressed on its
+  // crest (r), and slid across from 15 mm beside it (s).
+  const RibMaps ribs = make_rib_maps(RibScene{});
+  const auto rib_fields = std::make_shared<const FieldSampler>(ribs.surf, ribs.bone);
+  Environment rib_on(rib_fields, ribs.skin_level, RibScene{}.rib_x, 20.0);
+  Environment rib_off(rib_fields, ribs.skin_level, RibScene{}.rib_x - 15.0, 20.0);
   std::printf("stability: skin at z = %.2f, bone plate top %.2f mm under it, stop at %.0f mm\n",
               maps.skin_level, maps.skin_level - maps.rib_top, kStopDepthMm);
 
@@ -365,10 +395,12 @@ int main(int argc, char** argv) {
     for (Chain chain : {Chain::Saturation, Chain::Limiter, Chain::PalpdLimiter, Chain::Palpd,
                         Chain::PalpdEngaged}) {
       for (const Scenario& sc : kScenarios) {
-        Environment& env = sc.bone ? bone : skin;
+        Environment& env = sc.scene == Scene::Skin    ? skin
+                           : sc.scene == Scene::Plate ? bone
+                           : sc.scene == Scene::RibOn ? rib_on
+                                                      : rib_off;
         for (double rate : rates) {
-          const bool traced = rate == 1000.0 && (std::string(dc.profile) == "touch" ||
-                                                 std::string(dc.profile) == "falcon");
+          const bool traced = rate == 1000.0 && std::string(dc.profile) != "omega";
           std::vector<TracePoint> trace;
           const RunResult r =
               run(env, profile, dc, hand, rate, chain, sc, traced ? &trace : nullptr);
@@ -418,8 +450,9 @@ int main(int argc, char** argv) {
                    r.coupling_N_per_mm,
                    energy_resolution,
                    std::string(dc.profile) + ", " + chain_name(chain)});
-          // Worst p2p and energy over the presses that should hold (a, b30, b90, d); steps and
-          // holding over all six.
+          // Worst p2p and energy over the presses that should hold (a, b30, b90, d, r, s; s ends
+          // at rest where it began, its energy the work over the closed slide); steps and holding
+          // over all eight.
           const bool cycle_scenario = sc.name != std::string("c") && sc.name != std::string("e");
           for (const std::string& who : {std::string(dc.profile), std::string("all")})
             worst[{who, chain_name(chain), rate}].add(sc.name, r, r.max_step_N / bound, held,
