@@ -29,7 +29,7 @@ struct DeviceClass {
   const char* profile;
   double mass_kg, damping_Ns_per_m, encoder_mm;
 };
-// Touch first: study_passivity (whose published figures predate it) skips it.
+// Both studies run every class.
 constexpr DeviceClass kDeviceClasses[] = {
     {"touch", 0.045, 0.1, 0.055},
     {"falcon", 0.15, 0.5, 0.06},

@@ -67,16 +67,16 @@ charts() {
     --title "finger:37 across a thin rib at 12 mm indentation, against speed" \
     --out "$figures/pop_through_speed.png"
 
-  want passivity && for profile in falcon phantom-premium omega; do
+  want passivity && for profile in touch falcon phantom-premium omega; do
     "$chart" "${c[@]}" --csv "$data/passivity_boundary.csv" --where profile=$profile \
-      --where "limits=saturation|limiter" --x hand_N --y min_stable_rate_hz --group series \
+      --where "limits=saturation|limiter|coupling" --x hand_N --y min_stable_rate_hz --group series \
       --logy --legend tr --xlabel "hand push (N)" \
       --ylabel "lowest stable update rate (Hz; 20000 = unstable at 10 kHz)" \
       --title "$profile: stable above each line (skin / bone 10 mm under skin)" \
       --out "$figures/passivity_$profile.png"
   done
   want passivity && "$chart" "${c[@]}" --csv "$data/passivity.csv" --where scene=bone --where hand_frac=0.2 \
-    --where "limits=saturation|limiter" --x rate_hz --y inj_mW --group profile,limits --logx \
+    --where "limits=saturation|limiter|coupling" --x rate_hz --y inj_mW --group profile,limits --logx \
     --logy --legend bl --xlabel "update rate (Hz)" \
     --ylabel "energy injected by the rendering (mW)" \
     --title "Hand pushing 20% of max force onto skin over bone (2.5 N step at contact)" \

@@ -1,6 +1,6 @@
 // Passivity of the closed loop: a haptic device held by a hand, pressing into skin and onto bone,
-// with the force model in the loop at update rates from 0.5 to 10 kHz, with and without the
-// stiffness limiter of the device profile.
+// with the force model in the loop at update rates from 0.5 to 10 kHz: with saturation alone,
+// the stiffness limiter palpd used first, and the virtual coupling that replaced it.
 //
 // One degree of freedom along the skin normal (the finger presses straight in; a flat skin, so
 // the friction proxy stays put). Per device profile (common/model/safety.hpp) the device is a mass
@@ -13,6 +13,9 @@
 //   the limiter       (palp::apply_device_limits: clamp, stiffness limit, rate limit),
 //   rise-only limiter (a variant for comparison, not in palp: the limiter applied only while the
 //                     force magnitude grows; a falling force passes with the clamp alone),
+//   the coupling      (palp::run_force_chain with the virtual coupling only, no engagement or
+//                     passivity controller: the model evaluated at the coupling's tool, the device
+//                     given its spring-damper, then the clamp and step bound),
 // and is held until the next update while both masses move (integrated at 100 kHz).
 //
 // Scenes: "skin" (a flat skin, no bone) and "bone" (a bone plate 10 mm under the skin; the bone
@@ -23,7 +26,7 @@
 //               so a passive rendering gives 0 and a limit cycle fed by sampling gives > 0
 //   stable      p2p below 0.05 mm plus two encoder steps, and no loss of contact
 //
-// Device class and hand assumptions: closed_loop.hpp (this study leaves out the touch class).
+// Device class and hand assumptions: closed_loop.hpp.
 //
 // Writes passivity.csv (every run) and passivity_boundary.csv (per profile, limits, scene and
 // hand force: the lowest tested rate from which every faster rate is stable; 20 kHz when even
@@ -39,6 +42,7 @@
 
 #include "bench/closed_loop.hpp"
 #include "bench/study_util.hpp"
+#include "safety/force_chain.hpp"
 #include "safety/safety.hpp"
 
 namespace palp::study {
@@ -46,12 +50,14 @@ namespace {
 
 constexpr double kRampS = 0.5, kEndS = 2.5, kMeasureS = 1.0, kCycleS = 0.5;
 
-// This study's devices: the classes of closed_loop.hpp but the touch (added after its figures).
-constexpr std::span<const DeviceClass> kDevices = std::span(kDeviceClasses).subspan(1);
+constexpr std::span<const DeviceClass> kDevices = std::span(kDeviceClasses);
 
-enum class Limits { Saturation, Limiter, RiseOnly };
+enum class Limits { Saturation, Limiter, RiseOnly, Coupling };
 const char* limits_name(Limits l) {
-  return l == Limits::Saturation ? "saturation" : l == Limits::Limiter ? "limiter" : "rise-only";
+  return l == Limits::Saturation ? "saturation"
+         : l == Limits::Limiter  ? "limiter"
+         : l == Limits::RiseOnly ? "rise-only"
+                                 : "coupling";
 }
 
 struct RunResult {
@@ -71,6 +77,14 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   double xh = xd, vh = 0.0;
   double f_out = 0.0, prev_force = 0.0, prev_pos = xd;
   const double q = dc.encoder_mm;
+  ForceChainConfig coupling_only;  // no engagement, no passivity controller
+  ForceChainState chain;
+  const bool coupled = limits == Limits::Coupling;
+  const double k_c = coupling_gains(profile, period).stiffness_N_per_mm;
+  const auto potential = [&](double z) {
+    return coupled ? env.coupled_potential(z, k_c, profile.max_force_N)
+                   : env.potential(z, profile.max_force_N);
+  };
   RunResult r;
   double work = 0.0, u_start = 0.0;  // J, over the measuring window
   bool measuring = false, touched = false;
@@ -80,11 +94,14 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   for (double t = 0.0; t < kEndS; t += period) {
     // Controller: encoder, model, limits.
     const double xq = q * std::round(xd / q);
-    const double f_model = env.tick_force(xq);
-    touched = touched || f_model > 0.0;
-    if (touched && f_model == 0.0 && t > kRampS) r.lost_contact = true;
+    const double model_z = coupled ? force_chain_tool(chain, coupling_only, {0, 0, xq}).z : xq;
+    const double f_model = env.tick_force(model_z);
     const bool falling = std::fabs(f_model) < std::fabs(prev_force);
-    if (limits == Limits::Limiter || (limits == Limits::RiseOnly && !falling)) {
+    if (coupled) {
+      f_out = run_force_chain(chain, coupling_only, profile, {0, 0, f_model}, {}, env.stiffness(),
+                              {0, 0, xq}, period)
+                  .force.z;
+    } else if (limits == Limits::Limiter || (limits == Limits::RiseOnly && !falling)) {
       SafetyInput in;
       in.force = {0.0, 0.0, f_model};
       in.prev_force = {0.0, 0.0, prev_force};
@@ -95,11 +112,16 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
     } else {
       f_out = std::clamp(f_model, -profile.max_force_N, profile.max_force_N);
     }
+    // Contact as the device feels it (with the coupling, its tool may touch and leave a step
+    // in the model while the device's force stays on).
+    const double felt = coupled ? f_out : f_model;
+    touched = touched || felt > 0.0;
+    if (touched && felt == 0.0 && t > kRampS) r.lost_contact = true;
     prev_force = f_out;
     prev_pos = xq;
     if (!measuring && t >= t_measure) {
       measuring = true;
-      u_start = env.potential(xd, profile.max_force_N);
+      u_start = potential(xd);
     }
     // Plant: device and hand, force held over the period.
     const double push = push_N * std::min(1.0, t / kRampS);
@@ -121,7 +143,7 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
       ++depth_n;
     }
   }
-  const double u_end = env.potential(xd, profile.max_force_N);
+  const double u_end = potential(xd);
   // Work done on the device minus what a passive rendering of the (clamped) law would return.
   r.inj_mW = (work - (u_start - u_end)) / kMeasureS * 1e3;
   r.p2p_mm = cyc_max - cyc_min;
@@ -166,7 +188,8 @@ int main(int argc, char** argv) {
   int runs = 0;
   for (const DeviceClass& dc : kDevices) {
     const DeviceProfile& profile = device_profile(dc.profile);
-    for (Limits limits : {Limits::Saturation, Limits::Limiter, Limits::RiseOnly}) {
+    for (Limits limits :
+         {Limits::Saturation, Limits::Limiter, Limits::RiseOnly, Limits::Coupling}) {
       for (auto* env_ptr : {&skin, &bone}) {
         Environment& env = *env_ptr;
         const char* scene_name = env_ptr == &skin ? "skin" : "bone";
