@@ -22,6 +22,13 @@ bool pose_usable(const Pose& pose) {
   return std::isfinite(qn) && qn > 1e-12;
 }
 
+// 3t^2 - 2t^3 on [0, 1], 0 below and 1 above: a C1 fade.
+inline double smoothstep(double t) {
+  if (!(t > 0.0)) return 0.0;
+  if (t >= 1.0) return 1.0;
+  return t * t * (3.0 - 2.0 * t);
+}
+
 // Point i leaves (or is out of) contact: no force, proxy forgotten, s = p = x.
 inline void clear_contact(State& st, std::size_t i, const Vec3d& x) {
   st.in_contact[i] = 0;
@@ -64,6 +71,153 @@ inline Vec3d printed_bone_force(const ForceParams& prm, const FieldSample& bone,
   return d_norm >= prm.direction_epsilon ? (fb / d_norm) * d_bone : Vec3d{};
 }
 
+// Accumulators of one tick's device outputs.
+struct TickSums {
+  Vec3d f{}, tau{}, u{};
+  double k = 0.0;
+  int n = 0;
+};
+
+// The palp model at one contact point x (see force_model.hpp): the bone proxy always, the bone
+// felt along the skin normal and faded in with depth, the saturated skin law, the last normal
+// past the band, and Coulomb friction placed from positions.
+template <class Access>
+void palp_point(const Access& fields, const ForceParams& prm, State& st, std::size_t i,
+                const Vec3d& x, const Vec3d& xd, bool bone_on, double bone_step,
+                std::uint32_t& status, TickSums& sums) {
+  const FieldSample skin_x = fields.surf_at(x);
+  if (!skin_x.inside) status |= kTickOutsideGrid;
+  if (!(skin_x.value > 0.0)) {
+    clear_contact(st, i, x);
+    st.normal[i] = Vec3d{};
+    return;
+  }
+  const bool entering = st.in_contact[i] == 0;
+  // v_s at x: from the gradient, or past the band (no gradient) the last normal
+  const auto skin_normal = [&](const FieldSample& sample, bool& has_dir) {
+    const double g = norm(sample.grad);
+    has_dir = g >= prm.grad_epsilon;
+    if (has_dir) return Vec3d(sample.grad * (-1.0 / g));
+    if (!entering && !(st.normal[i] == Vec3d{})) {
+      has_dir = true;
+      return st.normal[i];
+    }
+    return Vec3d{};
+  };
+  bool has_dir = false;
+  Vec3d v_s = skin_normal(skin_x, has_dir);
+
+  // Bone: the proxy (god-object). xc is the contact point: x, or held on the entry plane.
+  Vec3d xc = x;
+  Vec3d f_struct{};
+  double k_struct = 0.0;
+  bool latched = false;
+  if (bone_on) {
+    const FieldSample bone = fields.bone_at(x);
+    const double bone_grad_norm = norm(bone.grad);
+    const bool has_vb = bone_grad_norm >= prm.grad_epsilon;
+    const Vec3d v_b = has_vb ? bone.grad * (-1.0 / bone_grad_norm) : Vec3d{};
+    const bool inside_bone = bone.value > 0.0;
+    std::uint8_t latch = entering ? std::uint8_t{kBoneFree} : st.bone_latch[i];
+    Vec3d& anchor = st.bone_anchor[i];
+    Vec3d& normal = st.bone_normal[i];
+    if (latch != kBoneLatched) {
+      const bool crossed =
+          inside_bone || (latch == kBoneAnchor && segment_hits_bone(fields, st.x[i], x, bone_step));
+      if (crossed && latch == kBoneAnchor) {
+        latch = kBoneLatched;
+      } else if (crossed && (has_vb || has_dir)) {
+        // No remembered surface: the nearest bone surface point (or out of the skin).
+        normal = has_vb ? v_b : v_s;
+        anchor = x + bone.value * normal;
+        latch = kBoneLatched;
+      }
+    }
+    if (latch == kBoneLatched) {
+      const double pen = dot(anchor - x, normal);
+      if (!(pen > 0.0) ||
+          (!inside_bone && !segment_hits_bone(fields, x, x + pen * normal, bone_step))) {
+        latch = kBoneFree;
+      } else {
+        xc = x + pen * normal;  // held on the entry plane
+        f_struct = (prm.bone_fmax + prm.bone_k * pen) * normal;
+        k_struct = prm.bone_k;
+        latched = true;
+        status |= kTickBoneLatched;
+      }
+    }
+    if (!latched) {
+      // Bone along the skin normal: the distance to the bone's tangent plane along -v_s.
+      const double dist = -bone.value;
+      const double cos_b = has_vb && has_dir ? dot(v_b, v_s) : 0.0;
+      if (!inside_bone && dist > 0.0 && cos_b > 0.0) {
+        const double reach = prm.bone_along_normal ? dist / cos_b : dist;
+        const double fade =
+            prm.bone_fade_mm > 0.0 ? smoothstep(skin_x.value / prm.bone_fade_mm) : 1.0;
+        f_struct = (bone_force(reach, prm.bone_fmax) * fade) * v_s;
+        k_struct = bone_force_slope(reach, prm.bone_fmax) * fade;
+      }
+      if (!inside_bone && has_vb && cos_b > 0.0) {
+        anchor = x + bone.value * v_b;
+        normal = v_b;
+        latch = kBoneAnchor;
+      } else {
+        latch = kBoneFree;
+      }
+    }
+    st.bone_latch[i] = latch;
+  }
+
+  // Skin at the contact point (resampled where the proxy holds it off the device point).
+  FieldSample skin = skin_x;
+  if (latched) {
+    skin = fields.surf_at(xc);
+    v_s = skin_normal(skin, has_dir);
+  }
+  if (!has_dir) status |= kTickNoSkinDirection;
+  const double depth = std::max(0.0, skin.value);
+  const Vec3d f_surf = saturated_surface_force(depth, prm.skin_fmax) * v_s;
+  if (has_dir) st.normal[i] = v_s;
+
+  // Surface point and Coulomb friction: the proxy on the tangent plane at s, at most
+  // mu f_n / k from it.
+  const Vec3d s = has_dir ? xc + depth * v_s : (entering ? xc : st.s[i]);
+  const Vec3d s_last = entering ? s : st.s[i];
+  const Vec3d p_last = entering ? s : st.p[i];
+  const double f_n = std::max(0.0, dot(f_surf + f_struct, v_s));
+  const double radius = prm.k > 0.0 ? prm.mu * f_n / prm.k : 0.0;
+  Vec3d d = s - p_last;
+  d = d - dot(d, v_s) * v_s;  // tangential
+  const double dn = norm(d);
+  const Vec3d p = dn <= radius ? s - d : s - (radius / dn) * d;
+  const Vec3d f_friction = prm.k * (p - s);
+  const Vec3d f = f_surf + f_friction + f_struct;
+  if (!is_finite(f) || !is_finite(p) || !is_finite(s) || !is_finite(xc)) {
+    status |= kTickNonFinite;
+    clear_contact(st, i, x);
+    st.normal[i] = Vec3d{};
+    return;
+  }
+  if (bone_on && fields.bone_at(xc).value > 0.0) status |= kTickInsideBone;
+
+  st.in_contact[i] = 1;
+  st.x[i] = xc;
+  st.s_prev[i] = s_last;
+  st.s[i] = s;
+  st.p[i] = p;
+  st.f[i] = f;
+  st.f_friction[i] = f_friction;
+  st.f_bone[i] = f_struct;
+  st.depth[i] = depth;
+
+  sums.f += f;
+  sums.tau += cross(xc - xd, f);
+  sums.u += p - xc;
+  sums.k +=
+      saturated_surface_force_slope(depth, prm.skin_fmax) + k_struct + (dn <= radius ? prm.k : 0.0);
+  ++sums.n;
+}
+
 template <class Access>
 void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<Vec3d>& points,
                State& st, const Pose& pose, double bone_step) {
@@ -76,10 +230,21 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
   Vec3d f_sum{}, tau_sum{}, u_sum{};
   double k_sum = 0.0;
   int n_contact = 0;
+  const bool palp = prm.model == ModelKind::Palp;
+  TickSums sums;  // the palp model's
   const std::size_t n = points.size();
   for (std::size_t i = 0; i < n; ++i) {
     // Tool frame -> scene frame: x = x_device + R(q) x_tool.
     const Vec3d x = pose_ok ? xd + rotate(q, points[i]) : Vec3d{};
+    if (palp) {
+      if (pose_ok) {
+        palp_point(fields, prm, st, i, x, xd, bone_on, bone_step, status, sums);
+      } else {
+        clear_contact(st, i, x);
+        st.normal[i] = Vec3d{};
+      }
+      continue;
+    }
     // Skin distance and gradient at x (outside the grid: not inside, far outside the body).
     const FieldSample skin = pose_ok ? fields.surf_at(x) : FieldSample{};
     if (pose_ok && !skin.inside) status |= kTickOutsideGrid;
@@ -211,6 +376,9 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
     ++n_contact;
   }
 
+  if (palp) {
+    f_sum = sums.f, tau_sum = sums.tau, u_sum = sums.u, k_sum = sums.k, n_contact = sums.n;
+  }
   // (12, 13) Device force, torque and displacement u: means over the points in contact.
   const double inv = n_contact > 0 ? 1.0 / n_contact : 0.0;
   st.f_device = f_sum * inv;
@@ -238,6 +406,16 @@ const char* to_string(BoneMode mode) {
   return mode == BoneMode::Robust ? "robust" : "printed";
 }
 
+ModelKind parse_model_kind(std::string_view name) {
+  if (name == "paper") return ModelKind::Paper;
+  if (name == "palp") return ModelKind::Palp;
+  throw UsageError("force model '" + std::string(name) + "' is not paper or palp");
+}
+
+const char* to_string(ModelKind kind) {
+  return kind == ModelKind::Palp ? "palp" : "paper";
+}
+
 ForceParams default_params(ToolKind kind) {
   ForceParams p;
   if (kind == ToolKind::Probe) {
@@ -248,6 +426,18 @@ ForceParams default_params(ToolKind kind) {
     p.k = 0.4;
   }
   return p;
+}
+
+ForceParams palp_params(ToolKind kind) {
+  ForceParams p = default_params(kind);
+  p.model = ModelKind::Palp;
+  p.bone_mode = BoneMode::Robust;
+  p.mu = kind == ToolKind::Probe ? 0.2 : 0.5;
+  return p;
+}
+
+ForceParams model_params(ModelKind kind, ToolKind tool) {
+  return kind == ModelKind::Palp ? palp_params(tool) : default_params(tool);
 }
 
 void validate(const ForceParams& p) {
@@ -271,6 +461,11 @@ void validate(const ForceParams& p) {
   check(
       std::isfinite(p.direction_epsilon) && p.direction_epsilon > 0.0 && p.direction_epsilon <= 0.1,
       "direction_epsilon must be in (0, 0.1]");
+  check(p.model == ModelKind::Paper || p.model == ModelKind::Palp,
+        "model must be paper (0) or palp (1)");
+  check(in(p.mu, 0.0, 2.0), "mu must be in [0, 2] (finger on skin 0.3-0.8)");
+  check(in(p.skin_fmax, 1.0, 200.0), "skin_fmax must be in [1, 200] N (default 30)");
+  check(in(p.bone_fade_mm, 0.0, 30.0), "bone_fade_mm must be in [0, 30] mm (default 4)");
 }
 
 void set_param(ForceParams& params, std::string_view name, double value) {
@@ -293,6 +488,20 @@ void set_param(ForceParams& params, std::string_view name, double value) {
     if (value != 0.0 && value != 1.0)
       throw UsageError("force parameter bone_mode must be 0 (printed) or 1 (robust)");
     p.bone_mode = value != 0.0 ? BoneMode::Robust : BoneMode::Printed;
+  } else if (name == "model") {
+    if (value != 0.0 && value != 1.0)
+      throw UsageError("force parameter model must be 0 (paper) or 1 (palp)");
+    p.model = value != 0.0 ? ModelKind::Palp : ModelKind::Paper;
+  } else if (name == "mu") {
+    p.mu = value;
+  } else if (name == "skin_fmax") {
+    p.skin_fmax = value;
+  } else if (name == "bone_fade_mm") {
+    p.bone_fade_mm = value;
+  } else if (name == "bone_along_normal") {
+    if (value != 0.0 && value != 1.0)
+      throw UsageError("force parameter bone_along_normal must be 0 or 1");
+    p.bone_along_normal = value != 0.0;
   } else if (name == "bone_enabled") {
     if (value != 0.0 && value != 1.0)
       throw UsageError("force parameter bone_enabled must be 0 or 1");
@@ -300,7 +509,8 @@ void set_param(ForceParams& params, std::string_view name, double value) {
   } else {
     throw UsageError("unknown force parameter '" + std::string(name) +
                      "' (known: c, k, bone_fmax, bone_flip, bone_enabled, grad_epsilon, "
-                     "direction_epsilon, bone_mode, bone_k)");
+                     "direction_epsilon, bone_mode, bone_k, model, mu, skin_fmax, bone_fade_mm, "
+                     "bone_along_normal)");
   }
   validate(p);
   params = p;
@@ -332,6 +542,7 @@ State make_state(const Model& model) {
   st.bone_anchor.assign(n, Vec3d{});
   st.bone_normal.assign(n, Vec3d{});
   st.bone_latch.assign(n, kBoneFree);
+  st.normal.assign(n, Vec3d{});
   return st;
 }
 
@@ -348,6 +559,7 @@ void reset(State& st) {
   std::fill(st.bone_anchor.begin(), st.bone_anchor.end(), Vec3d{});
   std::fill(st.bone_normal.begin(), st.bone_normal.end(), Vec3d{});
   std::fill(st.bone_latch.begin(), st.bone_latch.end(), std::uint8_t{kBoneFree});
+  std::fill(st.normal.begin(), st.normal.end(), Vec3d{});
   st.f_device = st.tau_device = st.u = Vec3d{};
   st.stiffness = 0.0;
   st.n_contact = 0;
@@ -361,7 +573,7 @@ void tick(const Model& model, State& state, const Pose& device_pose) {
       state.p.size() != n || state.f.size() != n || state.f_friction.size() != n ||
       state.depth.size() != n || state.in_contact.size() != n || state.f_bone.size() != n ||
       state.bone_anchor.size() != n || state.bone_normal.size() != n ||
-      state.bone_latch.size() != n) {
+      state.bone_latch.size() != n || state.normal.size() != n) {
     // Not a State of this model: touch nothing per contact, report nothing.
     state.f_device = state.tau_device = state.u = Vec3d{};
     state.stiffness = 0.0;

@@ -38,8 +38,29 @@
 //          that plane along n (it slid off the bone sideways), or when contact is lost. A point
 //          that enters bone with no remembered surface (it entered contact inside bone, or
 //          approached from beneath) latches with n = v_s and e = x + D_bone v_s.
+//
+// Two models (ForceParams::model):
+//   paper  the spec's equations as printed, bit for bit: the reference the paper's figures and
+//          the independent checks use. ForceParams' defaults (and default_params) are this one.
+//   palp   the commands' default (palp_params): changes only what measurement justified, each
+//          behind its own parameter (docs/force_model.md):
+//          - skin law saturating smoothly at skin_fmax, f = f_s / (1 + (f_s / skin_fmax)^4)^(1/4),
+//            and past the distance band (no gradient) the point keeps its last skin normal;
+//          - bone felt along the skin normal (bone_along_normal): the bone law of the distance
+//            to the bone's tangent plane along -v_s, x / (v_b . v_s), pushing out along v_s, so
+//            an intercostal space (bone beside, not beneath) feels soft; faded in with skin
+//            depth over bone_fade_mm (smoothstep) so first contact brings no step;
+//          - bone as a constraint (the bone proxy of Robust mode, always): a latched point's
+//            contact point is held on the bone's entry plane (a god-object), State::x reports
+//            that point, the skin is sampled there, and the spring bone_fmax + bone_k * pen
+//            pushes the device out, so no contact point is ever inside bone;
+//          - Coulomb friction: the proxy sticks while |s - p| (tangential) <= mu f_n / k and
+//            slides on that circle beyond it, placed from positions alone: |f_friction| <=
+//            mu f_n always, no friction without pressing, and the same at every speed and rate.
+//          The scene's gradient for palp defaults to the precomputed field (continuous normals).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string_view>
@@ -52,6 +73,7 @@
 namespace palp {
 
 enum class BoneMode { Printed, Robust };
+enum class ModelKind { Paper, Palp };
 
 struct ForceParams {
   double c = 2.0;                   // mm/N: friction stick length per newton of pressing force
@@ -63,7 +85,16 @@ struct ForceParams {
   double direction_epsilon = 1e-9;  // |d_bone| below this: no bone force
   BoneMode bone_mode = BoneMode::Printed;  // Robust: bone proxy, no tunnelling (see above)
   double bone_k = 10.0;                    // N/mm: Robust mode's spring past the bone surface
+  ModelKind model = ModelKind::Paper;      // palp: the parameters below apply (see above)
+  double mu = 0.5;                // palp: Coulomb friction coefficient (finger-skin 0.3-0.8)
+  double skin_fmax = 30.0;        // palp: N, where the skin law saturates
+  double bone_fade_mm = 4.0;      // palp: skin depth over which the bone force fades in (0: none)
+  bool bone_along_normal = true;  // palp: bone distance along the skin normal
 };
+
+// "paper" | "palp"; UsageError otherwise.
+ModelKind parse_model_kind(std::string_view name);
+const char* to_string(ModelKind kind);
 
 // "printed" | "robust"; UsageError otherwise.
 BoneMode parse_bone_mode(std::string_view name);
@@ -72,14 +103,21 @@ const char* to_string(BoneMode mode);
 // Parameter sets of the spec: fingertip c = 2.0, k = 0.4 (finger, twofinger); ultrasound probe
 // c = 0.4, k = 0.3.
 ForceParams default_params(ToolKind kind);
+// The palp model's set: default_params with model palp, the bone proxy on, mu 0.5 for a fingertip
+// on skin and 0.2 for a probe on gel.
+ForceParams palp_params(ToolKind kind);
+// The set of `kind` for a tool (palp_params or default_params).
+ForceParams model_params(ModelKind kind, ToolKind tool);
 
 // Overrides one parameter by name: c, k, bone_fmax, bone_flip, bone_enabled (0/1),
-// grad_epsilon, direction_epsilon, bone_mode (0 = printed, 1 = robust), bone_k.
+// grad_epsilon, direction_epsilon, bone_mode (0 = printed, 1 = robust), bone_k, model (0 = paper,
+// 1 = palp), mu, skin_fmax, bone_fade_mm, bone_along_normal (0/1).
 // UsageError for unknown names or unusable values.
 void set_param(ForceParams& params, std::string_view name, double value);
 
 // UsageError outside the physical ranges: c [0, 20] mm/N, k [0, 5] N/mm, bone_fmax [0, 60] N,
-// bone_flip [0, 10], bone_k [0, 100] N/mm, epsilons (0, 0.1].
+// bone_flip [0, 10], bone_k [0, 100] N/mm, epsilons (0, 0.1], mu [0, 2], skin_fmax [1, 200] N,
+// bone_fade_mm [0, 30] mm.
 void validate(const ForceParams& params);
 
 // f_s(x) = 1.78e-2 x^3 + 3.82e-3 x^2 + 2.28e-4 x for x > 0, else 0 (mm -> N).
@@ -97,6 +135,19 @@ constexpr double bone_force(double distance_mm, double fmax) {
   if (!(distance_mm > 0.0)) return 0.0;
   const double f = 2500.0 / (distance_mm * distance_mm * distance_mm);  // 20 * 5^3 / x^3
   return f < fmax ? f : fmax;  // x^3 underflowing to 0 gives +inf, capped here
+}
+
+// The palp model's skin law: f_s saturated smoothly at fmax, f_s / (1 + (f_s / fmax)^4)^(1/4).
+inline double saturated_surface_force(double depth_mm, double fmax) {
+  const double f = surface_force(depth_mm);
+  const double r = f / fmax, r2 = r * r;
+  return f / std::sqrt(std::sqrt(1.0 + r2 * r2));
+}
+// Its slope (N/mm): f_s'(x) (1 + r^4)^(-5/4), r = f_s / fmax.
+inline double saturated_surface_force_slope(double depth_mm, double fmax) {
+  const double r = surface_force(depth_mm) / fmax, r2 = r * r;
+  const double q = 1.0 + r2 * r2;
+  return surface_force_slope(depth_mm) / (q * std::sqrt(std::sqrt(q)));
 }
 
 // |df_b/dx| (N/mm) where the bone law is below its cap, else 0.
@@ -160,6 +211,7 @@ struct State {
   std::vector<Vec3d> bone_anchor;        // remembered / latched bone surface point e
   std::vector<Vec3d> bone_normal;        // outward bone normal n at e
   std::vector<std::uint8_t> bone_latch;  // BoneLatch
+  std::vector<Vec3d> normal;             // palp: the last skin normal v_s (kept past the band)
 
   // Device outputs: means over the points in contact (zero when none).
   Vec3d f_device{};    // N

@@ -573,7 +573,13 @@ TEST(ForceModel, ParametersAndValidation) {
   set_param(p, "k", 0.2);
   EXPECT_EQ(p.c, 1.5);
   EXPECT_EQ(p.k, 0.2);
-  EXPECT_THROW(set_param(p, "mu", 1.0), UsageError);
+  EXPECT_THROW(set_param(p, "nu", 1.0), UsageError);  // unknown
+  EXPECT_THROW(set_param(p, "mu", 2.5), UsageError);  // out of range
+  EXPECT_THROW(set_param(p, "model", 2.0), UsageError);
+  EXPECT_THROW(set_param(p, "skin_fmax", 0.5), UsageError);
+  EXPECT_THROW(set_param(p, "bone_fade_mm", 31.0), UsageError);
+  set_param(p, "model", 1.0);
+  EXPECT_EQ(p.model, ModelKind::Palp);
   EXPECT_THROW(set_param(p, "c", -1.0), UsageError);
   EXPECT_THROW(set_param(p, "k", std::nan("")), UsageError);
   EXPECT_THROW(set_param(p, "grad_epsilon", 0.0), UsageError);
