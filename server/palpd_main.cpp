@@ -141,7 +141,12 @@ std::vector<std::string> param_assignments(const ForceParams& p) {
           "grad_epsilon=" + number_text(p.grad_epsilon),
           "direction_epsilon=" + number_text(p.direction_epsilon),
           std::string("bone_mode=") + (p.bone_mode == BoneMode::Robust ? "1" : "0"),
-          "bone_k=" + number_text(p.bone_k)};
+          "bone_k=" + number_text(p.bone_k),
+          std::string("model=") + (p.model == ModelKind::Palp ? "1" : "0"),
+          "mu=" + number_text(p.mu),
+          "skin_fmax=" + number_text(p.skin_fmax),
+          "bone_fade_mm=" + number_text(p.bone_fade_mm),
+          std::string("bone_along_normal=") + (p.bone_along_normal ? "1" : "0")};
 }
 
 // Commands from the controller, wired to the loop, the recorder and the remote device.
@@ -165,8 +170,9 @@ class App final : public net::ControlTarget {
     if (recording()) return kLockedWhileRecording;
     const Tool tool = parse_tool(name);
     const auto current = loop_.model();
-    const ForceParams params =
-        tool.kind == current->tool().kind ? current->params() : default_params(tool.kind);
+    const ForceParams params = tool.kind == current->tool().kind
+                                   ? current->params()
+                                   : model_params(current->params().model, tool.kind);
     loop_.swap_model(std::make_shared<const Model>(fields_, tool, params));
     return {};
   }
@@ -389,6 +395,8 @@ int run(const cli::Arguments& argv_in) {
       if (!args.has(key))
         if (const auto v = meta(key)) defaults.push_back("--" + std::string(key) + "=" + *v);
     std::vector<std::string> recorded_params;
+    // recordings made before the palp model was added ran the paper's
+    if (!meta("param.model")) recorded_params.push_back("model=0");
     for (const auto& [key, value] : replay->metadata)
       if (key.rfind("param.", 0) == 0) recorded_params.push_back(key.substr(6) + "=" + value);
     params_in.insert(params_in.begin(), recorded_params.begin(), recorded_params.end());
@@ -399,7 +407,7 @@ int run(const cli::Arguments& argv_in) {
   }
 
   const Tool tool = parse_tool(args.get("tool").value_or("finger:37"));
-  const ForceParams params = cli::force_params(tool, params_in);
+  const ForceParams params = cli::force_params(cli::model_kind(args), tool, params_in);
   const DeviceProfile* profile = nullptr;
   if (const auto name = args.get("device-profile")) profile = &device_profile(*name);
   rt::LoopConfig loop_config;

@@ -171,7 +171,7 @@ int cmd_bench(const Arguments& argv_in) {
   const std::size_t warmup = parse_count(args, "warmup", 2000);
   if (ticks == 0) throw UsageError("--ticks needs at least 1");
   const Tool tool = parse_tool(*tool_name);
-  const ForceParams params = force_params(tool, assignments);
+  const ForceParams params = force_params(model_kind(args), tool, assignments);
   const bool quiet = args.has("quiet");
   (void)scene_options(args);
 

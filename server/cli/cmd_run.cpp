@@ -118,7 +118,7 @@ int cmd_run(const Arguments& argv_in) {
   const bool quiet = args.has("quiet");
   // Everything a usage mistake can be is checked before the (slower) scene load.
   const Tool tool = parse_tool(*tool_name);
-  const ForceParams params = force_params(tool, assignments);
+  const ForceParams params = force_params(model_kind(args), tool, assignments);
   DeviceFilter filter;
   if (const auto profile = args.get("device-profile")) filter.profile = &device_profile(*profile);
   (void)scene_options(args);

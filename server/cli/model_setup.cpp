@@ -29,8 +29,15 @@ std::vector<std::string> take_repeated(Arguments& argv, const std::string& key) 
   return values;
 }
 
+ModelKind model_kind(const Args& args) {
+  return parse_model_kind(args.get("model").value_or("palp"));
+}
+
 SceneOptions scene_options(const Args& args) {
   SceneOptions options;
+  // palp's continuous normals: the precomputed gradient, trilinearly interpolated
+  if (model_kind(args) == ModelKind::Palp)
+    options.sampler.gradient = GradientScheme::PrecomputedField;
   if (const auto scheme = args.get("scheme"))
     options.sampler.gradient = parse_gradient_scheme(*scheme);
   if (const auto storage = args.get("storage")) options.sampler.storage = parse_storage(*storage);
@@ -62,8 +69,9 @@ Scene load_scene_for(const Args& args, const std::string& command, bool quiet) {
   return scene;
 }
 
-ForceParams force_params(const Tool& tool, const std::vector<std::string>& assignments) {
-  ForceParams params = default_params(tool.kind);
+ForceParams force_params(ModelKind model, const Tool& tool,
+                         const std::vector<std::string>& assignments) {
+  ForceParams params = model_params(model, tool.kind);
   for (const std::string& assignment : assignments) {
     const auto eq = assignment.find('=');
     if (eq == std::string::npos || eq == 0)

@@ -14,13 +14,17 @@
 namespace palp::cli {
 
 // Valued options every model command accepts (besides its own).
-inline const std::vector<std::string> kSceneOptions = {"scene", "scheme", "storage", "cache-dir"};
+inline const std::vector<std::string> kSceneOptions = {"scene", "scheme", "storage", "cache-dir",
+                                                       "model"};
 
 // Help text of those options.
 inline constexpr const char* kSceneOptionsHelp =
     R"(  --scene SCENE           a prep directory, a CT (.nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr, DICOM
                           directory) or phantom:NAME; CTs are prepped once into the cache
-  --scheme NAME           gradient: analytic (default), central, precomputed
+  --model NAME            force model: palp (default; docs/force_model.md) or paper (the
+                          paper's equations as printed, bit for bit)
+  --scheme NAME           gradient: analytic, central, precomputed (default: precomputed for
+                          --model palp, analytic for --model paper)
   --storage NAME          maps in memory: float32 (default), int16, interleaved
   --cache-dir DIR         scene cache (default $PALP_SCENE_CACHE, else
                           $XDG_CACHE_HOME/palp/scenes, else ~/.cache/palp/scenes)
@@ -30,14 +34,20 @@ inline constexpr const char* kSceneOptionsHelp =
 // would otherwise overwrite) and returns the values in order. UsageError for a missing value.
 std::vector<std::string> take_repeated(Arguments& argv, const std::string& key);
 
-// The scene options of parsed arguments (--scheme, --storage, --cache-dir).
+// The force model of parsed arguments (--model; default palp).
+ModelKind model_kind(const Args& args);
+
+// The scene options of parsed arguments (--scheme, --storage, --cache-dir; the scheme's default
+// follows --model).
 SceneOptions scene_options(const Args& args);
 
 // Loads --scene (required: UsageError naming `command` otherwise), reporting on stderr unless
 // quiet: where the maps came from and how long it took.
 Scene load_scene_for(const Args& args, const std::string& command, bool quiet);
 
-// The tool kind's default parameters with NAME=VALUE overrides applied in order.
-ForceParams force_params(const Tool& tool, const std::vector<std::string>& assignments);
+// The model's parameters for the tool kind (model_params) with NAME=VALUE overrides applied in
+// order.
+ForceParams force_params(ModelKind model, const Tool& tool,
+                         const std::vector<std::string>& assignments);
 
 }  // namespace palp::cli

@@ -33,6 +33,11 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
   p->set_bone_enabled(fp.bone_enabled);
   p->set_bone_mode(to_string(fp.bone_mode));
   p->set_bone_k(fp.bone_k);
+  p->set_model(to_string(fp.model));
+  p->set_mu(fp.mu);
+  p->set_skin_fmax_n(fp.skin_fmax);
+  p->set_bone_fade_mm(fp.bone_fade_mm);
+  p->set_bone_along_normal(fp.bone_along_normal);
   si->set_device(scene.device);
   si->set_device_profile(scene.device_profile);
   si->set_device_renders_force(loop.device().renders_force());

@@ -70,16 +70,21 @@ TEST(CmdRun, TwoRunsAreByteIdentical) {
 }
 
 TEST(CmdRun, PressOnTheCubeGivesTheAnalyticForce) {
-  const auto out = run_palp_cli(run_args(cube_press(), dir() / "f.csv"), cache());
-  ASSERT_EQ(out.exit_code, 0) << out.output;
-  EXPECT_NE(out.output.find("ticks"), std::string::npos);
-  const std::vector<std::string> row = split(last_line(read_text(dir() / "f.csv")));
-  ASSERT_EQ(row.size(), 16u);
-  EXPECT_NEAR(std::stod(row[3]), palp::surface_force(4.0), 1e-9);   // fz
-  EXPECT_EQ(row[7], "37");                                          // n_contact
-  EXPECT_NEAR(std::stod(row[11]), palp::surface_force(4.0), 1e-9);  // f_normal
-  EXPECT_NEAR(std::stod(row[13]), 4.0, 1e-6);                       // depth
-  EXPECT_EQ(row[15], "0");                                          // no safety filter
+  // --model paper: the printed law; the default (palp): the saturated law (0.00003 % lower here).
+  for (const char* model : {" --model paper", ""}) {
+    SCOPED_TRACE(model);
+    const auto out = run_palp_cli(run_args(cube_press(), dir() / "f.csv") + model, cache());
+    ASSERT_EQ(out.exit_code, 0) << out.output;
+    EXPECT_NE(out.output.find("ticks"), std::string::npos);
+    const std::vector<std::string> row = split(last_line(read_text(dir() / "f.csv")));
+    ASSERT_EQ(row.size(), 16u);
+    const double f = *model ? palp::surface_force(4.0) : palp::saturated_surface_force(4.0, 30.0);
+    EXPECT_NEAR(std::stod(row[3]), f, 1e-9);     // fz
+    EXPECT_EQ(row[7], "37");                     // n_contact
+    EXPECT_NEAR(std::stod(row[11]), f, 1e-9);    // f_normal
+    EXPECT_NEAR(std::stod(row[13]), 4.0, 1e-6);  // depth
+    EXPECT_EQ(row[15], "0");                     // no safety filter
+  }
 }
 
 TEST(CmdRun, DeviceProfileLimitsTheForce) {
