@@ -111,13 +111,14 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
   Vec3d xc = x;
   Vec3d f_struct{};
   double k_struct = 0.0;
-  bool latched = false;
+  bool latched = false, inside_x = false;
   if (bone_on) {
     const FieldSample bone = fields.bone_at(x);
     const double bone_grad_norm = norm(bone.grad);
     const bool has_vb = bone_grad_norm >= prm.grad_epsilon;
     const Vec3d v_b = has_vb ? bone.grad * (-1.0 / bone_grad_norm) : Vec3d{};
     const bool inside_bone = bone.value > 0.0;
+    inside_x = inside_bone;
     std::uint8_t latch = entering ? std::uint8_t{kBoneFree} : st.bone_latch[i];
     Vec3d& anchor = st.bone_anchor[i];
     Vec3d& normal = st.bone_normal[i];
@@ -176,7 +177,8 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
   }
   if (!has_dir) status |= kTickNoSkinDirection;
   const double depth = std::max(0.0, skin.value);
-  const Vec3d f_surf = saturated_surface_force(depth, prm.skin_fmax) * v_s;
+  double skin_slope = 0.0;
+  const Vec3d f_surf = saturated_surface_force(depth, prm.skin_fmax, &skin_slope) * v_s;
   if (has_dir) st.normal[i] = v_s;
 
   // Surface point and Coulomb friction: the proxy on the tangent plane at s, at most
@@ -198,7 +200,9 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
     st.normal[i] = Vec3d{};
     return;
   }
-  if (bone_on && fields.bone_at(xc).value > 0.0) status |= kTickInsideBone;
+  // (a point held on the entry plane is checked there; a free one is outside bone, or it would
+  // have latched, unless there was no direction to latch along)
+  if (bone_on && (latched ? fields.bone_at(xc).value > 0.0 : inside_x)) status |= kTickInsideBone;
 
   st.in_contact[i] = 1;
   st.x[i] = xc;
@@ -213,8 +217,7 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
   sums.f += f;
   sums.tau += cross(xc - xd, f);
   sums.u += p - xc;
-  sums.k +=
-      saturated_surface_force_slope(depth, prm.skin_fmax) + k_struct + (dn <= radius ? prm.k : 0.0);
+  sums.k += skin_slope + k_struct + (dn <= radius ? prm.k : 0.0);
   ++sums.n;
 }
 

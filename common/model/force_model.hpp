@@ -137,11 +137,15 @@ constexpr double bone_force(double distance_mm, double fmax) {
   return f < fmax ? f : fmax;  // x^3 underflowing to 0 gives +inf, capped here
 }
 
-// The palp model's skin law: f_s saturated smoothly at fmax, f_s / (1 + (f_s / fmax)^4)^(1/4).
-inline double saturated_surface_force(double depth_mm, double fmax) {
+// The palp model's skin law: f_s saturated smoothly at fmax, f_s / (1 + (f_s / fmax)^4)^(1/4);
+// its slope (N/mm) into *slope when given.
+inline double saturated_surface_force(double depth_mm, double fmax, double* slope = nullptr) {
   const double f = surface_force(depth_mm);
   const double r = f / fmax, r2 = r * r;
-  return f / std::sqrt(std::sqrt(1.0 + r2 * r2));
+  const double q = 1.0 + r2 * r2;
+  const double root = std::sqrt(std::sqrt(q));
+  if (slope) *slope = surface_force_slope(depth_mm) / (q * root);
+  return f / root;
 }
 // Its slope (N/mm): f_s'(x) (1 + r^4)^(-5/4), r = f_s / fmax.
 inline double saturated_surface_force_slope(double depth_mm, double fmax) {
