@@ -15,6 +15,10 @@ double Grid::min_spacing() const {
   return std::min({spacing[0], spacing[1], spacing[2]});
 }
 
+double Grid::max_spacing() const {
+  return std::max({spacing[0], spacing[1], spacing[2]});
+}
+
 Vec3 Grid::extent_mm() const {
   return {static_cast<double>(dims[0] - 1) * spacing[0],
           static_cast<double>(dims[1] - 1) * spacing[1],

@@ -41,6 +41,7 @@ struct Grid {
     return i >= 0 && j >= 0 && k >= 0 && i < dims[0] && j < dims[1] && k < dims[2];
   }
   double min_spacing() const;
+  double max_spacing() const;
   // Extent of the grid in the scene frame (centre of first to centre of last voxel), mm.
   Vec3 extent_mm() const;
   bool operator==(const Grid&) const = default;

@@ -3,6 +3,7 @@
 // Not a public header: only surface_anchor.cpp, trajectory_gen.cpp and ribs_path.cpp include it.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <string>
@@ -17,7 +18,11 @@ inline constexpr double kMaxRows = 1e8;          // refuse paths longer than thi
 inline constexpr int kBisectionSteps = 60;       // skin search: interval / 2^60, far below 1 nm
 inline constexpr int kDepthNewtonSteps = 6;      // pad-centre depth correction
 inline constexpr double kNormalPatchHalf = 2.5;  // mm: the skin normal is averaged over +-2.5 mm
-inline constexpr double kMinGradient = 1e-6;     // |grad D| below this: no direction
+// The patch's half-size on a grid: kNormalPatchHalf, or two voxels where they are larger.
+inline double patch_half_mm(const Grid& grid) {
+  return std::max(kNormalPatchHalf, 2.0 * grid.max_spacing());
+}
+inline constexpr double kMinGradient = 1e-6;  // |grad D| below this: no direction
 
 // --- Vectors ----------------------------------------------------------------------------------
 

@@ -51,10 +51,14 @@ Vec3d patch_normal(const FieldSampler& fields, const Vec3d& skin, const Vec3d& s
   if (norm(n0) == 0.0) return n0;
   const Vec3d t1 = unit(slide - dot(slide, n0) * n0);
   const Vec3d t2 = cross(n0, t1);
+  // +-2.5 mm, or two voxels on a coarse grid (a 3 mm CT's terraces average out), sampled at
+  // most a voxel apart
+  const double half = patch_half_mm(fields.grid());
+  const int steps = std::max(1, static_cast<int>(std::ceil(half / fields.grid().max_spacing())));
   Vec3d sum{};
-  for (double a : {-kNormalPatchHalf, 0.0, kNormalPatchHalf})
-    for (double b : {-kNormalPatchHalf, 0.0, kNormalPatchHalf})
-      sum += outward_normal(fields, skin + a * t1 + b * t2);
+  for (int a = -steps; a <= steps; ++a)
+    for (int b = -steps; b <= steps; ++b)
+      sum += outward_normal(fields, skin + (half * a / steps) * t1 + (half * b / steps) * t2);
   return unit(sum);
 }
 
