@@ -106,7 +106,8 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   --poll-us US            how often the network thread takes new frames from the loop
                           (500; 50..100000)
   --record FILE           record every tick (binary, see server/rt/recording.hpp) and FILE's .csv
-  --record-dir DIR        where StartRecording commands write (default: the current directory)
+  --record-dir DIR        where StartRecording commands (palp ctl record start) write, made at
+                          start when missing (default: the current directory)
   --watchdog-ms MS        a tick starting MS later than its deadline zeroes the force (5; 0 off;
                           at most 1000)
   --device-timeout-ms MS  a device silent for MS zeroes the force (100; 0 = off; at most 10000)
@@ -434,6 +435,14 @@ int run(const cli::Arguments& argv_in) {
   server_config.poll_interval_s = within(args, "poll-us", 500, 50, 100000) * 1e-6;
   const double duration = within(args, "duration", 0, 0, 1e7);
   const std::string record_dir = args.get("record-dir").value_or(".");
+  {
+    // made now, so a StartRecording is not refused an hour into a study for a missing folder
+    std::error_code ec;
+    std::filesystem::create_directories(record_dir, ec);
+    if (ec || !std::filesystem::is_directory(record_dir))
+      throw UsageError("--record-dir " + record_dir + ": not a directory palpd can create" +
+                       (ec ? " (" + ec.message() + ")" : std::string()));
+  }
   const std::string stats_json = args.get("stats-json").value_or("");
   (void)cli::scene_options(args);
 

@@ -15,5 +15,6 @@ int cmd_run(const Arguments& args);      // cmd_run.cpp
 int cmd_traj(const Arguments& args);     // cmd_traj.cpp
 int cmd_bench(const Arguments& args);    // cmd_bench.cpp
 int cmd_probe(const Arguments& args);    // cmd_probe.cpp (palpd observer)
+int cmd_ctl(const Arguments& args);      // cmd_ctl.cpp (palpd controller console)
 
 }  // namespace palp::cli

@@ -69,6 +69,23 @@ Arguments config_arguments(const std::string& path, const std::vector<std::strin
   return out;
 }
 
+std::optional<std::string> config_value(const std::string& path, const std::string& key) {
+  try {
+    require_regular_file(path);
+    const toml::table table = toml::parse_file(path);
+    const toml::node* node = table.get(key);
+    if (!node) return std::nullopt;
+    if (const auto s = node->value<std::string>()) return *s;
+    if (const auto d = node->value<double>()) return number_text(*d);
+    throw UsageError(path + ": '" + key + "' must be a string or a number");
+  } catch (const InputError& e) {
+    throw UsageError(std::string("--config: ") + e.what());
+  } catch (const toml::parse_error& e) {
+    throw UsageError(path + ": " + std::string(e.description()) + " (line " +
+                     std::to_string(e.source().begin.line) + ")");
+  }
+}
+
 // Finds "--config FILE" / "--config=FILE" in argv without parsing the rest.
 std::optional<std::string> config_path(const Arguments& argv) {
   for (std::size_t i = 0; i < argv.size(); ++i) {

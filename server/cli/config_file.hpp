@@ -15,6 +15,10 @@ namespace palp::cli {
 Arguments config_arguments(const std::string& path, const std::vector<std::string>& flags,
                            const std::vector<std::string>& valued);
 
+// The string (or number, as text) under `key` in a config file, without checking the other keys
+// (palp ctl reads palpd's token this way). UsageError naming the file for an unreadable file.
+std::optional<std::string> config_value(const std::string& path, const std::string& key);
+
 // "--config FILE" / "--config=FILE" in argv, found without parsing the rest.
 std::optional<std::string> config_path(const Arguments& argv);
 

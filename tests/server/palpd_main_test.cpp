@@ -12,6 +12,7 @@
 #include "rt/recording.hpp"
 #include "support/cli_test_util.hpp"
 #include "support/net_test_client.hpp"
+#include "support/palpd_process.hpp"
 
 namespace palp {
 namespace {
@@ -21,6 +22,8 @@ using asio::ip::tcp;
 using testing::read_text;
 using testing::run_palp_cli;
 using testing::shared_cli_dir;
+using testing::start_palpd;
+using testing::wait_palpd_exit;
 namespace v1 = palp::v1;
 
 testing::CliOutcome run_palpd(const std::string& args) {
@@ -34,33 +37,6 @@ testing::CliOutcome run_palpd(const std::string& args) {
   const int status = pclose(pipe);
   outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return outcome;
-}
-
-// Starts palpd in the background with its output in `log`; returns the port it listens on
-// (0 when it did not come up within the timeout).
-int start_palpd(const std::string& args, const fs::path& log) {
-  const std::string command = "PALP_SCENE_CACHE='" + (shared_cli_dir() / "cache").string() + "' " +
-                              PALPD_PATH + " " + args + " >'" + log.string() +
-                              "' 2>&1 </dev/null &";
-  if (std::system(command.c_str()) != 0) return 0;
-  const std::regex listening("listening on 127\\.0\\.0\\.1:([0-9]+)");
-  for (int i = 0; i < 600; ++i) {
-    std::smatch match;
-    const std::string text = read_text(log);
-    if (std::regex_search(text, match, listening)) return std::stoi(match[1]);
-    if (text.find("error") != std::string::npos) return 0;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return 0;
-}
-
-// Waits for palpd's closing summary line in `log`.
-bool wait_palpd_exit(const fs::path& log) {
-  for (int i = 0; i < 600; ++i) {
-    if (read_text(log).find(" ticks, ") != std::string::npos) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return false;
 }
 
 TEST(Palpd, HelpAndUsageErrors) {

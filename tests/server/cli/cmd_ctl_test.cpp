@@ -1,0 +1,93 @@
+// palp ctl against a real palpd (sim device): a study's actions from one console, each printing
+// what palpd answered and what changed, refusals exiting 1, and recordings never overwritten.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "support/cli_test_util.hpp"
+#include "support/palpd_process.hpp"
+
+namespace palp {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::read_text;
+using testing::run_palp_cli;
+using testing::shared_cli_dir;
+
+TEST(CmdCtl, ATrialFromOneConsole) {
+  const fs::path dir = shared_cli_dir() / "ctl";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path log = dir / "palpd.log", rec = dir / "recordings";  // made by palpd
+  const int port = testing::start_palpd(
+      "--scene phantom:sphere --device sim --port 0 --duration 8 "
+      "--no-realtime --record-dir " +
+          rec.string(),
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  const std::string at = "ctl 127.0.0.1:" + std::to_string(port) + " ";
+  const fs::path cache = dir / "cache";
+
+  auto r = run_palp_cli(at + "status", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("tool       finger:37"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("model palp, c 2, k 0.4"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("state      running, not recording"), std::string::npos) << r.output;
+
+  r = run_palp_cli(at + "set c=1.5 k=0.3", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("set c=1.5: ok"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("changed: c 2 -> 1.5"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("changed: k 0.4 -> 0.3"), std::string::npos) << r.output;
+
+  r = run_palp_cli(at + "set k=50", cache);  // beyond its physical range
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("set k=50: refused: force parameter k must be in [0, 5] N/mm"),
+            std::string::npos)
+      << r.output;
+
+  r = run_palp_cli(at + "record start trial1", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("now: running, recording"), std::string::npos) << r.output;
+  r = run_palp_cli(at + "record stop", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::is_regular_file(rec / "trial1"));
+  EXPECT_TRUE(fs::is_regular_file(rec / "trial1.csv"));
+  const auto size = fs::file_size(rec / "trial1");
+  r = run_palp_cli(at + "record start trial1", cache);  // exists: refused, not overwritten
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
+  EXPECT_EQ(fs::file_size(rec / "trial1"), size);
+
+  r = run_palp_cli(at + "pause", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("now: paused"), std::string::npos) << r.output;
+  r = run_palp_cli(at + "tool finger:7", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("changed: tool finger:37 -> finger:7"), std::string::npos) << r.output;
+  r = run_palp_cli(at + "resume", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("now: running"), std::string::npos) << r.output;
+  EXPECT_TRUE(testing::wait_palpd_exit(log)) << read_text(log);
+}
+
+TEST(CmdCtl, UsageMistakesAndNoServer) {
+  const fs::path cache = shared_cli_dir() / "cache";
+  EXPECT_EQ(run_palp_cli("ctl", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("ctl 127.0.0.1:1", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("ctl 127.0.0.1:1 dance", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("ctl 127.0.0.1:1 set c", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("ctl 127.0.0.1:1 record", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli("ctl 127.0.0.1:1 status --timeout 0", cache).exit_code, 2);
+  const auto none = run_palp_cli("ctl 127.0.0.1:1 status --timeout 2", cache);
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_NE(none.output.find("cannot connect"), std::string::npos) << none.output;
+  const auto help = run_palp_cli("ctl --help", cache);
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("record start [NAME]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace palp
