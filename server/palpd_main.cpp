@@ -60,6 +60,10 @@ Devices:
                           (docs/usb-protocol.md; VID:PID in hex, default 1209:0001); hot-plug:
                           it may come after palpd starts and go at any time (zero force while
                           absent); a permission error names the udev rule to install
+  spacemouse[:position|:rate][:VID:PID]
+                          a 3Dconnexion SpaceMouse as a pose source (no force output: clients
+                          show the force it cannot render); rate (default) moves the finger
+                          while the cap is deflected, position offsets it from --home
 
 Options:
 )";

@@ -33,10 +33,15 @@ constexpr const char* kRunOptions =
     R"(  --tool TOOL             finger:N (N = 1, 7, 19, 37), twofinger:N or probe:NXxNY (required)
   --trajectory FILE       trajectory CSV: t,px,py,pz,qw,qx,qy,qz (s, mm, scene frame)
   --out FILE              force CSV to write
-  --param NAME=VALUE      force parameter override, repeatable: c, k, bone_fmax, bone_flip,
-                          bone_enabled, grad_epsilon, direction_epsilon
-  --device-profile NAME   apply a device's limits after the model: falcon, phantom-premium,
-                          omega (default: none, the model's own output)
+  --param NAME=VALUE      force parameter override, repeatable (ranges enforced):
+                            c [0, 20] mm/N, k [0, 5] N/mm, bone_fmax [0, 60] N,
+                            bone_flip [0, 10], bone_enabled 0|1, bone_mode 0 (printed) | 1
+                            (robust), bone_k [0, 100] N/mm, grad_epsilon and
+                            direction_epsilon (0, 0.1], model 0 (paper) | 1 (palp);
+                            palp only: mu [0, 2], skin_fmax [1, 200] N,
+                            bone_fade_mm [0, 30] mm, bone_along_normal 0|1
+  --device-profile NAME   apply a device's limits after the model: touch, falcon,
+                          phantom-premium, omega (default: none, the model's own output)
   -q, --quiet             print only errors
   -h, --help              show this help
 )";
