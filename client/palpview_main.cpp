@@ -10,8 +10,8 @@
 //   controller: pose -> pose pump thread (250 Hz) -> StreamClient::send_pose;
 //               tool / pause requests -> commands
 // At exit the frame-time split is printed and (--stats-json) written as JSON.
-// Exit codes: 0 done, 1 failure (no display, no scene within --timeout in screenshot mode,
-// refused by the server), 2 usage.
+// Exit codes: 0 done, 1 failure (no display, no scene within --timeout in screenshot mode, the
+// stream lost before the screenshot, refused by the server), 2 usage.
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
@@ -413,7 +413,8 @@ int run(const Options& o) {
     hud.view_fps = view_fps;
     hud.controller = o.controller;
     scene.update_state(state, hud);
-    const bool live = state.volume && state.frame.valid;
+    // a frame counts as live while the link is (a lost stream keeps its last frame on screen)
+    const bool live = state.volume && state.frame.valid && state.link.state == LinkState::Live;
     if (live && !live_since) live_since = Clock::now();
 
     if (o.controller && state.volume) {
@@ -479,6 +480,16 @@ int run(const Options& o) {
       }
     }
     if (screenshot) {
+      // the stream went away after it had been live: no picture of a stale scene
+      if (live_frames > 0 && (state.link.state == LinkState::Reconnecting ||
+                              state.link.state == LinkState::Connecting)) {
+        std::cerr << "palpview: the stream from " << o.host << ":" << o.port << " was lost after "
+                  << live_frames << " of " << o.frames << " live frames"
+                  << (state.link.message.empty() ? "" : " (" + state.link.message + ")")
+                  << "; no screenshot written\n";
+        exit_code = 1;
+        break;
+      }
       if (live_frames >= o.frames) {
         write_png(window.render_window(), o.screenshot);
         std::cout << "palpview: wrote " << o.screenshot << " after " << live_frames

@@ -195,9 +195,10 @@ TEST(Palpview, DefaultViewIsThePatientsAnteriorHoweverStored) {
   const double ras = mean_abs_difference(shots["LPS"], shots["RAS"]);
   const double pir = mean_abs_difference(shots["LPS"], shots["PIR"]);
   const double back = mean_abs_difference(shots["LPS"], shots["LPS posterior"]);
-  std::printf("mean |difference| from the LPS default view (grey levels): RAS %.4f, PIR %.4f, "
-              "LPS posterior %.4f\n",
-              ras, pir, back);
+  std::printf(
+      "mean |difference| from the LPS default view (grey levels): RAS %.4f, PIR %.4f, "
+      "LPS posterior %.4f\n",
+      ras, pir, back);
   EXPECT_LT(ras, 0.5) << "RAS differs from LPS";
   EXPECT_LT(pir, 0.5) << "PIR differs from LPS";
   EXPECT_GT(back, 2.0) << "the posterior view looks like the anterior one: the test cannot fail";
@@ -239,6 +240,26 @@ TEST(Palpview, ScreenshotOfTheLiveStream) {
   EXPECT_EQ(j.at("render_ms").at("n").get<int>(), 5);
   EXPECT_EQ(j.at("width").get<int>(), 320);
   EXPECT_TRUE(j.at("last_frame_valid").get<bool>());
+}
+
+// A stream lost before the screenshot's frames arrived: exit 1 at once, no picture of the stale
+// scene ("CONNECTION LOST" in a PNG that claims success).
+TEST(Palpview, StreamLostBeforeTheScreenshotFails) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  const fs::path dir = test_dir();
+  Palpd palpd("--scene phantom:sphere --device sim --port 0 --no-realtime --duration 4", dir);
+  ASSERT_GT(palpd.port(), 0) << palpd.log();
+  const fs::path png = dir / "lost.png";
+  const auto started = std::chrono::steady_clock::now();
+  const auto r =
+      run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) + " --screenshot " +
+                   png.string() + " --frames 100000 --width 160 --height 120 --timeout 120");
+  const double took =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("was lost after"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(png));
+  EXPECT_LT(took, 60.0);  // not the 120 s timeout
 }
 
 TEST(Palpview, ControllerScriptDrivesTheRemoteDevice) {
