@@ -1,14 +1,16 @@
 // palpchart — renders a line or scatter chart of CSV columns to a PNG file, off screen.
 //
-//   palpchart --csv FILE --x COL --y COL[,COL...] --out FILE.png [options]
+//   palpchart --csv FILE [--csv FILE...] --x COL --y COL[,COL...] --out FILE.png [options]
 //
-// Needs an X display (VTK renders through X even off screen); without one it says so and
-// suggests `xvfb-run -a palpchart ...`. Exit status: 0 written, 1 failure, 2 usage.
+// VTK renders through X even off screen: without a display palpchart runs itself again under
+// `xvfb-run -a` when that is installed, and otherwise says what to install. Exit status: 0
+// written, 1 failure, 2 usage.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <numeric>
@@ -17,6 +19,8 @@
 #include <string_view>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include "base/errors.hpp"
 #include "chart/chart.hpp"
@@ -27,9 +31,11 @@ using palp::UsageError;
 namespace chart = palp::chart;
 
 constexpr const char* kUsage =
-    R"(usage: palpchart --csv FILE --x COL --y COL[,COL...] --out FILE.png [options]
+    R"(usage: palpchart --csv FILE [--csv FILE...] --x COL --y COL[,COL...] --out FILE.png [options]
 
-Draws the columns of a CSV file (header row) as a line or scatter chart and writes a PNG.
+Draws the columns of CSV files (header row) as a line or scatter chart and writes a PNG. Several
+--csv files are overlaid on one chart, each series named after its file (FILE's name without
+.csv, then the series).
   --group COL[,COL...]  one series per distinct value (or combination) of these columns
   --where COL=V[|V...]  keep only rows whose COL equals one of the values (repeatable)
   --names A[,B...]      series names for the --y columns (default: the column names)
@@ -45,7 +51,7 @@ Draws the columns of a CSV file (header row) as a line or scatter chart and writ
   --yrange LO,HI        y axis range, likewise
   --size WxH            image size in pixels (default 900x600)
   --legend POS          tr | tl | br | bl | none (default tr)
-Without an X display run it as: xvfb-run -a palpchart ...
+Without an X display palpchart runs itself under xvfb-run -a (package xvfb) when it can.
 )";
 
 std::vector<std::string> split(std::string_view s, char sep) {
@@ -69,7 +75,8 @@ double number(const std::string& text, std::string_view option) {
 }
 
 struct Options {
-  std::string csv, out, x;
+  std::vector<std::string> csv;
+  std::string out, x;
   std::vector<std::string> y, group, names;
   std::vector<std::pair<std::string, std::vector<std::string>>> where;
   chart::Style style = chart::Style::LinePoints;
@@ -88,7 +95,7 @@ Options parse_args(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string_view a = argv[i];
     if (a == "--csv") {
-      o.csv = value(i);
+      o.csv.push_back(value(i));
     } else if (a == "--out") {
       o.out = value(i);
     } else if (a == "--x") {
@@ -175,6 +182,8 @@ Options parse_args(int argc, char** argv) {
     throw UsageError("--names needs one name per --y column");
   if (o.pareto && o.y.size() != 1) throw UsageError("--pareto needs exactly one --y column");
   if (o.pareto && !o.mark.empty()) throw UsageError("use either --pareto or --mark");
+  if (o.csv.size() > 1 && (o.pareto || !o.mark.empty()))
+    throw UsageError("--pareto and --mark take one --csv");
   if (!o.xlabel_set) o.spec.x_title = o.x;
   if (!o.ylabel_set) o.spec.y_title = o.y.size() == 1 ? o.y[0] : "";
   return o;
@@ -194,7 +203,9 @@ void sort_by_x(chart::Series& s) {
   s.y = std::move(y);
 }
 
-chart::ChartSpec build(const Options& o, const chart::Table& table) {
+// The series of one CSV file (with its name before each series when `prefix` is not empty).
+chart::ChartSpec build(const Options& o, const chart::Table& table, const std::string& csv,
+                       const std::string& prefix) {
   // Rows kept by --where.
   std::vector<std::size_t> where_cols;
   for (const auto& w : o.where) where_cols.push_back(table.column(w.first));
@@ -208,7 +219,7 @@ chart::ChartSpec build(const Options& o, const chart::Table& table) {
     }
     if (keep) rows.push_back(r);
   }
-  if (rows.empty()) throw UsageError("no row of '" + o.csv + "' passes the --where filters");
+  if (rows.empty()) throw UsageError("no row of '" + csv + "' passes the --where filters");
 
   std::vector<std::size_t> group_cols;
   for (const std::string& g : o.group) group_cols.push_back(table.column(g));
@@ -233,6 +244,8 @@ chart::ChartSpec build(const Options& o, const chart::Table& table) {
           it->second.name = yname;
         else
           it->second.name = o.y.size() > 1 ? yname + ": " + key : key;
+        if (!prefix.empty())
+          it->second.name = prefix + (key.empty() && o.y.size() == 1 ? "" : ": " + it->second.name);
       }
       it->second.x.push_back(xs[r]);
       it->second.y.push_back(ys[r]);
@@ -288,11 +301,31 @@ int main(int argc, char** argv) {
   try {
     const Options o = parse_args(argc, argv);
     if (!chart::display_available()) {
+      // once: under xvfb-run, when installed (the variable stops a loop if it gave no display)
+      if (!std::getenv("PALPCHART_UNDER_XVFB") &&
+          std::system("command -v xvfb-run >/dev/null") == 0) {
+        ::setenv("PALPCHART_UNDER_XVFB", "1", 1);
+        std::vector<char*> args{const_cast<char*>("xvfb-run"), const_cast<char*>("-a")};
+        for (int i = 0; i < argc; ++i) args.push_back(argv[i]);
+        args.push_back(nullptr);
+        ::execvp("xvfb-run", args.data());
+      }
       std::cerr << chart::no_display_message("palpchart") << "\n";
       return 1;
     }
-    const chart::Table table = chart::read_csv(o.csv);
-    chart::render_png(build(o, table), o.out);
+    chart::ChartSpec spec;
+    for (const std::string& csv : o.csv) {
+      const chart::Table table = chart::read_csv(csv);
+      const std::string prefix =
+          o.csv.size() > 1 ? std::filesystem::path(csv).stem().string() : std::string();
+      chart::ChartSpec one = build(o, table, csv, prefix);
+      if (spec.series.empty()) {
+        spec = std::move(one);
+      } else {
+        for (chart::Series& s : one.series) spec.series.push_back(std::move(s));
+      }
+    }
+    chart::render_png(spec, o.out);
     return 0;
   } catch (const UsageError& e) {
     std::cerr << "palpchart: " << e.what() << "\n" << kUsage;
