@@ -172,9 +172,13 @@ class RemoteDevice final : public Device {
   bool renders_force() const noexcept override { return false; }
   DeviceStatus configure(const DeviceConfig& config) override;
   DeviceStatus activate() override;
-  // NoData until the first pose and between poses; Timeout when the last pose is older than
-  // the configured timeout.
+  // NoData until the first pose and between poses; Absent once the last pose is older than the
+  // configured timeout (the controller left or stopped: one absent period, not a fault per tick),
+  // until poses come again.
   DeviceStatus read(std::int64_t now_ns, DeviceSample& sample) noexcept override;
+  DeviceState state() const noexcept override {
+    return absent_.load(std::memory_order_relaxed) ? DeviceState::Absent : DeviceState::Present;
+  }
   DeviceStatus write(const DeviceCommand& command) noexcept override;
   DeviceStatus deactivate() override;
 
@@ -193,6 +197,7 @@ class RemoteDevice final : public Device {
   DeviceCommand command_seen_{};
   Timed last_{};
   bool have_pose_ = false;
+  std::atomic<bool> absent_{false};
   std::int64_t timeout_ns_ = 250'000'000;
 };
 

@@ -11,6 +11,7 @@ DeviceStatus RemoteDevice::configure(const DeviceConfig& config) {
 
 DeviceStatus RemoteDevice::activate() {
   have_pose_ = false;
+  absent_.store(false, std::memory_order_relaxed);
   return DeviceStatus::Ok;
 }
 
@@ -19,12 +20,20 @@ DeviceStatus RemoteDevice::read(std::int64_t now_ns, DeviceSample& sample) noexc
   if (box_.read(fresh)) {
     last_ = fresh;
     have_pose_ = true;
+    absent_.store(false, std::memory_order_relaxed);
     sample.pose = last_.pose;
     sample.forced_fault = 0;
     return DeviceStatus::Ok;
   }
+  if (absent_.load(std::memory_order_relaxed)) return DeviceStatus::Absent;
   if (!have_pose_) return DeviceStatus::NoData;
-  if (now_ns - last_.t_ns > timeout_ns_) return DeviceStatus::Timeout;
+  if (now_ns - last_.t_ns > timeout_ns_) {
+    // the driver stopped sending (its controller left): the device is gone, as an unplugged USB
+    // device is, not failing every tick
+    have_pose_ = false;
+    absent_.store(true, std::memory_order_relaxed);
+    return DeviceStatus::Absent;
+  }
   return DeviceStatus::NoData;
 }
 

@@ -1,4 +1,5 @@
-// remote: poses from the network thread, NoData between them, Timeout when they stop.
+// remote: poses from the network thread, NoData between them, Absent when they stop (one absent
+// period, not a fault per tick).
 #include <gtest/gtest.h>
 
 #include <thread>
@@ -8,7 +9,7 @@
 namespace palp::rt {
 namespace {
 
-TEST(RemoteDevice, NoDataUntilAPoseThenHoldsThenTimesOut) {
+TEST(RemoteDevice, NoDataUntilAPoseThenHoldsThenAbsent) {
   RemoteDevice d;
   DeviceConfig c;
   c.timeout_s = 0.1;
@@ -23,11 +24,15 @@ TEST(RemoteDevice, NoDataUntilAPoseThenHoldsThenTimesOut) {
   EXPECT_EQ(s.pose.position, p.position);
   EXPECT_EQ(d.read(1'050'000'000, s), DeviceStatus::NoData);
   EXPECT_EQ(d.read(1'100'000'000, s), DeviceStatus::NoData);
-  EXPECT_EQ(d.read(1'100'000'001, s), DeviceStatus::Timeout);
+  EXPECT_EQ(d.state(), DeviceState::Present);
+  EXPECT_EQ(d.read(1'100'000'001, s), DeviceStatus::Absent);
+  EXPECT_EQ(d.state(), DeviceState::Absent);
+  EXPECT_EQ(d.read(1'150'000'000, s), DeviceStatus::Absent);  // stays absent, quietly
   p.position = {4, 5, 6};
   d.submit(p, 1'200'000'000);
   EXPECT_EQ(d.read(1'200'000'000, s), DeviceStatus::Ok);
   EXPECT_EQ(s.pose.position, p.position);
+  EXPECT_EQ(d.state(), DeviceState::Present);
 }
 
 TEST(RemoteDevice, PassesTheLastForceBack) {

@@ -308,6 +308,29 @@ TEST(HapticLoop, DeviceFaultsZeroTheForce) {
 
 // Hot-plug: Absent zeroes the force from that tick on without a fault, counts one event per
 // unplug, puts the state into each snapshot, and after the replug waits for a fresh pose.
+// The remote device whose controller leaves: one absent period, no fault per tick (a lab's idle
+// rig shows 0 faults, as operations.md says), and contact resumes when poses come again.
+TEST(HapticLoop, ARemoteControllerLeavingIsOneAbsentEventNotFaults) {
+  auto model = testing::ball_model();
+  RemoteDevice d;
+  DeviceConfig dc;
+  dc.timeout_s = 0.005;  // 5 ticks
+  ASSERT_EQ(d.configure(dc), DeviceStatus::Ok);
+  ASSERT_EQ(d.activate(), DeviceStatus::Ok);
+  HapticLoop loop(model, d, quiet_config());
+  d.submit(testing::press_pose(2.0), 0);
+  for (int n = 0; n < 100; ++n) loop.step(n * kPeriod, n * kPeriod);  // 95 ticks with no pose
+  LoopStats s = loop.stats();
+  EXPECT_EQ(s.faults, 0u);
+  EXPECT_EQ(s.absent_events, 1u);
+  EXPECT_EQ(s.device_state, DeviceState::Absent);
+  d.submit(testing::press_pose(2.0), 100 * kPeriod);
+  loop.step(100 * kPeriod, 100 * kPeriod);
+  s = loop.stats();
+  EXPECT_EQ(s.device_state, DeviceState::Present);
+  EXPECT_EQ(s.faults, 0u);
+}
+
 TEST(HapticLoop, AbsentDeviceIsZeroedNotFaulted) {
   auto model = testing::ball_model();
   ScriptedDevice d;
