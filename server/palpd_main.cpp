@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -353,10 +354,31 @@ double within(const cli::Args& args, const std::string& key, double fallback, do
   return v;
 }
 
+int run_configured(const cli::Arguments& argv_in, const std::optional<std::string>& config);
+
 int run(const cli::Arguments& argv_in) {
+  // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
+  for (const std::string& a : argv_in)
+    if (a == "--help" || a == "-h") {
+      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions;
+      return 0;
+    }
+  const auto config = cli::config_path(argv_in);
+  std::map<std::string, int> lines;
+  cli::Arguments from_config;
+  if (config) from_config = cli::config_arguments(*config, kFlags, kValued, &lines);
+  try {
+    from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
+    return run_configured(from_config, config);
+  } catch (const UsageError& e) {
+    if (!config) throw;
+    throw UsageError(cli::config_error(e.what(), *config, lines, argv_in));
+  }
+}
+
+int run_configured(const cli::Arguments& argv_in, const std::optional<std::string>& config) {
+  (void)config;
   cli::Arguments argv;
-  if (const auto path = cli::config_path(argv_in))
-    argv = cli::config_arguments(*path, kFlags, kValued);
   argv.insert(argv.end(), argv_in.begin(), argv_in.end());
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;

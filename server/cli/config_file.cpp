@@ -14,7 +14,8 @@ namespace palp::cli {
 
 // The TOML file as "--key=value" arguments (placed before the command line's, which win).
 Arguments config_arguments(const std::string& path, const std::vector<std::string>& flags,
-                           const std::vector<std::string>& valued) {
+                           const std::vector<std::string>& valued,
+                           std::map<std::string, int>* lines) {
   toml::table table;
   try {
     require_regular_file(path);  // a FIFO would block palpd's start forever
@@ -30,16 +31,18 @@ Arguments config_arguments(const std::string& path, const std::vector<std::strin
   Arguments out;
   for (const auto& [key_node, node] : table) {
     const std::string key(key_node.str());
+    const std::string at =
+        path + " line " + std::to_string(node.source().begin.line) + ", key '" + key + "'";
+    if (lines) (*lines)[key] = static_cast<int>(node.source().begin.line);
     const auto scalar = [&](const toml::node& n) -> std::string {
       if (const auto s = n.value<std::string>()) return *s;
       if (const auto i = n.value<std::int64_t>()) return std::to_string(*i);
       if (const auto d = n.value<double>()) return number_text(*d);
-      throw UsageError(path + ": '" + key + "' must be a string or a number");
+      throw UsageError(at + ": must be a string or a number");
     };
-    if (key == "config") throw UsageError(path + ": 'config' cannot be set in a config file");
+    if (key == "config") throw UsageError(at + ": 'config' cannot be set in a config file");
     if (key == "no-force-limits")
-      throw UsageError(path +
-                       ": 'no-force-limits' cannot be set in a config file (command line only)");
+      throw UsageError(at + ": cannot be set in a config file (command line only)");
     if (key == "param") {
       if (const toml::array* a = node.as_array()) {
         for (const toml::node& item : *a) out.push_back("--param=" + scalar(item));
@@ -47,13 +50,13 @@ Arguments config_arguments(const std::string& path, const std::vector<std::strin
         for (const auto& [name, value] : *t)
           out.push_back("--param=" + std::string(name.str()) + "=" + scalar(value));
       } else {
-        throw UsageError(path + ": 'param' must be an array of \"NAME=VALUE\" or a table");
+        throw UsageError(at + ": must be an array of \"NAME=VALUE\" or a table");
       }
       continue;
     }
     if (std::find(flags.begin(), flags.end(), key) != flags.end() || key == "realtime") {
       const auto b = node.value<bool>();
-      if (!b) throw UsageError(path + ": '" + key + "' must be true or false");
+      if (!b) throw UsageError(at + ": must be true or false");
       if (key == "realtime") {
         if (!*b) out.push_back("--no-realtime");
       } else if (*b) {
@@ -63,10 +66,24 @@ Arguments config_arguments(const std::string& path, const std::vector<std::strin
     }
     if (std::find(valued.begin(), valued.end(), key) == valued.end() &&
         std::find(kSceneOptions.begin(), kSceneOptions.end(), key) == kSceneOptions.end())
-      throw UsageError(path + ": unknown key '" + key + "'");
+      throw UsageError(at +
+                       ": unknown key (palpd --help lists the options; a key is an option's "
+                       "name without its dashes)");
     out.push_back("--" + key + "=" + scalar(node));
   }
   return out;
+}
+
+std::string config_error(const std::string& message, const std::string& path,
+                         const std::map<std::string, int>& lines, const Arguments& command_line) {
+  if (message.rfind("--", 0) != 0) return message;
+  const std::size_t end = message.find_first_of(" =", 2);
+  const std::string key = message.substr(2, end == std::string::npos ? end : end - 2);
+  const auto it = lines.find(key);
+  if (it == lines.end()) return message;
+  for (const std::string& arg : command_line)
+    if (arg == "--" + key || arg.rfind("--" + key + "=", 0) == 0) return message;
+  return path + " line " + std::to_string(it->second) + ", key '" + key + "': " + message;
 }
 
 std::optional<std::string> config_value(const std::string& path, const std::string& key) {

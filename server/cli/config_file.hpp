@@ -3,6 +3,7 @@
 // not a regular file, unknown keys, 'config' itself, and 'no-force-limits' (command line only).
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,8 +13,16 @@
 namespace palp::cli {
 
 // `flags`: the options without a value (true/false in the file); `valued`: those with one.
+// `lines` (when given) receives the line of each key, for errors found later in its value.
 Arguments config_arguments(const std::string& path, const std::vector<std::string>& flags,
-                           const std::vector<std::string>& valued);
+                           const std::vector<std::string>& valued,
+                           std::map<std::string, int>* lines = nullptr);
+
+// A usage error in an option's value that came from the config file, told as the file's: "FILE
+// line N, key 'rate': --rate ..." when `message` starts with "--KEY" for a KEY set in the file
+// and not on the command line (`command_line`); otherwise the message unchanged.
+std::string config_error(const std::string& message, const std::string& path,
+                         const std::map<std::string, int>& lines, const Arguments& command_line);
 
 // The string (or number, as text) under `key` in a config file, without checking the other keys
 // (palp ctl reads palpd's token this way). UsageError naming the file for an unreadable file.

@@ -99,10 +99,22 @@ TEST(Palpd, ConfigFileSetsOptionsAndCommandLineWins) {
   std::ofstream(config) << "scene = \"phantom:sphere\"\nfrobnicate = 1\n";
   r = run_palpd("--config " + config.string() + " --device sim");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("unknown key 'frobnicate'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("line 2, key 'frobnicate': unknown key"), std::string::npos) << r.output;
   std::ofstream(config) << "scene = [\n";
   r = run_palpd("--config " + config.string() + " --device sim");
   EXPECT_EQ(r.exit_code, 2);
+  // --help works whatever the file holds; a bad value is told as the file's, with its line,
+  // unless the command line set it
+  EXPECT_EQ(run_palpd("--config " + config.string() + " --help").exit_code, 0);
+  std::ofstream(config) << "scene = \"phantom:sphere\"\ndevice = \"sim\"\nrate = 1e9\n";
+  r = run_palpd("--config " + config.string() + " --no-realtime");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("line 3, key 'rate': --rate must be between 1 and 100000 Hz"),
+            std::string::npos)
+      << r.output;
+  r = run_palpd("--config " + config.string() + " --no-realtime --rate 0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output.find("key 'rate'"), std::string::npos) << r.output;
 }
 
 TEST(Palpd, ProbeObservesARecordedSessionThatReplaysExactly) {
