@@ -131,7 +131,8 @@ constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
 // Where the stream holding the voxels starts, checked against the file size before anything is
 // allocated: raw voxels must all be in the file, compressed ones within deflate's ratio of it.
 // `compressed` is set to the compressed bytes (0 for raw voxels).
-std::uint64_t check_data_size(const StoredVoxels& v, std::uint64_t need, std::uint64_t& compressed) {
+std::uint64_t check_data_size(const StoredVoxels& v, std::uint64_t need,
+                              std::uint64_t& compressed) {
   const std::uint64_t size = file_size(v.path);
   compressed = 0;
   if (v.compression == Compression::none) {
