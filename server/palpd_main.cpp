@@ -103,6 +103,9 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   --max-clients N         default 16 (1..1024)
   --queue N               haptic frames queued per client before the oldest is dropped
                           (256; 1..65536)
+  --queue-bytes N         everything queued for one client (frames, pongs, errors, results),
+                          each message counted with 128 bytes more; a client past it that still
+                          does not read is dropped (4194304; 65536..1073741824)
   --idle-timeout S        close clients that send nothing (Ping) for S s (30; 0 = never;
                           at most 86400)
   --hello-timeout S       close clients that send no Hello within S s (5; 0.1..600)
@@ -136,7 +139,7 @@ const std::vector<std::string> kValued = {
     "record",        "record-dir",     "watchdog-ms",    "device-timeout-ms",
     "priority",      "duration",       "config",         "poll-us",
     "stats-json",    "device-axes",    "device-scale",   "home",
-    "engage-ramp-s", "home-clearance", "workspace-mm"};
+    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"};
 
 std::vector<std::string> param_assignments(const ForceParams& p) {
   return {"c=" + number_text(p.c),
@@ -455,6 +458,8 @@ int run_configured(const cli::Arguments& argv_in, const std::optional<std::strin
   server_config.max_clients = static_cast<std::size_t>(within(args, "max-clients", 16, 1, 1024));
   server_config.queue_frames =
       std::max<std::size_t>(1, static_cast<std::size_t>(within(args, "queue", 256, 1, 65536)));
+  server_config.max_queue_bytes =
+      static_cast<std::size_t>(within(args, "queue-bytes", 4 << 20, 64 << 10, 1 << 30));
   server_config.idle_timeout_s = within(args, "idle-timeout", 30, 0, 86400);
   server_config.hello_timeout_s = within(args, "hello-timeout", 5, 0.1, 600);
   server_config.write_timeout_s = within(args, "write-timeout", 5, 0, 600);

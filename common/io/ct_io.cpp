@@ -114,8 +114,12 @@ void convert(const std::uint8_t* src, std::size_t n, const StoredVoxels& v, Out*
 
 // ---- reading voxels ----
 
-// Largest ratio of decompressed to compressed size deflate can reach (about 1032:1).
+// Largest ratio of decompressed to compressed size deflate can reach (about 1032:1): a claim
+// beyond it is refused before anything is read.
 constexpr std::uint64_t kMaxDeflateRatio = 1032;
+// A compressed stream's volume starts with room for this ratio (real CT compresses 2-5:1, so a
+// real volume gets all its room at once) and grows, doubling, as decoded bytes arrive.
+constexpr std::uint64_t kFirstRoomRatio = 16;
 constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
 
 [[noreturn]] void throw_short_data(const std::string& path, std::uint64_t need,
@@ -124,9 +128,13 @@ constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
                    " bytes of voxel data, file has " + std::to_string(have));
 }
 
-// Where the raw voxel bytes start, checked against the file size before anything is allocated.
-std::uint64_t check_data_size(const StoredVoxels& v, std::uint64_t need) {
+// Where the stream holding the voxels starts, checked against the file size before anything is
+// allocated: raw voxels must all be in the file, compressed ones within deflate's ratio of it.
+// `compressed` is set to the compressed bytes (0 for raw voxels).
+std::uint64_t check_data_size(const StoredVoxels& v, std::uint64_t need,
+                              std::uint64_t& compressed) {
   const std::uint64_t size = file_size(v.path);
+  compressed = 0;
   if (v.compression == Compression::none) {
     if (v.at_end_of_file) {
       if (size < need) throw_short_data(v.path, need, size);
@@ -137,7 +145,7 @@ std::uint64_t check_data_size(const StoredVoxels& v, std::uint64_t need) {
     if (have < need) throw_short_data(v.path, need, have);
     return v.file_offset;
   }
-  const std::uint64_t compressed = size > v.file_offset ? size - v.file_offset : 0;
+  compressed = size > v.file_offset ? size - v.file_offset : 0;
   const std::uint64_t most = compressed * kMaxDeflateRatio;
   if (need + v.skip > most)
     throw InputError(v.path + ": header says " + std::to_string(need) +
@@ -153,6 +161,10 @@ void finish_stream(DecodedReader& reader) {
   reader.read(extra, sizeof extra);
 }
 
+// Reads the voxels. The volume's memory follows the bytes that have arrived: raw voxels were
+// checked against the file size, so their volume is allocated at once; a compressed stream may
+// decode to less than its header claims (deflate reaches 1032:1, so a 2 MB stream can claim 2 GB),
+// so its volume grows as decoded bytes arrive and a lying header costs what the stream holds.
 template <class Out>
 Volume<Out> load_volume(const StoredImage& image) {
   const StoredVoxels& v = image.voxels;
@@ -160,9 +172,17 @@ Volume<Out> load_volume(const StoredImage& image) {
   const std::size_t element = scalar_size(v.type);
   const std::uint64_t count = image.grid.voxel_count();
   const std::uint64_t need = count * element;
-  const std::uint64_t start = check_data_size(v, need);
+  std::uint64_t compressed = 0;
+  const std::uint64_t start = check_data_size(v, need, compressed);
+  check_allocation(image.grid, sizeof(Out), v.path);
 
-  Volume<Out> volume(image.grid, Out{}, v.path);
+  Volume<Out> volume;
+  volume.grid = image.grid;
+  std::uint64_t room = count;
+  if (v.compression != Compression::none)
+    room = std::clamp<std::uint64_t>(compressed * kFirstRoomRatio / element, 1, count);
+  volume.data.reserve(static_cast<std::size_t>(room));
+
   DecodedReader reader(v.path, start, v.compression);
   if (!v.at_end_of_file && v.skip > 0 && reader.skip(v.skip) < v.skip)
     throw_short_data(v.path, need, 0);
@@ -173,7 +193,13 @@ Volume<Out> load_volume(const StoredImage& image) {
     const std::size_t want =
         static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size() / element, count - done));
     const std::size_t got = reader.read(chunk.data(), want * element);
-    convert(chunk.data(), got / element, v, volume.data.data() + done);
+    const std::size_t values = got / element;
+    if (done + values > volume.data.capacity())
+      volume.data.reserve(static_cast<std::size_t>(
+          std::min<std::uint64_t>(count, std::max<std::uint64_t>(done + values, 2 * room))));
+    room = volume.data.capacity();
+    volume.data.resize(static_cast<std::size_t>(done + values));
+    convert(chunk.data(), values, v, volume.data.data() + done);
     if (got < want * element) throw_short_data(v.path, need, done * element + got);
     done += want;
   }

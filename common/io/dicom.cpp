@@ -19,7 +19,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -59,6 +58,9 @@ struct SliceHeader {
   double intercept = 0.0;
   double thickness = 0.0;
   double along_normal = 0.0;  // position projected on the slice normal
+  unsigned bits_allocated = 16;
+  std::uint64_t image_bytes = 0;   // what Rows x Columns x BitsAllocated claim
+  std::uint64_t backed_bytes = 0;  // the most its stored pixel data can decode to
 };
 
 std::string name_of(const std::string& file) {
@@ -140,22 +142,70 @@ bool has_dicom_magic(const std::string& file) {
   return in.gcount() == sizeof head && std::memcmp(head + 128, "DICM", 4) == 0;
 }
 
-void check_not_truncated(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::vector<char> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  DicomLayoutCheck layout(std::move(bytes));
+// How many decoded bytes one byte of stored pixel data may stand for: native 1; RLE 64 (PackBits
+// repeats a byte at most 128 times for 2 bytes); the JPEG family and JPEG 2000 have no useful
+// theoretical bound (JPEG-LS run mode, empty JPEG 2000 code blocks), palp allows deflate's 1032.
+std::uint64_t max_decode_ratio(const std::string& syntax) {
+  if (syntax == "1.2.840.10008.1.2" || syntax == "1.2.840.10008.1.2.1" ||
+      syntax == "1.2.840.10008.1.2.2")
+    return 1;
+  if (syntax == "1.2.840.10008.1.2.5") return 64;
+  return 1032;
+}
+
+// A slice may claim this much whatever its bytes (a blank 1024x1024 slice compresses past any
+// ratio); a series may claim this much more than its bytes back in all.
+constexpr std::uint64_t kFreeSliceBytes = std::uint64_t{2} << 20;
+constexpr std::uint64_t kFreeSeriesBytes = std::uint64_t{256} << 20;
+// Pixel data may be larger than the image it decodes to (a codec's overhead), but not by more.
+constexpr std::uint64_t kPixelDataSlack = std::uint64_t{64} << 10;
+
+// What the structural walk learned about a file's pixel data.
+struct PixelDataLayout {
+  std::string syntax;
+  std::uint64_t bytes = 0;  // stored bytes of the Pixel Data (the file's size when not walked)
+};
+
+PixelDataLayout check_layout(const std::string& file) {
+  DicomLayoutCheck layout(file);
   const DicomLayoutCheck::Result result = layout.run();
   if (result == DicomLayoutCheck::Result::truncated)
     throw InputError(file + ": corrupt or truncated DICOM file (an element runs past its end)");
+  if (result == DicomLayoutCheck::Result::refused)
+    throw InputError(file + ": corrupt DICOM file (" + layout.reason() + ")");
+  if (layout.transfer_syntax() == "1.2.840.10008.1.2.1.99")
+    throw InputError(file +
+                     ": the deflated transfer syntax is not supported (its size cannot be "
+                     "bounded before inflating it; store the series uncompressed or with an "
+                     "image codec)");
   const auto storage = gdcm::MediaStorage::GetMSType(layout.media_storage_sop_class().c_str());
   if (result == DicomLayoutCheck::Result::complete && !layout.has_pixel_data() &&
       gdcm::MediaStorage::IsImage(storage))
     throw InputError(file + ": corrupt or truncated DICOM file (an image without pixel data)");
+  const bool walked = result == DicomLayoutCheck::Result::complete;
+  return {layout.transfer_syntax(), walked ? layout.pixel_data_bytes() : layout.file_bytes()};
+}
+
+// Refuses a slice whose Rows x Columns claim more pixel bytes than its stored pixel data can
+// decode to, or whose pixel data is far larger than its image (GDCM reads it whole).
+void check_pixel_claim(SliceHeader& h, const PixelDataLayout& layout) {
+  h.image_bytes = std::uint64_t{h.rows} * h.columns * (h.bits_allocated / 8);
+  h.backed_bytes = layout.bytes * max_decode_ratio(layout.syntax);
+  const std::string ts = layout.syntax.empty() ? "?" : layout.syntax;
+  const std::string size = std::to_string(h.columns) + "x" + std::to_string(h.rows);
+  if (layout.bytes > 2 * h.image_bytes + kPixelDataSlack)
+    throw InputError(h.file + ": " + std::to_string(layout.bytes) + " bytes of pixel data for a " +
+                     size + " image of " + std::to_string(h.image_bytes) + " bytes");
+  if (h.image_bytes > std::max(kFreeSliceBytes, h.backed_bytes))
+    throw InputError(h.file + ": Rows x Columns (" + size + ") claim " +
+                     std::to_string(h.image_bytes) + " bytes of pixels, but its " +
+                     std::to_string(layout.bytes) + " bytes of pixel data (transfer syntax " + ts +
+                     ") decode to at most " + std::to_string(h.backed_bytes));
 }
 
 // nullopt for DICOM files that hold no image (DICOMDIR, reports, ...).
 std::optional<SliceHeader> read_slice_header(const std::string& file) {
-  check_not_truncated(file);
+  const PixelDataLayout layout = check_layout(file);
   gdcm::Reader reader;
   reader.SetFileName(file.c_str());
   if (!reader.ReadUpToTag(kPixelData))
@@ -169,6 +219,15 @@ std::optional<SliceHeader> read_slice_header(const std::string& file) {
   if (number_or(ds, kNumberOfFrames, 1.0) > 1.0)
     throw InputError(
         file + ": multi-frame DICOM images are not supported (give a series of single slices)");
+  const unsigned samples = us_value<0x0028, 0x0002>(ds);
+  if (samples > 1)
+    throw InputError(file + ": " + std::to_string(samples) +
+                     " samples per pixel (only greyscale CT is supported)");
+  h.bits_allocated = us_value<0x0028, 0x0100>(ds);
+  if (h.bits_allocated != 8 && h.bits_allocated != 16)
+    throw InputError(file + ": BitsAllocated " + std::to_string(h.bits_allocated) +
+                     " is not supported (8 or 16)");
+  check_pixel_claim(h, layout);
   h.series_uid = string_value(ds, kSeriesInstanceUid);
   h.pixel_spacing = numbers<2>(ds, kPixelSpacing);
   h.orientation = numbers<6>(ds, kImageOrientation);
@@ -177,6 +236,22 @@ std::optional<SliceHeader> read_slice_header(const std::string& file) {
   h.intercept = number_or(ds, kRescaleIntercept, 0.0);
   h.thickness = number_or(ds, kSpacingBetweenSlices, number_or(ds, kSliceThickness, 0.0));
   return h;
+}
+
+// The whole series may claim at most what its pixel data backs plus kFreeSeriesBytes: many tiny
+// files, each within kFreeSliceBytes, must not add up to gigabytes.
+void check_series_claim(const std::vector<SliceHeader>& slices, const std::string& directory) {
+  std::uint64_t claimed = 0;
+  std::uint64_t backed = 0;
+  for (const auto& s : slices) {
+    claimed += s.image_bytes;
+    backed += std::min(s.backed_bytes, s.image_bytes);
+  }
+  if (claimed > backed + kFreeSeriesBytes)
+    throw InputError(directory + ": the series claims " + std::to_string(claimed) +
+                     " bytes of pixels, but its pixel data decodes to at most " +
+                     std::to_string(backed) + " (" + std::to_string(kFreeSeriesBytes) +
+                     " more are allowed)");
 }
 
 void require_single_series(const std::vector<SliceHeader>& slices, const std::string& directory) {
@@ -399,6 +474,7 @@ void load_series(const std::vector<std::string>& files, std::size_t all_files,
                  const std::string& directory, ChildWriter& out) {
   quiet_gdcm();
   std::vector<SliceHeader> slices = read_headers(files, all_files, directory, out);
+  check_series_claim(slices, directory);
   require_single_series(slices, directory);
   check_consistent(slices, directory);
   const SliceAxes axes = slice_axes(slices.front());

@@ -156,4 +156,15 @@ class HeaderFields {
   std::string missing_prefix_, missing_suffix_;
 };
 
+// The data file a detached header names must be a regular file (a device, a FIFO or a socket
+// would never end or block): "no such file or directory", "a loop of symbolic links" or what it
+// is instead, after the header's path.
+inline void require_data_file(const HeaderFields& f, const std::string& data_path) {
+  try {
+    require_regular_file(data_path);
+  } catch (const InputError& e) {
+    throw f.error(std::string("data file ") + e.what());
+  }
+}
+
 }  // namespace palp::header_text

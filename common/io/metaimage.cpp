@@ -149,9 +149,7 @@ void locate_voxels(const MetaFields& f, const MetaHeader& header, const std::str
     throw f.error("multi-file data (ElementDataFile = " + ht::printable(data_file) +
                   ") is not supported");
   voxels.path = ht::beside(path, data_file);
-  std::error_code ec;
-  if (!std::filesystem::exists(voxels.path, ec))
-    throw f.error("data file " + voxels.path + ": no such file or directory");
+  ht::require_data_file(f, voxels.path);
   if (const auto header_size = f.find({"HeaderSize"})) {
     const auto skip = ht::to_int(*header_size);
     if (!skip || *skip < -1)

@@ -260,9 +260,7 @@ void locate_voxels(const NrrdFields& f, const NrrdHeader& header, StoredVoxels& 
                     ") is not supported");
     voxels.path = ht::beside(path, *data_file);
     voxels.file_offset = 0;
-    std::error_code ec;
-    if (!std::filesystem::exists(voxels.path, ec))
-      throw f.error("data file " + voxels.path + ": no such file or directory");
+    ht::require_data_file(f, voxels.path);
   } else {
     if (!header.has_blank_line)
       throw f.error("no data (no blank line after the header and no data file)");

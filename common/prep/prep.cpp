@@ -21,6 +21,7 @@
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
 #include "io/ct_io.hpp"
+#include "io/gzip.hpp"
 #include "prep/ct_check.hpp"
 #include "prep/reorient.hpp"
 
@@ -50,13 +51,15 @@ class ContentHash {
     mix(size);
   }
   void add(const std::string& text) { add(text.data(), text.size()); }
+  // Reads through DecodedReader: only regular files, opened without blocking (a FIFO would wait
+  // for a writer, /dev/zero never ends), a symlink loop named as one.
   void add_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path.string() + ": cannot be read");
+    DecodedReader in(path.string(), 0, Compression::none);
     std::vector<char> buffer(1 << 20);
-    while (in) {
-      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-      add(buffer.data(), static_cast<std::size_t>(in.gcount()));
+    for (;;) {
+      const std::size_t got = in.read(buffer.data(), buffer.size());
+      add(buffer.data(), got);
+      if (got < buffer.size()) break;
     }
   }
   std::string hex() const {

@@ -15,7 +15,7 @@ namespace {
 std::string prep_usage() {
   const SegmentationParams seg;
   const DistanceParams dist;
-  char text[2048];
+  char text[4096];
   std::snprintf(text, sizeof text, R"(usage: palp prep INPUT --out DIR [options]
 
 Segments body and bone and computes the signed distance maps the force model samples.
@@ -24,6 +24,12 @@ Writes body.nii.gz, bone.nii.gz, d_surf.nii.gz, d_bone.nii.gz and prep.json into
 The input is checked first: air near -1000 HU and soft tissue near 0..100 HU must be present
 and the body must leave air around it. Patient directions come from the file's direction
 matrix; an oblique volume (gantry tilt) is resampled onto the nearest axis-aligned frame.
+What prep reads: INPUT; for a .mhd or .nhdr header also the data file it names, which may be
+an absolute path or lead out of the header's directory with ../ (both are legal in these
+formats: check a header from elsewhere before prepping it); for a directory, every regular file
+in it and in its immediate subdirectories. Only regular files are read (a device, FIFO or socket
+is refused), and nothing is allocated for a header's sizes before the bytes behind them exist
+(docs/security.md).
 Options:
   --out DIR               output directory (required; created if missing)
   --no-cache              recompute even if DIR already holds the result for this input

@@ -4,8 +4,10 @@
 //   cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
 //         -DPALP_FUZZ=ON -DPALP_BUILD_TESTS=OFF && ninja -C build-fuzz frame_decoder_fuzz
 //   build-fuzz/server/frame_decoder_fuzz -max_total_time=60
-// tests/proto/wire/framing_test.cpp and tests/server/net/protocol_test.cpp run a deterministic
-// mutation pass over the same path in CTest.
+// CTest runs it for 20 s over the seeds in tests/fuzz/frame_decoder_corpus wherever clang++ with
+// libFuzzer is installed (tests/fuzz/CMakeLists.txt builds it with clang whatever compiles the
+// rest); tests/proto/wire/framing_test.cpp and tests/server/net/protocol_test.cpp run a
+// deterministic mutation pass over the same path everywhere.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -14,8 +16,8 @@
 #include "wire/framing.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using namespace palp::net;
-  using namespace palp::wire;
+  namespace wire = palp::wire;
+  using palp::net::parse_client_message;
   // The first byte picks the size of the pieces the stream arrives in (1..256 bytes).
   if (size == 0) return 0;
   const std::size_t piece = static_cast<std::size_t>(data[0]) + 1;

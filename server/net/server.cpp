@@ -7,13 +7,13 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <map>
 #include <thread>
 #include <vector>
 
 #include "asio.hpp"
 #include "base/errors.hpp"
+#include "net/client_queue.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
 #include "net/token_guard.hpp"
@@ -22,7 +22,6 @@
 namespace palp::net {
 
 using asio::ip::tcp;
-using Bytes = std::shared_ptr<const std::string>;
 
 namespace {
 
@@ -37,14 +36,6 @@ Bytes error_frame(v1::Error::Code code, const std::string& reason, bool fatal) {
   e->set_reason(reason);
   e->set_fatal(fatal);
   return frame_of(m);
-}
-
-// Constant-time comparison of the token.
-bool same_token(const std::string& a, const std::string& b) {
-  unsigned char diff = a.size() == b.size() ? 0 : 1;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    diff |= static_cast<unsigned char>(a[i] ^ (i < b.size() ? b[i] : 0));
-  return diff == 0;
 }
 
 std::int64_t seconds_to_ns(double s) {
@@ -107,13 +98,7 @@ class Server::Impl {
   }
 
   void scene_changed() {
-    asio::post(io_, [this] {
-      for (auto& s : sessions_)
-        if (s->welcomed && !s->closing) {
-          s->control.push_back(scene_frame());
-          pump(s);
-        }
-    });
+    asio::post(io_, [this] { scene_dirty_ = true; });
   }
 
   std::uint16_t port() const { return port_; }
@@ -126,12 +111,15 @@ class Server::Impl {
     c.frames_sent = frames_sent_.load();
     c.frames_dropped = frames_dropped_.load();
     c.timeouts = timeouts_.load();
+    c.overflows = overflows_.load();
     return c;
   }
 
   struct Session {
-    explicit Session(asio::io_context& io, std::size_t max_frame)
-        : socket(io), decoder(max_frame) {}
+    Session(asio::io_context& io, const ServerConfig& config)
+        : socket(io),
+          decoder(config.max_frame_bytes),
+          queue(config.queue_frames, config.max_queue_bytes) {}
     tcp::socket socket;
     std::uint64_t id = 0;
     std::string name;
@@ -148,12 +136,12 @@ class Server::Impl {
     std::int64_t next_frame_ns = 0;
     wire::FrameDecoder decoder;
     std::array<std::uint8_t, 8192> rbuf{};
-    std::deque<Bytes> control;  // Welcome, SceneInfo, results, errors, stats, pongs
-    std::deque<Bytes> frames;   // bounded, newest kept
+    ClientQueue queue;
     std::vector<Bytes> inflight;
     std::vector<asio::const_buffer> buffers;
     std::int64_t connected_ns = 0, last_rx_ns = 0, write_started_ns = 0;
-    std::uint64_t frames_sent = 0, frames_dropped = 0;
+    std::uint64_t frames_sent = 0;
+    std::uint64_t frames_dropped_counted = 0;  // of queue.frames_dropped(), in frames_dropped_
     // Volume streaming.
     VolumePlan volume;
     std::uint32_t volume_k = 0, volume_chunk = 0;
@@ -163,7 +151,7 @@ class Server::Impl {
  private:
   // ------------------------------------------------------------------ accept
   void accept() {
-    auto session = std::make_shared<Session>(io_, config_.max_frame_bytes);
+    auto session = std::make_shared<Session>(io_, config_);
     acceptor_.async_accept(session->socket, [this, session](const asio::error_code& ec) {
       if (ec) {
         if (ec != asio::error::operation_aborted && acceptor_.is_open()) accept();
@@ -269,8 +257,7 @@ class Server::Impl {
         p->set_id(msg.ping().id());
         p->set_client_time_ns(msg.ping().client_time_ns());
         p->set_server_time_ns(rt::monotonic_ns());
-        s->control.push_back(frame_of(m));
-        pump(s);
+        send(s, frame_of(m));
         return;
       }
       case v1::ClientMessage::kCommand:
@@ -350,62 +337,30 @@ class Server::Impl {
     w->set_server_name(config_.server_name);
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
-    s->control.push_back(frame_of(m));
-    s->control.push_back(scene_frame());
+    if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
     plan_volume(*s, h.volume_step(), h.volume_max_dim());
     if (s->volume.chunks == 0) s->ready = true;
     pump(s);
   }
 
   void command(const SessionPtr& s, const v1::Command& c) {
-    std::string failure;
     bool scene_change = false;
-    if (!control_) {
-      failure = "this server takes no commands";
-    } else
-      try {
-        switch (c.kind_case()) {
-          case v1::Command::kSetTool:
-            failure = control_->set_tool(c.set_tool().tool());
-            scene_change = failure.empty();
-            break;
-          case v1::Command::kSetParameter:
-            failure = control_->set_parameter(c.set_parameter().name(), c.set_parameter().value());
-            scene_change = failure.empty();
-            break;
-          case v1::Command::kPause:
-            failure = control_->set_paused(c.pause().paused());
-            break;
-          case v1::Command::kRecentre:
-            failure = control_->recentre();
-            break;
-          case v1::Command::kStartRecording:
-            failure = control_->start_recording(c.start_recording().name());
-            break;
-          case v1::Command::kStopRecording:
-            failure = control_->stop_recording();
-            break;
-          case v1::Command::KIND_NOT_SET:
-            failure = "empty command";
-            break;
-        }
-      } catch (const std::exception& e) {
-        failure = e.what();
-        scene_change = false;
-      }
+    const std::string failure = apply_command(control_, c, scene_change);
     v1::ServerMessage m;
     v1::CommandResult* r = m.mutable_result();
     r->set_request_id(c.request_id());
     r->set_ok(failure.empty());
     r->set_message(failure);
-    s->control.push_back(frame_of(m));
-    pump(s);
-    if (scene_change)
-      for (auto& other : sessions_)
-        if (other->welcomed && !other->closing) {
-          other->control.push_back(scene_frame());
-          pump(other);
-        }
+    send(s, frame_of(m));
+    if (scene_change) scene_dirty_ = true;  // sent at the next poll, once for a burst of changes
+  }
+
+  // One SceneInfo, shared by every welcomed client; it replaces one still queued for a client.
+  void send_scene_to_all() {
+    scene_dirty_ = false;
+    const Bytes scene = scene_frame();
+    for (const SessionPtr& s : sessions_)
+      if (s->welcomed && !s->closing && !s->closed && queue_scene(*s, scene)) pump(s);
   }
 
   // ------------------------------------------------------------------ scene and volume
@@ -437,19 +392,10 @@ class Server::Impl {
     s->inflight.clear();
     s->buffers.clear();
     std::size_t frames_now = 0;
-    while (!s->control.empty()) {
-      s->inflight.push_back(std::move(s->control.front()));
-      s->control.pop_front();
-    }
+    s->queue.take(s->inflight, false);
     if (!s->closing && !s->ready && s->volume.chunks > 0 && s->inflight.empty())
       s->inflight.push_back(next_volume_chunk(*s));
-    if (!s->closing && s->ready) {
-      while (!s->frames.empty()) {
-        s->inflight.push_back(std::move(s->frames.front()));
-        s->frames.pop_front();
-        ++frames_now;
-      }
-    }
+    if (!s->closing && s->ready) frames_now = s->queue.take(s->inflight, true);
     if (s->inflight.empty()) {
       if (s->closing) close(*s);
       return;
@@ -471,27 +417,56 @@ class Server::Impl {
                       });
   }
 
+  // Queue a message / replace the queued SceneInfo for `s`; false (and the client dropped) when
+  // its queue exceeds max_queue_bytes even after its stale frames went.
+  bool queue(Session& s, Bytes bytes) {
+    if (s.closed) return false;
+    return counted(s, s.queue.push_message(std::move(bytes)));
+  }
+
+  bool queue_scene(Session& s, Bytes scene) {
+    if (s.closed) return false;
+    return counted(s, s.queue.push_scene(std::move(scene)));
+  }
+
+  // Adds the frames the queue dropped to the server's count; drops the client when its queue
+  // is over the bound.
+  bool counted(Session& s, bool within_bound) {
+    const std::uint64_t dropped = s.queue.frames_dropped();
+    frames_dropped_.fetch_add(dropped - s.frames_dropped_counted);
+    s.frames_dropped_counted = dropped;
+    if (within_bound) return true;
+    overflows_.fetch_add(1);
+    close(s);  // an Error could not get through a queue the client does not read either
+    return false;
+  }
+
+  void send(const SessionPtr& s, Bytes bytes) {
+    if (queue(*s, std::move(bytes))) pump(s);
+  }
+
   void error(const SessionPtr& s, v1::Error::Code code, const std::string& reason) {
     protocol_errors_.fetch_add(1);
-    s->control.push_back(error_frame(code, reason, false));
-    pump(s);
+    send(s, error_frame(code, reason, false));
   }
 
   void fatal(const SessionPtr& s, v1::Error::Code code, const std::string& reason) {
     protocol_errors_.fetch_add(1);
     rejected_.fetch_add(1);
-    s->frames.clear();
-    s->control.push_back(error_frame(code, reason, true));
+    s->queue.drop_frames();
+    counted(*s, true);
     s->closing = true;
-    pump(s);
+    send(s, error_frame(code, reason, true));
   }
 
+  // Closes the socket; the queue goes to the graveyard, freed a slice at a time (each poll).
   void close(Session& s) {
     if (s.closed) return;
     s.closed = true;
     asio::error_code ec;
     s.socket.shutdown(tcp::socket::shutdown_both, ec);
     s.socket.close(ec);
+    s.queue.bury(graveyard_);
   }
 
   // ------------------------------------------------------------------ frames from the loop
@@ -500,7 +475,9 @@ class Server::Impl {
         std::max<std::int64_t>(seconds_to_ns(config_.poll_interval_s), 50'000)));
     poll_timer_.async_wait([this](const asio::error_code& ec) {
       if (ec) return;
+      if (scene_dirty_) send_scene_to_all();
       drain();
+      graveyard_.free_some(kFreePerPoll);
       schedule_poll();
     });
   }
@@ -530,12 +507,8 @@ class Server::Impl {
           fill_frame(*snap, s->want_contacts, m.mutable_frame());
           bytes = frame_of(m);
         }
-        s->frames.push_back(bytes);
-        if (s->frames.size() > config_.queue_frames) {
-          s->frames.pop_front();
-          ++s->frames_dropped;
-          frames_dropped_.fetch_add(1);
-        }
+        s->queue.push_frame(bytes);
+        counted(*s, true);
         if (std::find(touched.begin(), touched.end(), s) == touched.end()) touched.push_back(s);
       }
       ring.pop();
@@ -595,9 +568,8 @@ class Server::Impl {
     for (const SessionPtr& s : sessions_) {
       if (!s->welcomed || s->closing || s->closed) continue;
       st->set_client_frames_sent(s->frames_sent);
-      st->set_client_frames_dropped(s->frames_dropped);
-      s->control.push_back(frame_of(m));
-      pump(s);
+      st->set_client_frames_dropped(s->queue.frames_dropped());
+      send(s, frame_of(m));
     }
   }
 
@@ -610,6 +582,10 @@ class Server::Impl {
   asio::steady_timer poll_timer_, house_timer_;
   std::thread thread_;
   std::vector<SessionPtr> sessions_;
+  // Queues of dropped clients, freed kFreePerPoll messages per poll.
+  static constexpr std::size_t kFreePerPoll = 4096;
+  Graveyard graveyard_;
+  bool scene_dirty_ = false;  // the scene changed since SceneInfo was last sent
   std::uint16_t port_ = 0;
   std::uint64_t next_id_ = 0;
   TokenGuard token_guard_;
@@ -618,7 +594,7 @@ class Server::Impl {
   std::uint64_t last_stats_ticks_ = 0;
   std::atomic<std::size_t> client_count_{0};
   std::atomic<std::uint64_t> accepted_{0}, rejected_{0}, protocol_errors_{0}, frames_sent_{0},
-      frames_dropped_{0}, timeouts_{0};
+      frames_dropped_{0}, timeouts_{0}, overflows_{0};
 };
 
 Server::Server(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop,

@@ -5,8 +5,13 @@
 // Welcome, SceneInfo and - when asked for - the render volume in chunks, and only then
 // HapticFrames (late joiners get the scene before frames). Frames go into a bounded per-client
 // queue; when it is full the oldest frame is dropped (counted), so a slow client gets the newest
-// frames and never holds anyone up. One write is in flight per client, gathering everything
-// queued. Stats about once a second. Sockets use TCP_NODELAY.
+// frames and never holds anyone up. Everything a client has queued (frames, errors, pongs,
+// command results, scene and stats messages) is also bounded in bytes (max_queue_bytes, each
+// message counted with kQueueEntryOverhead): stale frames go first, and a client whose other
+// messages still exceed the bound (one that floods Pings or Commands and never reads) is
+// dropped; its queues are freed a slice at a time between polls, never all at once on the io
+// thread. One write is in flight per client, gathering everything queued. Stats about once a
+// second. Sockets use TCP_NODELAY.
 //
 // Protocol violations get an Error with a reason and never take the server down:
 //   first message not a Hello, version mismatch, bad role, wrong token, second controller,
@@ -27,6 +32,7 @@
 #include "base/volume.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/field_sampler.hpp"
+#include "net/control_target.hpp"
 
 namespace palp::net {
 
@@ -41,6 +47,7 @@ struct ServerConfig {
   std::string token;                        // non-empty: CONTROLLER must present it
   std::size_t max_frame_bytes = 64 * 1024;  // client -> server
   std::size_t queue_frames = 256;           // HapticFrames queued per client before dropping
+  std::size_t max_queue_bytes = 4 << 20;    // all messages queued per client (client_queue.hpp)
   double hello_timeout_s = 5.0;
   double idle_timeout_s = 30.0;  // 0: off
   double write_timeout_s = 5.0;  // 0: off
@@ -69,23 +76,6 @@ struct SceneDescription {
   std::optional<Placement> placement;
 };
 
-// What Commands do; palpd wires it to the loop, the recorder and the remote device. Each
-// returns "" on success or the reason for refusing. Called on the io thread.
-class ControlTarget {
- public:
-  virtual ~ControlTarget() = default;
-  virtual std::string set_tool(const std::string& tool) = 0;
-  virtual std::string set_parameter(const std::string& name, double value) = 0;
-  virtual std::string set_paused(bool paused) = 0;
-  virtual std::string recentre() = 0;
-  virtual std::string start_recording(const std::string& name) = 0;
-  virtual std::string stop_recording() = 0;
-  virtual bool recording() const = 0;
-  virtual std::uint64_t record_lost() const = 0;
-  // false: there is no remote device to drive.
-  virtual bool set_device_pose(const Pose& pose, std::int64_t received_ns) = 0;
-};
-
 struct ServerCounters {
   std::uint64_t accepted = 0;
   std::uint64_t rejected = 0;         // closed with a fatal Error
@@ -93,6 +83,7 @@ struct ServerCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t frames_dropped = 0;  // stale frames dropped from client queues
   std::uint64_t timeouts = 0;
+  std::uint64_t overflows = 0;  // clients dropped for exceeding max_queue_bytes
 };
 
 class Server {

@@ -33,4 +33,11 @@ bool TokenGuard::failed(const std::string& address, std::int64_t now_ns) {
   return true;
 }
 
+bool same_token(const std::string& presented, const std::string& expected) {
+  unsigned char diff = presented.size() == expected.size() ? 0 : 1;
+  for (std::size_t i = 0; i < presented.size(); ++i)
+    diff |= static_cast<unsigned char>(presented[i] ^ (i < expected.size() ? expected[i] : 0));
+  return diff == 0;
+}
+
 }  // namespace palp::net

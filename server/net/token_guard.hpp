@@ -10,6 +10,10 @@
 
 namespace palp::net {
 
+// Compares a presented token with the server's in time that depends only on the presented
+// token's length, not on where the first difference is.
+bool same_token(const std::string& presented, const std::string& expected);
+
 class TokenGuard {
  public:
   static constexpr std::size_t kMaxAddresses = 1024;

@@ -39,6 +39,16 @@ TEST_F(PalpCli, HelpOnEveryCommand) {
     EXPECT_NE(out.output.find("usage: palp"), std::string::npos) << args;
   }
   EXPECT_EQ(run_palp("").exit_code, 2);
+  // prep says what it will read, absolute and ../ data-file paths included, and the whole text
+  // (longer than its old buffer) is there.
+  const auto prep = run_palp("prep --help");
+  EXPECT_NE(prep.output.find("What prep reads: INPUT; for a .mhd or .nhdr header also the data"),
+            std::string::npos)
+      << prep.output;
+  EXPECT_NE(prep.output.find("an absolute path or lead out of the header's directory with ../"),
+            std::string::npos)
+      << prep.output;
+  EXPECT_NE(prep.output.find("  -h, --help"), std::string::npos) << prep.output;
 }
 
 TEST_F(PalpCli, UsageMistakesExitWithTwoAndOneLine) {

@@ -60,8 +60,9 @@ TEST(Palpd, HelpAndUsageErrors) {
   r = run_palpd("--device sim --bind 10.1.2.3.4 --scene phantom:sphere --no-realtime");
   EXPECT_EQ(r.exit_code, 2);
   // Absurd numbers are refused with the option's name and range, before anything runs on them.
-  for (const char* absurd : {"--idle-timeout 1e10", "--poll-us 1e12", "--queue 1e12",
-                             "--hello-timeout 0", "--watchdog-ms 1e9", "--duration 1e300"}) {
+  for (const char* absurd :
+       {"--idle-timeout 1e10", "--poll-us 1e12", "--queue 1e12", "--queue-bytes 1e15",
+        "--queue-bytes 100", "--hello-timeout 0", "--watchdog-ms 1e9", "--duration 1e300"}) {
     r = run_palpd(std::string("--scene phantom:sphere --device sim --no-realtime ") + absurd);
     EXPECT_EQ(r.exit_code, 2) << absurd << ": " << r.output;
     EXPECT_NE(r.output.find("must be in ["), std::string::npos) << absurd << ": " << r.output;

@@ -88,6 +88,26 @@ void append(std::vector<std::uint8_t>& out, T value, bool swap = false) {
   out.insert(out.end(), bytes, bytes + sizeof(T));
 }
 
+// Resident memory the process has gained since the last reset_peak_memory(), from VmHWM (the
+// kernel resets the high-water mark when "5" is written to /proc/self/clear_refs).
+inline void reset_peak_memory() {
+  std::ofstream("/proc/self/clear_refs") << "5";
+}
+
+inline std::size_t peak_memory_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "VmHWM:") {
+      std::size_t kib = 0;
+      status >> kib;
+      return kib * 1024;
+    }
+    status.ignore(1 << 12, '\n');
+  }
+  return 0;
+}
+
 }  // namespace palp::testing
 
 // Expects `statement` to throw `ErrorType` with a single-line message containing `fragment`.

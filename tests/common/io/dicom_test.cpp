@@ -11,7 +11,9 @@
 #include <gdcmUIDGenerator.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
@@ -324,6 +326,69 @@ TEST(DicomLayout, CompleteFilesPassAndCutsInsideThePixelDataAreFound) {
           << sub << " cut " << cut;
     }
   }
+}
+
+// Sets Rows and Columns (explicit VR little endian US elements) in a file's bytes.
+void claim_image_size(const std::string& path, std::uint16_t columns, std::uint16_t rows) {
+  auto bytes = testing::read_bytes(path);
+  const auto patch = [&](std::uint8_t element, std::uint16_t value) {
+    const std::uint8_t tag[] = {0x28, 0x00, element, 0x00, 'U', 'S', 0x02, 0x00};
+    const auto at = std::search(bytes.begin(), bytes.end(), std::begin(tag), std::end(tag));
+    ASSERT_NE(at, bytes.end()) << path;
+    testing::put(bytes, static_cast<std::size_t>(at - bytes.begin()) + 8, value);
+  };
+  patch(0x10, rows);
+  patch(0x11, columns);
+  testing::write_bytes(path, bytes);
+}
+
+// Eight RLE slices of a few hundred bytes each claiming 16384 x 16384 pixels: RLE decodes at most
+// 64 bytes per stored byte, so each claim is refused before anything is allocated for it (the
+// series volume alone would have been 4 GiB).
+TEST(DicomErrors, TinySlicesClaimingHugeImagesAreRefusedBeforeAllocating) {
+  TempDir dir;
+  write_series(dir.path() / "raw", SeriesSpec{});
+  transcode_series(dir.path() / "raw", dir.path() / "rle", gdcm::TransferSyntax::RLELossless);
+  for (int k = 0; k < 8; ++k) claim_image_size(dir.file("rle/" + slice_name(k, 8)), 16384, 16384);
+  testing::reset_peak_memory();
+  const std::size_t before = testing::peak_memory_bytes();
+  EXPECT_PALP_ERROR(read_ct(dir.file("rle")), InputError,
+                    "Rows x Columns (16384x16384) claim 536870912 bytes of pixels, but its");
+  EXPECT_LT(testing::peak_memory_bytes(), before + (64u << 20));
+}
+
+// Slices within the small allowance each (1024 x 1024 int16, 2 MiB) that add up past what the
+// series' pixel data can back plus 256 MiB.
+TEST(DicomErrors, ManySmallClaimsAddUpToARefusal) {
+  TempDir dir;
+  SeriesSpec spec;
+  spec.slices = 139;  // prime to 5: slice_name gives each slice its own file
+  write_series(dir.path() / "raw", spec);
+  transcode_series(dir.path() / "raw", dir.path() / "rle", gdcm::TransferSyntax::RLELossless);
+  for (int k = 0; k < spec.slices; ++k)
+    claim_image_size(dir.file("rle/" + slice_name(k, spec.slices)), 1024, 1024);
+  testing::reset_peak_memory();
+  const std::size_t before = testing::peak_memory_bytes();
+  EXPECT_PALP_ERROR(read_ct(dir.file("rle")), InputError,
+                    "rle: the series claims 291504128 bytes of pixels, but its pixel data decodes");
+  EXPECT_LT(testing::peak_memory_bytes(), before + (64u << 20));
+}
+
+// A 3 GB sparse file with the DICOM magic in a series directory is walked through a window and
+// refused at its second element, not read into memory.
+TEST(DicomErrors, ASparseGigabyteFileIsNotReadWhole) {
+  TempDir dir;
+  std::filesystem::create_directories(dir.path() / "sparse");
+  const std::string path = dir.file("sparse/zeros.dcm");
+  std::vector<std::uint8_t> head(128, 0);
+  for (char c : std::string("DICM")) head.push_back(static_cast<std::uint8_t>(c));
+  testing::write_bytes(path, head);
+  std::filesystem::resize_file(path, std::uint64_t{3} << 30);
+  testing::reset_peak_memory();
+  const std::size_t before = testing::peak_memory_bytes();
+  EXPECT_PALP_ERROR(read_ct(dir.file("sparse")), InputError,
+                    "zeros.dcm: corrupt DICOM file (element (0000,0000) at byte 140");
+  EXPECT_LT(testing::peak_memory_bytes(), before + (64u << 20));
 }
 
 TEST(DicomErrors, GarbledHeaderDoesNotCrash) {

@@ -296,6 +296,28 @@ TEST(NiftiErrors, FileShorterThanTheHeaderSays) {
                     "short.nii.gz: header says 24 bytes of voxel data, file has 10");
 }
 
+// 3 MB of incompressible voxels behind a header claiming 1000^3 int16 (2 GB): within deflate's
+// ratio of the compressed size, so only decoding shows the lie; the volume must grow with the
+// bytes that arrive instead of being allocated for the claim.
+TEST(NiftiErrors, CompressedClaimBeyondItsStreamCostsOnlyWhatTheStreamHolds) {
+  TempDir dir;
+  std::vector<std::int16_t> values(1500000);
+  std::uint32_t state = 12345;
+  for (auto& v : values) {
+    state = state * 1664525u + 1013904223u;
+    v = static_cast<std::int16_t>(state >> 16);
+  }
+  NiftiSpec s;
+  s.dim = {3, 1000, 1000, 1000, 1, 1, 1, 1};
+  write_bytes(dir.file("liar.nii.gz"), gzip_compress(ByteSpan(nifti_file(s, values, false))));
+  values = {};
+  testing::reset_peak_memory();
+  const std::size_t before = testing::peak_memory_bytes();
+  EXPECT_PALP_ERROR(read_ct(dir.file("liar.nii.gz")), InputError,
+                    "liar.nii.gz: header says 2000000000 bytes of voxel data, file has 3000000");
+  EXPECT_LT(testing::peak_memory_bytes(), before + (128u << 20));
+}
+
 TEST(NiftiErrors, TruncatedAndCorruptGzip) {
   TempDir dir;
   write_nifti(dir.file("ok.nii.gz"), sample_ct(tilted_grid()));

@@ -4,6 +4,9 @@
 #include "io/nrrd.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
 
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
@@ -192,6 +195,24 @@ TEST(NrrdErrors, MalformedFields) {
       "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 2 2\nencoding: raw\ndata file: gone.raw\n");
   EXPECT_PALP_ERROR(read_ct(dir.file("gone.nhdr")), InputError,
                     "gone.raw: no such file or directory");
+}
+
+// A detached data file must be a regular file: a symlink loop is named as one (it was reported
+// missing), a FIFO is refused without waiting for a writer.
+TEST(NrrdErrors, DataFileThatIsNotARegularFile) {
+  TempDir dir;
+  std::filesystem::create_symlink("loop.raw", dir.file("loop.raw"));
+  write_text(
+      dir.file("loop.nhdr"),
+      "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 2 2\nencoding: raw\ndata file: loop.raw\n");
+  EXPECT_PALP_ERROR(read_ct(dir.file("loop.nhdr")), InputError,
+                    "loop.nhdr: data file " + dir.file("loop.raw") + ": a loop of symbolic links");
+  ASSERT_EQ(::mkfifo(dir.file("fifo.raw").c_str(), 0600), 0);
+  write_text(
+      dir.file("fifo.nhdr"),
+      "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 2 2\nencoding: raw\ndata file: fifo.raw\n");
+  EXPECT_PALP_ERROR(read_ct(dir.file("fifo.nhdr")), InputError,
+                    "fifo.raw: a FIFO, not a regular file");
 }
 
 TEST(NrrdErrors, ShortAndTruncatedData) {

@@ -3,6 +3,7 @@
 #include "prep/prep.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -128,6 +129,41 @@ TEST_F(PrepTest, CacheKeyFollowsTheVoxelsOfADetachedHeader) {
   EXPECT_EQ(prep_cache_key(header, {}), before);
   std::ofstream(dir_ / "ct.raw", std::ios::binary) << std::string(15, '\0') << 'x';
   EXPECT_NE(prep_cache_key(header, {}), before);  // same header, other voxels
+}
+
+// The cache key reads the input before prep does: it must not wait on a FIFO, read /dev/zero
+// for ever or follow a loop of symbolic links (each hung `palp prep` before).
+TEST_F(PrepTest, CacheKeyReadsOnlyRegularFiles) {
+  const std::string fifo = (dir_ / "fifo.nii").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    (void)prep_cache_key(fifo, {});
+    ADD_FAILURE() << "a FIFO was hashed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fifo.nii: a FIFO, not a regular file"), std::string::npos)
+        << e.what();
+  }
+  const std::string header = (dir_ / "zero.mhd").string();
+  std::ofstream(header) << "ObjectType = Image\nNDims = 3\nDimSize = 64 64 64\n"
+                           "ElementType = MET_SHORT\nElementDataFile = /dev/zero\n";
+  try {
+    (void)prep_cache_key(header, {});
+    ADD_FAILURE() << "/dev/zero was hashed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("data file /dev/zero: a character device"),
+              std::string::npos)
+        << e.what();
+  }
+  fs::create_symlink("loop.raw", dir_ / "loop.raw");
+  std::ofstream(dir_ / "loop.mhd") << "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\n"
+                                      "ElementType = MET_SHORT\nElementDataFile = loop.raw\n";
+  try {
+    (void)prep_cache_key((dir_ / "loop.mhd").string(), {});
+    ADD_FAILURE() << "a symlink loop was hashed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("loop.raw: a loop of symbolic links"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(PrepTest, AcceptsPhantomInputs) {

@@ -490,6 +490,58 @@ TEST_F(ServerTest, StalledClientIsDroppedWithoutHoldingOthersUp) {
   ASSERT_TRUE(healthy.wait_for_case(v1::ServerMessage::kFrame, m));
 }
 
+// Sends `batch` (many frames) until the server closes the connection.
+void flood_until_closed(TestClient& c, const std::string& batch) {
+  try {
+    for (int n = 0; n < 100000; ++n) c.send_raw(batch);
+  } catch (const std::exception&) {  // reset or broken pipe: the server dropped us
+  }
+}
+
+// Two clients flood (Pings, and Commands an observer may not send) and never read. Without the
+// write timeout, only the byte bound on their queues (pongs, errors) can stop them: each is
+// dropped, while an observer that reads keeps getting frames.
+TEST_F(ServerTest, FloodingClientsThatNeverReadAreDroppedByTheirQueueBound) {
+  ServerConfig config;
+  config.send_buffer_bytes = 4096;
+  config.write_timeout_s = 0;
+  config.idle_timeout_s = 0;
+  config.max_queue_bytes = 256 << 10;
+  start(config);
+  TestClient healthy(port());
+  healthy.hello();
+  v1::ServerMessage m;
+  ASSERT_TRUE(healthy.wait_for_case(v1::ServerMessage::kFrame, m));
+
+  TestClient pinger(port(), 4096), commander(port(), 4096);
+  pinger.hello(v1::OBSERVER, "", kProtocolVersion, 0, 1.0);
+  commander.hello(v1::OBSERVER, "", kProtocolVersion, 0, 1.0);
+  std::string pings, commands;
+  for (int n = 0; n < 2000; ++n) {
+    v1::ClientMessage ping;
+    ping.mutable_ping()->set_id(static_cast<std::uint64_t>(n));
+    pings += wire::encode_frame(ping);
+    v1::ClientMessage command;
+    command.mutable_command()->set_request_id(static_cast<std::uint64_t>(n));
+    command.mutable_command()->mutable_pause()->set_paused(false);
+    commands += wire::encode_frame(command);
+  }
+  std::thread ping_flood([&] { flood_until_closed(pinger, pings); });
+  std::thread command_flood([&] { flood_until_closed(commander, commands); });
+
+  const auto deadline = Clock::now() + std::chrono::seconds(20);
+  std::uint64_t frames = 0;
+  while (Clock::now() < deadline && (server_->counters().overflows < 2 || frames < 200)) {
+    ASSERT_TRUE(healthy.wait_for_case(v1::ServerMessage::kFrame, m, 2.0));
+    ++frames;
+  }
+  ping_flood.join();
+  command_flood.join();
+  EXPECT_EQ(server_->counters().overflows, 2u);
+  EXPECT_TRUE(wait_clients(1));
+  ASSERT_TRUE(healthy.wait_for_case(v1::ServerMessage::kFrame, m));
+}
+
 TEST_F(ServerTest, SilentConnectionTimesOut) {
   ServerConfig config;
   config.hello_timeout_s = 0.2;

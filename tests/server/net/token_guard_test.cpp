@@ -38,5 +38,15 @@ TEST(TokenGuard, BoundedTableAndRateLimitedLogging) {
   EXPECT_EQ(logged, 2);  // at 0 ms and at 1000 ms
 }
 
+TEST(SameToken, EqualOnlyWhenLengthAndEveryByteAgree) {
+  EXPECT_TRUE(same_token("s3cret", "s3cret"));
+  EXPECT_TRUE(same_token("", ""));
+  EXPECT_FALSE(same_token("s3cre", "s3cret"));
+  EXPECT_FALSE(same_token("s3cret!", "s3cret"));
+  EXPECT_FALSE(same_token("s3creT", "s3cret"));
+  EXPECT_FALSE(same_token("", "s3cret"));
+  EXPECT_FALSE(same_token(std::string("s3\0ret", 6), "s3cret"));
+}
+
 }  // namespace
 }  // namespace palp::net
