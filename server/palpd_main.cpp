@@ -31,6 +31,7 @@
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
+#include "net/client_log.hpp"
 #include "net/server.hpp"
 #include "rt/recording.hpp"
 #include "safety/engagement.hpp"
@@ -509,6 +510,8 @@ int run_configured(const cli::Arguments& argv_in, const std::optional<std::strin
     loop_config.engage = engage;
     loop_config.passivity = true;
   }
+  // the port first: a port in use is told before minutes of scene preparation
+  net::check_listen_address(server_config.bind, server_config.port);
   const Scene scene = cli::load_scene_for(args, "palpd", quiet);
   auto model = std::make_shared<const Model>(scene.fields, tool, params);
 
@@ -581,6 +584,11 @@ int run_configured(const cli::Arguments& argv_in, const std::optional<std::strin
                 device_spec->c_str(), tool.name.c_str(), loop_config.rate_hz,
                 profile ? (std::string(", profile ") + std::string(profile->name)).c_str() : "");
     const PatientFrame frame = patient_frame(scene.grid);
+    if (server_config.token.empty() && !net::is_loopback_address(server_config.bind))
+      std::printf(
+          "palpd: WARNING: listening beyond this machine without --token: anyone who can "
+          "reach %s:%u may become the controller (set 'token' in the config)\n",
+          server_config.bind.c_str(), static_cast<unsigned>(server.port()));
     std::printf("palpd: patient stored %s: anterior is %s in the scene frame\n",
                 frame.orientation_code().c_str(),
                 to_string(frame.nearest_axis(Anatomy::Anterior)).c_str());

@@ -13,6 +13,7 @@
 
 #include "asio.hpp"
 #include "base/errors.hpp"
+#include "net/client_log.hpp"
 #include "net/client_queue.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
@@ -132,6 +133,7 @@ class Server::Impl {
     bool reading = false;
     bool writing = false;
     bool want_contacts = false;
+    bool end_logged = false;  // its leaving (or refusal) is in the log
     std::int64_t frame_interval_ns = 0;
     std::int64_t next_frame_ns = 0;
     wire::FrameDecoder decoder;
@@ -297,13 +299,22 @@ class Server::Impl {
         return;
       }
       if (!config_.token.empty() && !same_token(h.token(), config_.token)) {
-        if (token_guard_.failed(s->address, now))
-          std::fprintf(stderr,
-                       "palpd: wrong controller token from %s (%llu wrong tokens in all so far)\n",
-                       s->address.c_str(), static_cast<unsigned long long>(token_guard_.total()));
-        fatal(s, v1::Error::UNAUTHORIZED, "CONTROLLER needs the server's token");
+        const bool missing = h.token().empty();
+        token_guard_.failed(s->address, now);  // the back-off; the log bounds itself below
+        if (config_.log_clients)
+          token_log_.say(std::string(missing ? "no" : "wrong") + " controller token from " +
+                         s->address + " (" + std::to_string(token_guard_.total()) +
+                         " refused in all so far)");
+        s->end_logged = true;  // said just above
+        fatal(s, v1::Error::UNAUTHORIZED,
+              missing ? "CONTROLLER needs the server's token: none was given"
+                      : "CONTROLLER needs the server's token: the one given is wrong");
         return;
       }
+      if (!h.token().empty() && !is_loopback_address(s->address))
+        log_client("warning: " + s->address +
+                   " sent the controller token in clear text over the network; anyone on the "
+                   "path can read it (keep palpd on a trusted network, or tunnel it)");
       token_guard_.succeeded(s->address);
       for (const auto& other : sessions_)
         if (other != s && other->role == v1::CONTROLLER && !other->closed) {
@@ -340,7 +351,16 @@ class Server::Impl {
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
     plan_volume(*s, h.volume_step(), h.volume_max_dim());
     if (s->volume.chunks == 0) s->ready = true;
+    log_client(who(*s) + " joined");
     pump(s);
+  }
+
+  // ------------------------------------------------------------------ the log
+  void log_client(const std::string& line) {
+    if (config_.log_clients) client_log_.say(line);
+  }
+  static std::string who(const Session& s) {
+    return describe_client(s.id, s.address, s.welcomed, s.role == v1::CONTROLLER, s.name);
   }
 
   void command(const SessionPtr& s, const v1::Command& c) {
@@ -437,7 +457,8 @@ class Server::Impl {
     s.frames_dropped_counted = dropped;
     if (within_bound) return true;
     overflows_.fetch_add(1);
-    close(s);  // an Error could not get through a queue the client does not read either
+    // an Error could not get through a queue the client does not read either
+    close(s, "dropped: its queue is over --queue-bytes (it does not read)");
     return false;
   }
 
@@ -451,6 +472,8 @@ class Server::Impl {
   }
 
   void fatal(const SessionPtr& s, v1::Error::Code code, const std::string& reason) {
+    if (!s->end_logged) log_client(who(*s) + (s->welcomed ? " dropped: " : " refused: ") + reason);
+    s->end_logged = true;
     protocol_errors_.fetch_add(1);
     rejected_.fetch_add(1);
     s->queue.drop_frames();
@@ -460,9 +483,11 @@ class Server::Impl {
   }
 
   // Closes the socket; the queue goes to the graveyard, freed a slice at a time (each poll).
-  void close(Session& s) {
+  void close(Session& s, const char* why = "left") {
     if (s.closed) return;
     s.closed = true;
+    if (!s.end_logged && s.welcomed) log_client(who(s) + " " + why);
+    s.end_logged = true;
     asio::error_code ec;
     s.socket.shutdown(tcp::socket::shutdown_both, ec);
     s.socket.close(ec);
@@ -534,7 +559,8 @@ class Server::Impl {
                                  now - s->write_started_ns > seconds_to_ns(config_.write_timeout_s);
       if (stalled_write) {
         timeouts_.fetch_add(1);
-        close(*s);  // the socket does not drain: an Error could not get through either
+        // the socket does not drain: an Error could not get through either
+        close(*s, "dropped: its socket did not drain within --write-timeout");
         continue;
       }
       if (s->closing) continue;
@@ -595,6 +621,8 @@ class Server::Impl {
   std::atomic<std::size_t> client_count_{0};
   std::atomic<std::uint64_t> accepted_{0}, rejected_{0}, protocol_errors_{0}, frames_sent_{0},
       frames_dropped_{0}, timeouts_{0}, overflows_{0};
+  // token refusals have a budget of their own, so a flood of other refusals cannot hide them
+  ClientLog client_log_, token_log_;
 };
 
 Server::Server(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop,
@@ -606,6 +634,7 @@ Server::~Server() {
 std::uint16_t Server::port() const {
   return impl_->port();
 }
+
 void Server::start() {
   impl_->start();
 }

@@ -56,7 +56,13 @@ struct ServerConfig {
   std::size_t volume_chunk_bytes = 1 << 20;  // per map, per chunk
   int send_buffer_bytes = 0;                 // SO_SNDBUF of client sockets (0: system default)
   std::string server_name = "palpd";
+  bool log_clients = true;  // clients joining, leaving and refused, on stderr (rate-bounded)
 };
+
+// Whether palpd could listen on bind:port (port 0 always can), checked before the scene is
+// loaded so a port in use is told at once: ResourceError saying what to change, UsageError for
+// a bind that is not an address.
+void check_listen_address(const std::string& bind, std::uint16_t port);
 
 // What SceneInfo describes besides the model (which comes from the loop).
 struct SceneDescription {

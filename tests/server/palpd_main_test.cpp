@@ -118,6 +118,37 @@ TEST(Palpd, ConfigFileSetsOptionsAndCommandLineWins) {
   EXPECT_EQ(r.output.find("key 'rate'"), std::string::npos) << r.output;
 }
 
+// What journalctl shows: clients joining and leaving with address, role and name; a missing and
+// a wrong token told apart; a second palpd on a port in use refused before it loads a scene.
+TEST(Palpd, LogsClientsAndFindsAPortInUseFirst) {
+  const fs::path dir = shared_cli_dir() / "log";
+  fs::create_directories(dir);
+  const fs::path log = dir / "palpd.log";
+  const int port = start_palpd(
+      "--scene phantom:sphere --device sim --port 0 --duration 4 --no-realtime --token s3cret",
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  const std::string at = "127.0.0.1:" + std::to_string(port);
+  EXPECT_EQ(run_palp_cli("probe " + at + " --duration 0.3 --name lab-screen", dir / "c").exit_code,
+            0);
+  EXPECT_EQ(run_palp_cli("ctl " + at + " status", dir / "c").exit_code, 1);  // no token
+  EXPECT_EQ(run_palp_cli("ctl " + at + " status --token guess", dir / "c").exit_code, 1);
+  EXPECT_EQ(run_palp_cli("ctl " + at + " status --token s3cret", dir / "c").exit_code, 0);
+  const auto second = run_palpd("--scene /nonexistent/ct.nii --device sim --no-realtime --port " +
+                                std::to_string(port));
+  EXPECT_EQ(second.exit_code, 1) << second.output;
+  EXPECT_NE(second.output.find("Address already in use"), std::string::npos) << second.output;
+  EXPECT_NE(second.output.find("--port 0"), std::string::npos) << second.output;
+  EXPECT_EQ(second.output.find("nonexistent"), std::string::npos) << second.output;  // not loaded
+  ASSERT_TRUE(wait_palpd_exit(log)) << read_text(log);
+  const std::string text = read_text(log);
+  EXPECT_NE(text.find("(127.0.0.1, observer 'lab-screen') joined"), std::string::npos) << text;
+  EXPECT_NE(text.find("(127.0.0.1, observer 'lab-screen') left"), std::string::npos) << text;
+  EXPECT_NE(text.find("no controller token from 127.0.0.1"), std::string::npos) << text;
+  EXPECT_NE(text.find("wrong controller token from 127.0.0.1"), std::string::npos) << text;
+  EXPECT_NE(text.find("(127.0.0.1, controller 'palp-ctl') joined"), std::string::npos) << text;
+}
+
 TEST(Palpd, ProbeObservesARecordedSessionThatReplaysExactly) {
   const fs::path dir = shared_cli_dir();
   const fs::path rec = dir / "session.palprec", again = dir / "again.palprec";

@@ -404,7 +404,7 @@ TEST_F(ServerTest, WrongTokensBackOff) {
     TestClient guess(port());
     guess.hello(v1::CONTROLLER, "guess" + std::to_string(i));
     ASSERT_TRUE(guess.wait_for_case(v1::ServerMessage::kError, m));
-    EXPECT_EQ(m.error().reason(), "CONTROLLER needs the server's token");
+    EXPECT_EQ(m.error().reason(), "CONTROLLER needs the server's token: the one given is wrong");
   }
   TestClient hurried(port());
   hurried.hello(v1::CONTROLLER, "s3cret");  // even the right token waits now
