@@ -114,7 +114,10 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
                           at most 600)
   --poll-us US            how often the network thread takes new frames from the loop
                           (500; 50..100000)
-  --record FILE           record every tick (binary, see server/rt/recording.hpp) and FILE's .csv
+  --record FILE           record every tick into FILE (binary, see server/rt/recording.hpp) and a
+                          CSV beside it: FILE with its extension replaced by .csv (rec/s1.palprec
+                          -> rec/s1.csv; no extension: rec/s1 -> rec/s1.csv); either one existing
+                          is refused, never written over
   --record-dir DIR        where StartRecording commands (palp ctl record start) write, made at
                           start when missing (default: the current directory)
   --watchdog-ms MS        a tick starting MS later than its deadline zeroes the force (5; 0 off;
