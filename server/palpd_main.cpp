@@ -9,6 +9,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -145,6 +146,16 @@ const std::vector<std::string> kValued = {
     "stats-json",    "device-axes",    "device-scale",   "home",
     "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"};
 
+// Now, as 2026-11-24T12:00:00Z.
+std::string utc_now_text() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
 std::vector<std::string> param_assignments(const ForceParams& p) {
   return {"c=" + number_text(p.c),
           "k=" + number_text(p.k),
@@ -208,21 +219,23 @@ class App final : public net::ControlTarget {
     loop_.request_recentre();
     return {};
   }
-  std::string start_recording(const std::string& name) override {
+  std::string start_recording(const std::string& name, const std::string& requested_by) override {
     if (name.empty() || name.size() > 128 || name.find('/') != std::string::npos ||
         name.front() == '.')
       return "recording name must be a plain file name (no '/', not starting with '.')";
     for (const char ch : name)
       if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
         return "recording name must not hold control characters";
-    return start(std::filesystem::path(record_dir_) / name);
+    return start(std::filesystem::path(record_dir_) / name, requested_by);
   }
-  std::string start(const std::filesystem::path& path) {
+  std::string start(const std::filesystem::path& path, const std::string& requested_by) {
     const std::lock_guard lock(mutex_);
     if (recorder_) return "already recording to " + recorder_->path();
     rt::RecordingMetadata meta = metadata_;
     const auto model = loop_.model();
     meta["tool"] = model->tool().name;
+    meta["started-by"] = requested_by;
+    meta["started-at"] = utc_now_text();
     const std::vector<std::string> params = param_assignments(model->params());
     for (const std::string& a : params) {
       const auto eq = a.find('=');
@@ -573,7 +586,7 @@ int run_configured(const cli::Arguments& argv_in, const std::optional<std::strin
   net::Server server(server_config, description, loop, &app);
 
   if (const auto record = args.get("record")) {
-    const std::string failure = app.start(*record);
+    const std::string failure = app.start(*record, "palpd --record");
     if (!failure.empty()) throw Error(failure);
   }
   loop.start();

@@ -5,7 +5,8 @@
 
 namespace palp::net {
 
-std::string apply_command(ControlTarget* target, const v1::Command& c, bool& scene_changed) {
+std::string apply_command(ControlTarget* target, const v1::Command& c,
+                          const std::string& requested_by, bool& scene_changed) {
   std::string failure;
   scene_changed = false;
   if (!target) {
@@ -28,7 +29,7 @@ std::string apply_command(ControlTarget* target, const v1::Command& c, bool& sce
           failure = target->recentre();
           break;
         case v1::Command::kStartRecording:
-          failure = target->start_recording(c.start_recording().name());
+          failure = target->start_recording(c.start_recording().name(), requested_by);
           break;
         case v1::Command::kStopRecording:
           failure = target->stop_recording();

@@ -18,7 +18,8 @@ class ControlTarget {
   virtual std::string set_parameter(const std::string& name, double value) = 0;
   virtual std::string set_paused(bool paused) = 0;
   virtual std::string recentre() = 0;
-  virtual std::string start_recording(const std::string& name) = 0;
+  // `requested_by`: who asked (the client, as the log names it), noted in the recording.
+  virtual std::string start_recording(const std::string& name, const std::string& requested_by) = 0;
   virtual std::string stop_recording() = 0;
   virtual bool recording() const = 0;
   virtual std::uint64_t record_lost() const = 0;
@@ -26,9 +27,10 @@ class ControlTarget {
   virtual bool set_device_pose(const Pose& pose, std::int64_t received_ns) = 0;
 };
 
-// Runs `command` on `target` (none: the server takes no commands). Returns "" or the reason
-// it was refused (an exception's message included); `scene_changed` tells whether SceneInfo
-// must be sent again (a tool or parameter changed).
-std::string apply_command(ControlTarget* target, const v1::Command& command, bool& scene_changed);
+// Runs `command` from the client `requested_by` on `target` (none: the server takes no
+// commands). Returns "" or the reason it was refused (an exception's message included);
+// `scene_changed` tells whether SceneInfo must be sent again (a tool or parameter changed).
+std::string apply_command(ControlTarget* target, const v1::Command& command,
+                          const std::string& requested_by, bool& scene_changed);
 
 }  // namespace palp::net

@@ -365,7 +365,7 @@ class Server::Impl {
 
   void command(const SessionPtr& s, const v1::Command& c) {
     bool scene_change = false;
-    const std::string failure = apply_command(control_, c, scene_change);
+    const std::string failure = apply_command(control_, c, who(*s), scene_change);
     v1::ServerMessage m;
     v1::CommandResult* r = m.mutable_result();
     r->set_request_id(c.request_id());

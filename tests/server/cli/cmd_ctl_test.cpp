@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <string>
 
+#include "rt/recording.hpp"
 #include "support/cli_test_util.hpp"
 #include "support/palpd_process.hpp"
 
@@ -55,6 +56,11 @@ TEST(CmdCtl, ATrialFromOneConsole) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(fs::is_regular_file(rec / "trial1"));
   EXPECT_TRUE(fs::is_regular_file(rec / "trial1.csv"));
+  // the recording notes who started it, when, and the parameters in force
+  const rt::Recording recording = rt::read_recording((rec / "trial1").string());
+  EXPECT_NE(recording.metadata.at("started-by").find("controller 'palp-ctl'"), std::string::npos);
+  EXPECT_EQ(recording.metadata.at("param.c"), "1.5");
+  EXPECT_EQ(recording.metadata.at("started-at").size(), 20u);
   const auto size = fs::file_size(rec / "trial1");
   r = run_palp_cli(at + "record start trial1", cache);  // exists: refused, not overwritten
   EXPECT_EQ(r.exit_code, 1) << r.output;

@@ -26,8 +26,8 @@ class FakeTarget final : public ControlTarget {
     return "";
   }
   std::string recentre() override { return "no device"; }
-  std::string start_recording(const std::string& name) override {
-    calls += "record:" + name + ";";
+  std::string start_recording(const std::string& name, const std::string& by) override {
+    calls += "record:" + name + " by " + by + ";";
     return "";
   }
   std::string stop_recording() override { return ""; }
@@ -42,27 +42,27 @@ TEST(ControlTarget, CommandsReachTheirCallsAndOnlyAcceptedChangesTouchTheScene) 
   bool scene = true;
   v1::Command c;
   c.mutable_set_tool()->set_tool("ball:5");
-  EXPECT_EQ(apply_command(&target, c, scene), "");
+  EXPECT_EQ(apply_command(&target, c, "client 1", scene), "");
   EXPECT_TRUE(scene);
   c.mutable_set_tool()->set_tool("bad");
-  EXPECT_EQ(apply_command(&target, c, scene), "unknown tool");
+  EXPECT_EQ(apply_command(&target, c, "client 1", scene), "unknown tool");
   EXPECT_FALSE(scene);
   c.mutable_set_parameter()->set_name("k");
-  EXPECT_EQ(apply_command(&target, c, scene), "");
+  EXPECT_EQ(apply_command(&target, c, "client 1", scene), "");
   EXPECT_TRUE(scene);
   c.mutable_set_parameter()->set_name("boom");
-  EXPECT_EQ(apply_command(&target, c, scene), "k must be in [0, 10]");
+  EXPECT_EQ(apply_command(&target, c, "client 1", scene), "k must be in [0, 10]");
   EXPECT_FALSE(scene);
   c.mutable_pause()->set_paused(true);
-  EXPECT_EQ(apply_command(&target, c, scene), "");
+  EXPECT_EQ(apply_command(&target, c, "client 1", scene), "");
   EXPECT_FALSE(scene);
   c.mutable_recentre();
-  EXPECT_EQ(apply_command(&target, c, scene), "no device");
+  EXPECT_EQ(apply_command(&target, c, "client 1", scene), "no device");
   c.mutable_start_recording()->set_name("run1");
-  EXPECT_EQ(apply_command(&target, c, scene), "");
-  EXPECT_EQ(target.calls, "tool:ball:5;tool:bad;param:k;pause;record:run1;");
-  EXPECT_EQ(apply_command(&target, v1::Command{}, scene), "empty command");
-  EXPECT_EQ(apply_command(nullptr, c, scene), "this server takes no commands");
+  EXPECT_EQ(apply_command(&target, c, "client 1", scene), "");
+  EXPECT_EQ(target.calls, "tool:ball:5;tool:bad;param:k;pause;record:run1 by client 1;");
+  EXPECT_EQ(apply_command(&target, v1::Command{}, "client 1", scene), "empty command");
+  EXPECT_EQ(apply_command(nullptr, c, "client 1", scene), "this server takes no commands");
   EXPECT_FALSE(scene);
 }
 

@@ -48,7 +48,9 @@ class TestControl final : public ControlTarget {
     return "the remote device moves in the scene frame";
   }
   int recentres = 0;
-  std::string start_recording(const std::string&) override { return "not in this test"; }
+  std::string start_recording(const std::string&, const std::string&) override {
+    return "not in this test";
+  }
   std::string stop_recording() override { return "not recording"; }
   bool recording() const override { return false; }
   std::uint64_t record_lost() const override { return 0; }
