@@ -1,10 +1,10 @@
 // Sub-voxel signed distance maps (see subvoxel_distance.hpp).
 //
-// Both stages run over slices in parallel. The refinement writes only the slices its chunk
+// Every stage runs over slices in parallel. The near band writes only the slices its chunk
 // owns and reads the points of the slices within the band of them, so no two threads write the
-// same voxel; it runs twice over the same windows: the first pass marks the band (|D| = inf,
-// signed by the mask), the second takes the minimum over the discs, so a voxel's result does
-// not depend on the mask map it replaces.
+// same voxel. It takes the minimum of the far field and the discs within the band: a disc is
+// never farther than its point, so wherever the nearest point lies within the band the result is
+// the nearest disc's distance, and elsewhere it stays the distance to the points.
 #include "prep/subvoxel_distance.hpp"
 
 #include <algorithm>
@@ -172,12 +172,10 @@ void nearest_on_line(float* f, std::int64_t n, double w, std::vector<float>& scr
 
 // Runs `line(values, length)` over every line of `g` along `axis`, gathering blocks of adjacent
 // lines so strided reads fetch whole cache lines.
-// With `dest`, the results go there instead of back into g: assigned when `assign`, else the
-// minimum with what dest holds. Blocks of lines holding no finite value are skipped (their
-// results are all kNone).
+// Blocks of lines holding only kNone are skipped (an envelope leaves them so). The 1D pass's
+// input marks "no point" as -1, so its blocks are never skipped.
 template <class Line>
-void over_lines(std::vector<float>& g, const Index3& n, int axis, unsigned threads, Line line,
-                float* dest = nullptr, bool assign = false) {
+void over_lines(std::vector<float>& g, const Index3& n, int axis, unsigned threads, Line line) {
   const std::size_t stride[3] = {1, static_cast<std::size_t>(n[0]),
                                  static_cast<std::size_t>(n[0] * n[1])};
   const std::int64_t length = n[axis];
@@ -212,63 +210,113 @@ void over_lines(std::vector<float>& g, const Index3& n, int axis, unsigned threa
               block[static_cast<std::size_t>(w * length + p)] = v;
               any = any || v != kNone;
             }
-          if (any) {
-            for (std::int64_t w = 0; w < width; ++w)
-              line(&block[static_cast<std::size_t>(w * length)], length);
-          } else if (!(dest && assign)) {
-            continue;
-          }
-          float* target = dest ? dest : g.data();
+          if (!any) continue;
+          for (std::int64_t w = 0; w < width; ++w)
+            line(&block[static_cast<std::size_t>(w * length)], length);
           for (std::int64_t p = 0; p < length; ++p)
-            for (std::int64_t w = 0; w < width; ++w) {
-              const std::size_t at =
-                  first + static_cast<std::size_t>(p) * stride[axis] + static_cast<std::size_t>(w);
-              const float v = block[static_cast<std::size_t>(w * length + p)];
-              target[at] = dest && !assign ? std::min(target[at], v) : v;
-            }
+            for (std::int64_t w = 0; w < width; ++w)
+              g[first + static_cast<std::size_t>(p) * stride[axis] + static_cast<std::size_t>(w)] =
+                  block[static_cast<std::size_t>(w * length + p)];
         }
       },
       threads);
 }
 
+// Runs fn(line, length) along axis 1 of one slice (n0 x n1 values, rows along axis 0) through a
+// column buffer; the slice is small enough to stay in cache.
+template <class Fn>
+void along_columns(float* slice, std::int64_t n0, std::int64_t n1, std::vector<float>& column,
+                   Fn fn) {
+  column.resize(static_cast<std::size_t>(n1));
+  for (std::int64_t i = 0; i < n0; ++i) {
+    for (std::int64_t j = 0; j < n1; ++j)
+      column[static_cast<std::size_t>(j)] = slice[static_cast<std::size_t>(j * n0 + i)];
+    fn(column.data(), n1);
+    for (std::int64_t j = 0; j < n1; ++j)
+      slice[static_cast<std::size_t>(j * n0 + i)] = column[static_cast<std::size_t>(j)];
+  }
+}
+
+// Runs fn(row, length) along axis 0 of one slice.
+template <class Fn>
+void along_rows(float* slice, std::int64_t n0, std::int64_t n1, Fn fn) {
+  for (std::int64_t j = 0; j < n1; ++j) fn(slice + j * n0, n0);
+}
+
 // out = squared distance to the points (mm^2), capped at reach2 (kNone beyond).
+// The envelope passes are min-plus convolutions, so they distribute over a minimum: the points
+// on edges along axes 0 and 1 share their pass along axis 2. Order of work:
+//   per slice   axis-0 points: nearest along 0, envelope along 1; axis-1 points: nearest along
+//               1, envelope along 0; out = the minimum of the two
+//   whole grid  envelope of out along 2
+//   whole grid  axis-2 points in g: nearest along 2
+//   per slice   g: envelopes along 0 and 1; out = min(out, g)
+// The per-slice steps work in cache-sized buffers; only three passes touch the whole grid.
 void squared_point_distance(const SurfacePoints& surface, double reach2, std::vector<float>& out,
                             std::vector<float>& g, unsigned threads) {
   const Grid& grid = surface.grid;
   const Index3 n = grid.dims;
   const std::size_t count = grid.voxel_count();
-  std::fill(out.begin(), out.end(), kNone);
-  bool first_family = true;
-  for (int axis = 0; axis < 3; ++axis) {
-    g.assign(count, -1.0f);
-    bool any = false;
-    for (const SurfacePoint& p : surface.points) {
-      if (p.axis != axis) continue;
-      g[grid.linear(p.i, p.j, p.k)] = p.t;
-      any = true;
-    }
-    if (!any) continue;
-    const int second = axis == 0 ? 1 : 0, third = axis == 2 ? 1 : 2;
-    over_lines(g, n, axis, threads, [&](float* f, std::int64_t len) {
+  const std::size_t slice_size = static_cast<std::size_t>(n[0] * n[1]);
+  const double s0 = grid.spacing[0], s1 = grid.spacing[1], s2 = grid.spacing[2];
+  auto envelope = [reach2](double w2) {
+    return [w2, reach2](float* f, std::int64_t len) {
+      thread_local std::unique_ptr<Parabolas> parabolas;
+      if (!parabolas || static_cast<std::int64_t>(parabolas->sites.size()) < len)
+        parabolas = std::make_unique<Parabolas>(len);
+      parabolas->solve(f, len, w2, reach2);
+    };
+  };
+  auto nearest = [](double w) {
+    return [w](float* f, std::int64_t len) {
       thread_local std::vector<float> scratch;
-      nearest_on_line(f, len, grid.spacing[axis], scratch);
-    });
-    for (int b : {second, third}) {
-      const double w2 = grid.spacing[b] * grid.spacing[b];
-      // The last pass (never along axis 0) writes its minimum straight into out.
-      const bool last = b == third;
-      over_lines(
-          g, n, b, threads,
-          [&](float* f, std::int64_t len) {
-            thread_local std::unique_ptr<Parabolas> envelope;
-            if (!envelope || static_cast<std::int64_t>(envelope->sites.size()) < len)
-              envelope = std::make_unique<Parabolas>(len);
-            envelope->solve(f, len, w2, reach2);
-          },
-          last ? out.data() : nullptr, last && first_family);
-    }
-    first_family = false;
-  }
+      nearest_on_line(f, len, w, scratch);
+    };
+  };
+
+  parallel_for_chunks(
+      n[2], 1,
+      [&](std::int64_t k0, std::int64_t k1) {
+        std::vector<float> a(slice_size), b(slice_size), column;
+        for (std::int64_t k = k0; k < k1; ++k) {
+          std::fill(a.begin(), a.end(), -1.0f);
+          std::fill(b.begin(), b.end(), -1.0f);
+          const auto kk = static_cast<std::size_t>(k);
+          for (std::size_t pi = surface.slice_begin[kk]; pi < surface.slice_begin[kk + 1]; ++pi) {
+            const SurfacePoint& p = surface.points[pi];
+            const std::size_t at = static_cast<std::size_t>(p.j) * static_cast<std::size_t>(n[0]) +
+                                   static_cast<std::size_t>(p.i);
+            if (p.axis == 0) a[at] = p.t;
+            if (p.axis == 1) b[at] = p.t;
+          }
+          along_rows(a.data(), n[0], n[1], nearest(s0));
+          along_columns(a.data(), n[0], n[1], column, envelope(s1 * s1));
+          along_columns(b.data(), n[0], n[1], column, nearest(s1));
+          along_rows(b.data(), n[0], n[1], envelope(s0 * s0));
+          float* target = &out[grid.linear(0, 0, k)];
+          for (std::size_t v = 0; v < slice_size; ++v) target[v] = std::min(a[v], b[v]);
+        }
+      },
+      threads);
+  over_lines(out, n, 2, threads, envelope(s2 * s2));
+
+  g.assign(count, -1.0f);
+  for (const SurfacePoint& p : surface.points)
+    if (p.axis == 2) g[grid.linear(p.i, p.j, p.k)] = p.t;
+  over_lines(g, n, 2, threads, nearest(s2));
+  parallel_for_chunks(
+      n[2], 1,
+      [&](std::int64_t k0, std::int64_t k1) {
+        std::vector<float> column;
+        for (std::int64_t k = k0; k < k1; ++k) {
+          float* slice = &g[grid.linear(0, 0, k)];
+          along_rows(slice, n[0], n[1], envelope(s0 * s0));
+          along_columns(slice, n[0], n[1], column, envelope(s1 * s1));
+          float* target = &out[grid.linear(0, 0, k)];
+          for (std::size_t v = 0; v < slice_size; ++v) target[v] = std::min(target[v], slice[v]);
+        }
+      },
+      threads);
 }
 
 }  // namespace
@@ -330,6 +378,10 @@ SurfacePoints surface_points(const CtVolume& ct, const Mask& mask, double iso_hu
   return result;
 }
 
+namespace {
+
+// Within `band_mm` of each point: the minimum of |map| and the distance to the point's disc,
+// signed by the mask; then everything rounded and clamped.
 void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double band_mm,
                          double clamp_mm, DistanceMap& map, unsigned threads) {
   const Grid& grid = surface.grid;
@@ -351,7 +403,6 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
   Index3 reach;
   for (int a = 0; a < 3; ++a) reach[a] = static_cast<std::int64_t>(std::ceil(band_mm / s[a])) + 1;
   const float clamp = static_cast<float>(clamp_mm);
-  constexpr float kInf = std::numeric_limits<float>::infinity();
   constexpr float kSteps = 1024.0f;
 
   parallel_for_chunks(
@@ -361,7 +412,7 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
         const std::int64_t last_slice = std::min<std::int64_t>(n[2], k1 + reach[2]);
         const std::size_t p0 = surface.slice_begin[static_cast<std::size_t>(first_slice)];
         const std::size_t p1 = surface.slice_begin[static_cast<std::size_t>(last_slice)];
-        for (int pass = 0; pass < 2; ++pass) {
+        {
           for (std::size_t pi = p0; pi < p1; ++pi) {
             const SurfacePoint& p = surface.points[pi];
             const double pos[3] = {p.x, p.y, p.z};
@@ -387,10 +438,6 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
                   const double dx = static_cast<double>(i) * s[0] - pos[0];
                   const double d2 = dx * dx + dyz2;
                   if (d2 > band2) continue;
-                  if (pass == 0) {
-                    out[i] = in[i] ? kInf : -kInf;
-                    continue;
-                  }
                   const double along = dx * p.nx + dy * p.ny + dz * p.nz;
                   const double lateral2 = std::max(0.0, d2 - along * along);
                   double d;
@@ -419,9 +466,7 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
       threads);
 }
 
-}  // namespace palp
-
-namespace palp {
+}  // namespace
 
 void subvoxel_signed_distance(const SurfacePoints& surface, const Mask& mask, double band_mm,
                               double clamp_mm, DistanceMap& out, unsigned threads) {

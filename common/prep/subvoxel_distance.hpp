@@ -1,11 +1,11 @@
 // Sub-voxel signed distance maps (spec "Masks and distance maps", `--surface subvoxel`): the
 // distance to the HU iso-surface of a CT at a chosen level, restricted to the segmented
-// components, with the sign and the far field of the mask's exact map.
+// components, with the mask's sign.
 //
 //   surface points  one per voxel edge whose two ends the mask puts on different sides, placed
 //                   by linear interpolation of HU along that edge (midpoint when the HU do not
 //                   straddle the level, e.g. where table removal or hole filling cut the mask),
-//                   with the unit normal of the HU gradient there
+//                   with the unit normal of the HU gradient there (3x3x3 Sobel)
 //   narrow band     every voxel centre within `band_mm` of a point gets the distance to the
 //                   nearest surface disc (the tangent disc of radius r around each point, r half
 //                   the diagonal of the grid's two coarsest spacings, so the discs of a plane
@@ -15,7 +15,7 @@
 //
 // Only edges where the mask changes carry points, so parts the segmentation removed (the table)
 // have no surface and parts it kept (arms) do. Points are extracted while the CT is in memory;
-// the refinement needs only the points, the mask and the map.
+// the maps need only the points and the masks. Values are rounded to 1/1024 mm.
 #pragma once
 
 #include <cstdint>
@@ -49,10 +49,5 @@ SurfacePoints surface_points(const CtVolume& ct, const Mask& mask, double iso_hu
 // clamped to +-clamp_mm. Needs one float volume of scratch besides `out`.
 void subvoxel_signed_distance(const SurfacePoints& surface, const Mask& mask, double band_mm,
                               double clamp_mm, DistanceMap& out, unsigned threads = 0);
-
-// Replaces `map` (the mask's signed map, same grid) within `band_mm` of the points by the signed
-// distance to the surface discs. Values stay clamped to `clamp_mm`.
-void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double band_mm,
-                         double clamp_mm, DistanceMap& map, unsigned threads = 0);
 
 }  // namespace palp
