@@ -222,18 +222,24 @@ void over_lines(std::vector<float>& g, const Index3& n, int axis, unsigned threa
       threads);
 }
 
-// Runs fn(line, length) along axis 1 of one slice (n0 x n1 values, rows along axis 0) through a
-// column buffer; the slice is small enough to stay in cache.
+// Runs fn(line, length) along axis 1 of one slice (n0 x n1 values, rows along axis 0), 16
+// adjacent columns at a time through a buffer, so each row segment read is one cache line.
 template <class Fn>
-void along_columns(float* slice, std::int64_t n0, std::int64_t n1, std::vector<float>& column,
+void along_columns(float* slice, std::int64_t n0, std::int64_t n1, std::vector<float>& columns,
                    Fn fn) {
-  column.resize(static_cast<std::size_t>(n1));
-  for (std::int64_t i = 0; i < n0; ++i) {
+  constexpr std::int64_t kWidth = 16;
+  columns.resize(static_cast<std::size_t>(n1 * kWidth));
+  for (std::int64_t i0 = 0; i0 < n0; i0 += kWidth) {
+    const std::int64_t width = std::min(kWidth, n0 - i0);
     for (std::int64_t j = 0; j < n1; ++j)
-      column[static_cast<std::size_t>(j)] = slice[static_cast<std::size_t>(j * n0 + i)];
-    fn(column.data(), n1);
+      for (std::int64_t w = 0; w < width; ++w)
+        columns[static_cast<std::size_t>(w * n1 + j)] =
+            slice[static_cast<std::size_t>(j * n0 + i0 + w)];
+    for (std::int64_t w = 0; w < width; ++w) fn(&columns[static_cast<std::size_t>(w * n1)], n1);
     for (std::int64_t j = 0; j < n1; ++j)
-      slice[static_cast<std::size_t>(j * n0 + i)] = column[static_cast<std::size_t>(j)];
+      for (std::int64_t w = 0; w < width; ++w)
+        slice[static_cast<std::size_t>(j * n0 + i0 + w)] =
+            columns[static_cast<std::size_t>(w * n1 + j)];
   }
 }
 
