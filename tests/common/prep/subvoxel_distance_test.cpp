@@ -166,6 +166,40 @@ TEST(SubvoxelDistance, SlabAccuracyByVoxelSize) {
   }
 }
 
+// Only the components the mask keeps have a surface: a table the segmentation left out (same HU
+// as tissue, three voxels from the patient) changes nothing, an arm it kept has its own surface.
+TEST(SubvoxelDistance, OnlyTheMasksComponentsHaveASurface) {
+  const Shape patient = [](double x, double y, double z) {
+    return 12.0 -
+           std::sqrt((x - 30.2) * (x - 30.2) + (y - 26.7) * (y - 26.7) + (z - 30.4) * (z - 30.4));
+  };
+  Phantom p = render(patient, 30, 2.0, 3u);
+  Phantom air = p;
+  // The table: a slab at j = 23..27 (y 46..54 mm), all i and k; left out of the mask.
+  for (std::int64_t k = 0; k < 30; ++k)
+    for (std::int64_t j = 23; j < 28; ++j)
+      for (std::int64_t i = 0; i < 30; ++i) p.ct.at(i, j, k) = 0;
+  DistanceMap with_table, without;
+  subvoxel_signed_distance(surface_points(p.ct, p.mask, kIso), p.mask, 4.0, 60.0, with_table);
+  subvoxel_signed_distance(surface_points(air.ct, air.mask, kIso), air.mask, 4.0, 60.0, without);
+  EXPECT_EQ(with_table.data, without.data);
+  // Inside the table the map is the distance to the patient, not to the table's faces.
+  EXPECT_LT(with_table.at(15, 25, 15), -8.0f);
+
+  // An arm the mask keeps: a second ball, disconnected, gets its own surface (D = 0 crossing).
+  Phantom arm = air;
+  for (std::int64_t k = 0; k < 30; ++k)
+    for (std::int64_t j = 0; j < 30; ++j)
+      for (std::int64_t i = 0; i < 30; ++i) {
+        const double d = std::hypot(i - 24.0, j - 24.0, k - 15.0);
+        if (d <= 3.0) arm.ct.at(i, j, k) = 0, arm.mask.at(i, j, k) = 1;
+      }
+  DistanceMap with_arm;
+  subvoxel_signed_distance(surface_points(arm.ct, arm.mask, kIso), arm.mask, 4.0, 60.0, with_arm);
+  EXPECT_GT(with_arm.at(24, 24, 15), 5.0f);   // the arm's centre: about 3.5 voxels = 7 mm deep
+  EXPECT_LT(without.at(24, 24, 15), -15.0f);  // without it: far outside the patient
+}
+
 // Beyond the disc band the map is the exact distance to the points: a brute-force search over
 // every point agrees to float rounding, on an anisotropic grid.
 TEST(SubvoxelDistance, FarFieldIsTheExactDistanceToThePoints) {
