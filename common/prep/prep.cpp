@@ -257,10 +257,13 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   stage("bone mask", [&] { bone = segment_bone(ct, body, params.segmentation, &result.stats); });
   const bool subvoxel = params.surface.method == SurfaceMethod::subvoxel;
   SurfacePoints skin_points, bone_points;
+  nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
   if (subvoxel) {
     stage("surface points", [&] {
       skin_points = surface_points(ct, body, params.surface.skin_hu, params.distance.threads);
       bone_points = surface_points(ct, bone, params.surface.bone_hu, params.distance.threads);
+      point_counts = {{"skin", {skin_points.points.size(), skin_points.interpolated}},
+                      {"bone", {bone_points.points.size(), bone_points.interpolated}}};
     });
   }
   ct = CtVolume{};  // the HU are not needed past segmentation and the surface points
@@ -311,6 +314,9 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   if (subvoxel) {
     json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", params.surface.bone_hu}};
     json["subvoxel_band_mm_used"] = band;
+    // [points, placed by HU]: the rest straddle no level (the mask cut there: table contact,
+    // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
+    json["surface_points"] = point_counts;
   }
   json["voxels"] = {{"total", result.grid.voxel_count()},
                     {"body", result.stats.body_voxels},

@@ -116,6 +116,11 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   EXPECT_EQ(json["surface_iso_hu"]["skin"], -400.0);
   EXPECT_EQ(json["surface_iso_hu"]["bone"], 200.0);
   EXPECT_EQ(json["subvoxel_band_mm_used"], band);
+  const SurfacePoints skin = surface_points(ct, body, -400.0);
+  EXPECT_EQ(json["surface_points"]["skin"][0], skin.points.size());
+  EXPECT_EQ(json["surface_points"]["skin"][1], skin.interpolated);
+  EXPECT_GT(skin.interpolated, skin.points.size() * 9 / 10);  // the sphere's skin is all HU
+  EXPECT_EQ(json["surface_points"]["bone"][0], 0u);           // and it has no bone
   // The method is part of the cache key.
   PrepParams mask_params = params;
   mask_params.surface.method = SurfaceMethod::mask;
