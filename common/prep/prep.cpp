@@ -1,9 +1,11 @@
 // Preprocessing pipeline (see prep.hpp). Stages and their data flow:
 //   read CT      input file / DICOM dir / phantom -> CtVolume (HU)
 //   body mask    CT -> body (patient only, internal air filled)
-//   bone mask    CT + body -> bone            (the CT is released after this stage)
-//   d_surf       body -> signed distance map, written and released before the next map
-//   d_bone       bone -> signed distance map
+//   bone mask    CT + body -> bone
+//   surface points  CT + masks -> iso-surface points on the masks' edges (subvoxel only; the CT
+//                is released after this stage)
+//   d_surf       body (+ skin points) -> signed distance map, written and released before the next
+//   d_bone       bone (+ bone points) -> signed distance map
 //   prep.json    grid, parameters, counts, timings, peak memory, cache key
 #include "prep/prep.hpp"
 
@@ -24,6 +26,7 @@
 #include "io/gzip.hpp"
 #include "prep/ct_check.hpp"
 #include "prep/reorient.hpp"
+#include "prep/subvoxel_distance.hpp"
 
 namespace palp {
 namespace {
@@ -32,7 +35,8 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // Bump when the algorithms change what prep writes, so old caches are not reused.
-constexpr int kPrepAlgorithmVersion = 2;  // 2: oblique inputs reoriented, cube phantom ILA
+// 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces
+constexpr int kPrepAlgorithmVersion = 3;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
@@ -125,7 +129,17 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_small_hole_mm2", s.bone_small_hole_mm2},
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},
-          {"distance_band_mm", params.distance.band_mm}};
+          {"distance_band_mm", params.distance.band_mm},
+          {"surface", surface_method_name(params.surface.method)},
+          {"skin_iso_hu", params.surface.skin_hu},
+          {"bone_iso_hu", params.surface.bone_hu},
+          {"subvoxel_band_mm", params.surface.band_mm}};
+}
+
+// The sub-voxel band on this grid: the parameter, or twice the coarsest spacing.
+double subvoxel_band_mm(const SurfaceParams& surface, const Grid& grid) {
+  if (surface.band_mm > 0.0) return surface.band_mm;
+  return 2.0 * std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
 }
 
 // Writes to a temporary name and renames, so an interrupted run never leaves a half file
@@ -161,6 +175,16 @@ std::uint64_t count_nonzero(const Mask& mask) {
 }
 
 }  // namespace
+
+const char* surface_method_name(SurfaceMethod method) {
+  return method == SurfaceMethod::mask ? "mask" : "subvoxel";
+}
+
+SurfaceMethod parse_surface_method(const std::string& name) {
+  if (name == "subvoxel") return SurfaceMethod::subvoxel;
+  if (name == "mask") return SurfaceMethod::mask;
+  throw UsageError("--surface must be subvoxel or mask, not '" + name + "'");
+}
 
 std::string prep_cache_key(const std::string& input, const PrepParams& params) {
   ContentHash hash;
@@ -234,7 +258,18 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
           "scene)");
   }
   stage("bone mask", [&] { bone = segment_bone(ct, body, params.segmentation, &result.stats); });
-  ct = CtVolume{};  // the HU are not needed past segmentation
+  const bool subvoxel = params.surface.method == SurfaceMethod::subvoxel;
+  SurfacePoints skin_points, bone_points;
+  nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
+  if (subvoxel) {
+    stage("surface points", [&] {
+      skin_points = surface_points(ct, body, params.surface.skin_hu, params.distance.threads);
+      bone_points = surface_points(ct, bone, params.surface.bone_hu, params.distance.threads);
+      point_counts = {{"skin", {skin_points.points.size(), skin_points.interpolated}},
+                      {"bone", {bone_points.points.size(), bone_points.interpolated}}};
+    });
+  }
+  ct = CtVolume{};  // the HU are not needed past segmentation and the surface points
   result.stats.body_voxels = count_nonzero(body);
   result.stats.bone_voxels = count_nonzero(bone);
   stage("write masks", [&] {
@@ -244,15 +279,25 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
 
   float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
   DistanceMap map;  // one buffer serves both maps: each is written before the next is computed
-  auto distance_stage = [&](const char* name, const char* file, const Mask& mask, float* range) {
-    stage(name, [&] { signed_distance(mask, params.distance, map); });
+  const double band = subvoxel_band_mm(params.surface, result.grid);
+  auto distance_stage = [&](const char* name, const char* file, const Mask& mask,
+                            SurfacePoints& points, float* range) {
+    stage(name, [&] {
+      if (subvoxel) {
+        subvoxel_signed_distance(points, mask, band, params.distance.band_mm, map,
+                                 params.distance.threads);
+      } else {
+        signed_distance(mask, params.distance, map);
+      }
+    });
+    points = SurfacePoints{};
     const auto [lo, hi] = std::minmax_element(map.data.begin(), map.data.end());
     range[0] = *lo;
     range[1] = *hi;
     stage(std::string("write ") + name, [&] { write_atomically(dir / file, map); });
   };
-  distance_stage("d_surf", kSurfaceDistanceFile, body, surf_range);
-  distance_stage("d_bone", kBoneDistanceFile, bone, bone_range);
+  distance_stage("d_surf", kSurfaceDistanceFile, body, skin_points, surf_range);
+  distance_stage("d_bone", kBoneDistanceFile, bone, bone_points, bone_range);
 
   result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.peak_rss_bytes = peak_rss_bytes();
@@ -268,6 +313,14 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
                      {"orientation", patient_frame(result.grid).orientation_code()}};
   if (!result.hu_warning.empty()) json["not_hu_ok"] = result.hu_warning;
   json["parameters"] = params_json(params);
+  json["surface"] = surface_method_name(params.surface.method);
+  if (subvoxel) {
+    json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", params.surface.bone_hu}};
+    json["subvoxel_band_mm_used"] = band;
+    // [points, placed by HU]: the rest straddle no level (the mask cut there: table contact,
+    // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
+    json["surface_points"] = point_counts;
+  }
   json["voxels"] = {{"total", result.grid.voxel_count()},
                     {"body", result.stats.body_voxels},
                     {"bone", result.stats.bone_voxels},

@@ -15,9 +15,26 @@
 
 namespace palp {
 
+// Which surface the distance maps measure to (spec "Masks and distance maps"): the binary masks'
+// voxel faces (`mask`), or the HU iso-surfaces inside the segmented components (`subvoxel`,
+// prep/subvoxel_distance.hpp).
+enum class SurfaceMethod { subvoxel, mask };
+
+struct SurfaceParams {
+  SurfaceMethod method = SurfaceMethod::subvoxel;
+  double skin_hu = -500.0;  // iso level of d_surf's surface
+  double bone_hu = 200.0;   // iso level of d_bone's surface
+  double band_mm = 0.0;     // sub-voxel band; 0 = twice the grid's coarsest spacing
+};
+
+const char* surface_method_name(SurfaceMethod method);
+// Throws UsageError unless `name` is "subvoxel" or "mask".
+SurfaceMethod parse_surface_method(const std::string& name);
+
 struct PrepParams {
   SegmentationParams segmentation;
   DistanceParams distance;
+  SurfaceParams surface;
   bool use_cache = true;
   // Prep a volume that does not look like a CT in HU (prep/ct_check.hpp) instead of refusing it.
   // Not part of the cache key: it changes whether prep runs, never what it writes.

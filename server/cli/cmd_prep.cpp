@@ -15,7 +15,8 @@ namespace {
 std::string prep_usage() {
   const SegmentationParams seg;
   const DistanceParams dist;
-  char text[4096];
+  const SurfaceParams surface;
+  char text[6144];
   std::snprintf(text, sizeof text, R"(usage: palp prep INPUT --out DIR [options]
 
 Segments body and bone and computes the signed distance maps the force model samples.
@@ -34,6 +35,10 @@ Options:
   --out DIR               output directory (required; created if missing)
   --no-cache              recompute even if DIR already holds the result for this input
   --band MM               clamp |distance| beyond this many mm (default %g; at most 1e6)
+  --surface subvoxel|mask distances to the HU iso-surfaces inside the masks, or to the masks'
+                          voxel faces (default subvoxel)
+  --skin-hu HU            iso level of the skin surface for subvoxel (default %g)
+  --bone-hu HU            iso level of the bone surface for subvoxel (default %g)
   --threads N             worker threads (default: all cores, here %u)
   --body-threshold HU     voxels above this are not air (default %g)
   --min-body-part ML      drop separate parts smaller than this, except the patient (default %g)
@@ -46,18 +51,19 @@ Options:
   -q, --quiet             print only errors
   -h, --help              show this help
 )",
-                dist.band_mm, default_thread_count(), seg.body_threshold_hu, seg.min_body_part_ml,
-                seg.max_table_thickness_mm, seg.bone_seed_hu, seg.bone_grow_hu,
-                seg.min_bone_island_ml);
+                dist.band_mm, surface.skin_hu, surface.bone_hu, default_thread_count(),
+                seg.body_threshold_hu, seg.min_body_part_ml, seg.max_table_thickness_mm,
+                seg.bone_seed_hu, seg.bone_grow_hu, seg.min_bone_island_ml);
   return text;
 }
 
 }  // namespace
 
 int cmd_prep(const Arguments& argv) {
-  const Args args(argv, {"help", "no-cache", "quiet", "not-hu-ok"},
-                  {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
-                   "bone-grow", "min-bone-island", "max-table-thickness"});
+  const Args args(
+      argv, {"help", "no-cache", "quiet", "not-hu-ok"},
+      {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed", "bone-grow",
+       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu"});
   if (args.has("help")) {
     std::cout << prep_usage();
     return 0;
@@ -76,6 +82,11 @@ int cmd_prep(const Arguments& argv) {
   seg.max_table_thickness_mm = args.number("max-table-thickness", seg.max_table_thickness_mm);
   seg.min_bone_island_ml = args.number("min-bone-island", seg.min_bone_island_ml);
   params.distance.band_mm = args.number("band", params.distance.band_mm);
+  if (const auto surface = args.get("surface")) {
+    params.surface.method = parse_surface_method(*surface);
+  }
+  params.surface.skin_hu = args.number("skin-hu", params.surface.skin_hu);
+  params.surface.bone_hu = args.number("bone-hu", params.surface.bone_hu);
   const double threads = args.number("threads", default_thread_count());
   if (threads < 1 || threads > 1024 || threads != static_cast<unsigned>(threads)) {
     throw UsageError("--threads needs a whole number from 1 to 1024");

@@ -65,11 +65,14 @@ def run(cmd):
     return subprocess.run(cmd, check=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
+SURFACE = ["--surface", "mask"]  # set from --surface in main()
+
+
 def timed_prep(palp, ct, out_dir, runs):
     walls, jsons = [], []
     for _ in range(runs):
         t0 = time.perf_counter()
-        run([palp, "prep", ct, "--out", out_dir, "--no-cache", "--quiet"])
+        run([palp, "prep", ct, "--out", out_dir, "--no-cache", "--quiet"] + SURFACE)
         walls.append(time.perf_counter() - t0)
         with open(os.path.join(out_dir, "prep.json")) as f:
             jsons.append(json.load(f))
@@ -94,6 +97,8 @@ def main():
     ap.add_argument("--work", default="/tmp/palp-bench")
     ap.add_argument("--json", default=None, help="write raw figures here")
     ap.add_argument("--skip-large", action="store_true", help="skip case B (512x512x400)")
+    ap.add_argument("--surface", default="mask", choices=["mask", "subvoxel"],
+                    help="palp prep's surface method (mask: its maps must equal scipy's voxel for voxel)")
     args = ap.parse_args()
     try:
         import numpy as np  # noqa: F401
@@ -111,7 +116,9 @@ def main():
     ct_a = os.path.join(args.work, "torso_384x384x160.nii.gz")
     run([palp, "phantom", "torso", "--dims", "384x384x160", "--spacing", "0.8x0.8x1.5", "--out", ct_a])
     prep_a = os.path.join(args.work, "prep_384")
-    run([palp, "prep", ct_a, "--out", prep_a, "--no-cache", "--quiet"])  # warm-up (page cache, memory)
+    SURFACE[1] = args.surface
+    results["surface"] = args.surface
+    run([palp, "prep", ct_a, "--out", prep_a, "--no-cache", "--quiet"] + SURFACE)  # warm-up (page cache, memory)
     walls, jsons = timed_prep(palp, ct_a, prep_a, args.runs)
     body, spacing = nifti_load(os.path.join(prep_a, "body.nii.gz"))
     bone, _ = nifti_load(os.path.join(prep_a, "bone.nii.gz"))

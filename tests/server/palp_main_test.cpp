@@ -55,7 +55,8 @@ TEST_F(PalpCli, UsageMistakesExitWithTwoAndOneLine) {
   for (const char* args :
        {"frobnicate", "prep", "prep x", "prep x --out", "phantom cube",
         "prep phantom:cube --out d --band abc", "phantom cube --out f --dims 1x2",
-        "prep phantom:cube --out d --bogus"}) {
+        "prep phantom:cube --out d --bogus", "prep phantom:cube --out d --surface voxel",
+        "prep phantom:cube --out d --skin-hu x"}) {
     const auto out = run_palp(args);
     EXPECT_EQ(out.exit_code, 2) << args << ": " << out.output;
     EXPECT_EQ(testing::count_lines(out.output), 1) << args << ": " << out.output;

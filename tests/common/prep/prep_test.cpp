@@ -14,6 +14,7 @@
 #include "io/phantom.hpp"
 #include "prep/distance_transform.hpp"
 #include "prep/segmentation.hpp"
+#include "prep/subvoxel_distance.hpp"
 
 namespace palp {
 namespace {
@@ -52,6 +53,7 @@ TEST_F(PrepTest, WritesAllOutputsOnTheInputGridWithItsWorldPlacement) {
   const std::string input = write_small_ct(dir_, &ct);
   PrepParams params;
   params.distance.threads = 2;
+  params.surface.method = SurfaceMethod::mask;
   const PrepResult result = run_prep(input, (dir_ / "out").string(), params);
   EXPECT_FALSE(result.from_cache);
   EXPECT_EQ(result.grid.dims, ct.grid.dims);
@@ -88,6 +90,44 @@ TEST_F(PrepTest, WritesAllOutputsOnTheInputGridWithItsWorldPlacement) {
     EXPECT_GE(json["timings_s"][stage].get<double>(), 0.0);
   }
   EXPECT_GT(json["peak_memory_bytes"].get<std::uint64_t>(), 0u);
+  EXPECT_EQ(json["surface"], "mask");
+  EXPECT_FALSE(json.contains("surface_iso_hu"));
+}
+
+TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMasks) {
+  CtVolume ct;
+  const std::string input = write_small_ct(dir_, &ct);
+  PrepParams params;
+  EXPECT_EQ(params.surface.method, SurfaceMethod::subvoxel);
+  params.surface.skin_hu = -400.0;
+  run_prep(input, (dir_ / "out").string(), params);
+  const Mask body = read_nifti_mask((dir_ / "out" / kBodyFile).string());
+  const DistanceMap d_surf = read_nifti_float((dir_ / "out" / kSurfaceDistanceFile).string());
+  DistanceMap expected;
+  const double band = 2.0 * 2.5;  // twice the coarsest spacing
+  subvoxel_signed_distance(surface_points(ct, body, -400.0), body, band, params.distance.band_mm,
+                           expected);
+  EXPECT_EQ(d_surf.data, expected.data);
+  // It is not the mask's map: the surface moved off the voxel faces.
+  EXPECT_NE(d_surf.data, signed_distance(body, params.distance).data);
+
+  std::ifstream json_file(dir_ / "out" / kPrepJsonFile);
+  const auto json = nlohmann::json::parse(json_file);
+  EXPECT_EQ(json["surface"], "subvoxel");
+  EXPECT_EQ(json["surface_iso_hu"]["skin"], -400.0);
+  EXPECT_EQ(json["surface_iso_hu"]["bone"], 200.0);
+  EXPECT_EQ(json["subvoxel_band_mm_used"], band);
+  const SurfacePoints skin = surface_points(ct, body, -400.0);
+  EXPECT_EQ(json["surface_points"]["skin"][0], skin.points.size());
+  EXPECT_EQ(json["surface_points"]["skin"][1], skin.interpolated);
+  EXPECT_GT(skin.interpolated, skin.points.size() * 9 / 10);  // the sphere's skin is all HU
+  EXPECT_EQ(json["surface_points"]["bone"][0], 0u);           // and it has no bone
+  // The method is part of the cache key.
+  PrepParams mask_params = params;
+  mask_params.surface.method = SurfaceMethod::mask;
+  EXPECT_NE(prep_cache_key(input, params), prep_cache_key(input, mask_params));
+  EXPECT_EQ(parse_surface_method("mask"), SurfaceMethod::mask);
+  EXPECT_THROW(parse_surface_method("voxel"), UsageError);
 }
 
 TEST_F(PrepTest, SecondRunIsServedFromTheCacheUntilInputOrParametersChange) {

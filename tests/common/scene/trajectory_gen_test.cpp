@@ -33,8 +33,11 @@ class Generators : public ::testing::Test {
     cache_ = fs::temp_directory_path() / ("palp-gen-test-" + std::to_string(::getpid()));
     SceneOptions options;
     options.cache_dir = cache_.string();
-    cube_ = std::make_unique<Scene>(load_scene("phantom:cube", options));
     torso_ = std::make_unique<Scene>(load_scene("phantom:torso", options));
+    // The cube's faces are its mask's voxel faces (cube_geometry): its sharp HU steps put the
+    // sub-voxel iso-surface 0.02 voxel off them.
+    options.prep.surface.method = SurfaceMethod::mask;
+    cube_ = std::make_unique<Scene>(load_scene("phantom:cube", options));
   }
   static void TearDownTestSuite() {
     cube_.reset();
