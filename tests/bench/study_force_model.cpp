@@ -12,7 +12,8 @@
 //    skin normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held
 //    0.1 s; the pressing force is f_device . n over the last 50 ticks, also with the bone off.
 //    Ratio: every crest against each neighbouring space; median and smallest over all paths.
-//    A what-if beside: palp with the bone law reaching 7 mm instead of 5 (f_b = 20 (x / 7)^-3).
+//    Projected beside palp: the bone law reaching r = 6, 7, 8 mm instead of 5 (f_b = 20 (x / r)^-3
+//    scales palp's bone term, the pressing force less the bone-off force, by (r / 5)^3).
 // 2. Friction  flat skin (1 mm voxels, bone off), finger:1 at 1 kHz unless said: a slide at 4 mm
 //    at 100..800 mm/s (mean lateral force over the second half of 40 mm); the same at 200 and
 //    800 mm/s at 1..10 kHz; press to 1..8 mm, shift sideways by half the model's breakaway
@@ -65,20 +66,6 @@ std::shared_ptr<const FieldSampler> load_fields(const std::string& scene, Gradie
 std::vector<Variant> variants_for(const std::string& scene) {
   return {{ModelKind::Paper, load_fields(scene, GradientScheme::AnalyticTrilinear)},
           {ModelKind::Palp, load_fields(scene, GradientScheme::PrecomputedField)}};
-}
-
-// A what-if for the contrast: palp with the bone law reaching `reach` / 5 times as far,
-// f_b = 20 (x / reach)^-3, made by scaling the scene's D_bone by 5 / reach (the static presses
-// stay outside bone, where only the distance enters the law).
-Variant reach_variant(const std::string& scene, double reach) {
-  SceneOptions options;
-  const Scene sc = load_scene(scene, options);
-  DistanceMap surf = read_nifti_float(sc.prep_dir + "/d_surf.nii.gz");
-  DistanceMap bone = read_nifti_float(sc.prep_dir + "/d_bone.nii.gz");
-  for (float& v : bone.data) v = static_cast<float>(v * 5.0 / reach);
-  return {ModelKind::Palp, std::make_shared<const FieldSampler>(
-                               std::move(surf), std::move(bone),
-                               SamplerConfig{GradientScheme::PrecomputedField, Storage::Float32})};
 }
 
 // Distance along dir from `from` to the first sample inside bone, NaN within `length` none.
@@ -164,8 +151,7 @@ double press_force(const Model& model, State& st, const SkinFrame& frame, double
 void contrast(const std::string& scene_name, const std::string& scene,
               const std::vector<RibsSpec>& specs, const std::vector<double>& depths, Csv& csv,
               Csv& ratio_csv) {
-  std::vector<Variant> vars = variants_for(scene);
-  vars.push_back(reach_variant(scene, 7.0));
+  const std::vector<Variant> vars = variants_for(scene);
   // Sites per path (ratios only within a path).
   std::vector<std::vector<Site>> paths;
   for (const RibsSpec& spec : specs) {
@@ -183,38 +169,57 @@ void contrast(const std::string& scene_name, const std::string& scene,
   for (const char* tool_name : {"finger:1", "finger:37"}) {
     const Tool tool = parse_tool(tool_name);
     const double offset = pad_offset(tool);
-    for (std::size_t vi = 0; vi < vars.size(); ++vi) {
-      const Variant& v = vars[vi];
-      const std::string model_name =
-          vi == 2 ? std::string("palp reach 7 mm (what-if)") : std::string(to_string(v.model));
+    for (const Variant& v : vars) {
+      const std::string model_name = to_string(v.model);
       const ForceParams prm = model_params(v.model, tool.kind);
       ForceParams skin_only = prm;
       skin_only.bone_enabled = false;
       const Model model(v.fields, tool, prm), skin_model(v.fields, tool, skin_only);
       State st = make_state(model), st_skin = make_state(skin_model);
       const std::string series = model_name + ", " + tool_name;
-      std::printf("  %-36s", series.c_str());
+      std::printf("  %-46s", series.c_str());
+      // The bone law's reach r (f_b = 20 (x / r)^-3, printed r = 5 mm) only scales palp's bone
+      // term by (r / 5)^3 below the cap (same distances, same fade): projected from the terms.
+      constexpr double kReach[] = {5.0, 6.0, 7.0, 8.0};
+      std::vector<std::vector<double>> projected(std::size(kReach));
       for (double d : depths) {
-        std::vector<double> ratios;
+        std::vector<std::vector<double>> ratios(std::size(kReach));
         for (std::size_t pi = 0; pi < paths.size(); ++pi) {
           const std::vector<Site>& sites = paths[pi];
-          std::vector<double> force;
+          std::vector<double> force, skin;
           for (const Site& s : sites) {
             force.push_back(press_force(model, st, s.frame, d, offset));
-            const double skin = press_force(skin_model, st_skin, s.frame, d, offset);
+            skin.push_back(press_force(skin_model, st_skin, s.frame, d, offset));
             csv.row({scene_name, std::string(tool_name), model_name, specs[pi].azimuth_deg, d,
-                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin});
+                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin.back()});
           }
-          for (std::size_t i = 0; i < sites.size(); ++i) {
-            if (sites[i].rib) continue;
-            if (i > 0) ratios.push_back(force[i - 1] / force[i]);
-            if (i + 1 < sites.size()) ratios.push_back(force[i + 1] / force[i]);
+          for (std::size_t r = 0; r < std::size(kReach); ++r) {
+            const double scale = std::pow(kReach[r] / 5.0, 3.0);
+            auto at = [&](std::size_t i) { return skin[i] + scale * (force[i] - skin[i]); };
+            for (std::size_t i = 0; i < sites.size(); ++i) {
+              if (sites[i].rib) continue;
+              if (i > 0) ratios[r].push_back(at(i - 1) / at(i));
+              if (i + 1 < sites.size()) ratios[r].push_back(at(i + 1) / at(i));
+            }
           }
         }
-        const double med = median(ratios), lo = percentile(ratios, 0.0);
+        const double med = median(ratios[0]), lo = percentile(ratios[0], 0.0);
         ratio_csv.row({scene_name, std::string(tool_name), model_name, series, d, med, lo,
-                       static_cast<double>(ratios.size())});
+                       static_cast<double>(ratios[0].size())});
         std::printf(" %g:%.2f(%.2f)", d, med, lo);
+        for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r)
+          projected[r].push_back(median(ratios[r]));
+      }
+      for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r) {
+        char name[96];
+        std::snprintf(name, sizeof name, "palp, bone reach %g mm (projected), %s", kReach[r],
+                      tool_name);
+        std::printf("\n  %-46s", name);
+        for (std::size_t k = 0; k < depths.size(); ++k) {
+          std::printf(" %g:%.2f", depths[k], projected[r][k]);
+          ratio_csv.row({scene_name, std::string(tool_name), "palp projected", std::string(name),
+                         depths[k], projected[r][k], std::nan(""), std::nan("")});
+        }
       }
       std::printf("   [depth mm: median (smallest) rib / space]\n");
     }
