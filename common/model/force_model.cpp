@@ -80,6 +80,11 @@ inline Vec3d printed_bone_force(const ForceParams& prm, const FieldSample& bone,
 // steps 1.20 for 0.8 us more on finger:37's tick).
 constexpr int kBoneTraceSteps = 1;
 
+// palp's bone proxy: steps pushing a held point that its entry plane left inside bone out along
+// the plane's normal.
+constexpr int kHoldSteps = 8;
+constexpr double kHoldMargin = 0.01;  // mm
+
 // Accumulators of one tick's device outputs.
 struct TickSums {
   Vec3d f{}, tau{}, u{};
@@ -144,12 +149,26 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
       }
     }
     if (latch == kBoneLatched) {
-      const double pen = dot(anchor - x, normal);
-      if (!(pen > 0.0) ||
-          (!inside_bone && !segment_hits_bone(fields, x, x + pen * normal, bone_step))) {
+      double pen = dot(anchor - x, normal);
+      // Let go above the entry plane or slid off sideways, but never while inside bone: the
+      // plane is an estimate, and a voxelised bone's staircase may reach above it.
+      if (!inside_bone &&
+          (!(pen > 0.0) || !segment_hits_bone(fields, x, x + pen * normal, bone_step))) {
         latch = kBoneFree;
       } else {
+        if (!(pen > 0.0)) pen = 0.0;
         xc = x + pen * normal;  // held on the entry plane
+        // The plane goes through the distance field's estimate of the entry point; on a curved,
+        // voxelised bone it may cut into it: out along n while inside, by twice D_bone and
+        // kHoldMargin (steps of D_bone alone, a lower bound of the way out, only approach the
+        // surface), so the held point ends at most that much outside the bone.
+        for (int k = 0; k < kHoldSteps; ++k) {
+          const double d_in = fields.bone_value_at(xc);
+          if (!(d_in > 0.0)) break;
+          const double out = 2.0 * d_in + kHoldMargin;
+          pen += out;
+          xc += out * normal;
+        }
         f_struct = (prm.bone_fmax + prm.bone_k * pen) * normal;
         k_struct = prm.bone_k;
         latched = true;

@@ -193,6 +193,38 @@ TEST(PalpModel, NoContactPointEverInsideBone) {
   }
 }
 
+TEST(PalpModel, NoContactPointInsideARoundRibMetFromAnySide) {
+  // A round rib (radius 3 mm about x = 50, z = 10, voxelised at 1 mm) met by a point moving in
+  // straight lines from the skin side at angles from straight down to sideways, 0.25 mm a tick,
+  // 8 mm past the rib's centre: the held point is never inside the voxelised rib, whose
+  // staircase the entry plane (through the distance field's estimate of the entry point) can
+  // cut into on either side.
+  Grid g;
+  g.dims = kDims;
+  Mask rib(g, 0);
+  for (std::int64_t k = 0; k < kDims[2]; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 40; i <= 60; ++i)
+        if (std::hypot(i - 50.0, k - 10.0) <= 3.0) rib.at(i, j, k) = 1;
+  const auto fields = std::make_shared<const FieldSampler>(flat_skin(), signed_distance(rib));
+  const Model model(fields, parse_tool("finger:1"), palp());
+  const double pi = 3.14159265358979323846;
+  for (int deg = 0; deg <= 80; deg += 10) {
+    for (double offset : {-2.0, -1.0, 0.0, 1.0, 2.0}) {
+      const Vec3d dir{std::sin(deg * pi / 180.0), 0.0, -std::cos(deg * pi / 180.0)};
+      const Vec3d aim{50.0 + offset * dir.z, kCy, 10.0 - offset * dir.x};  // offset across dir
+      State st = make_state(model);
+      for (double s = -14.0; s <= 8.0; s += 0.25) {
+        const Vec3d pad = aim + s * dir;
+        if (pad.z > kZ0 - 0.5) continue;
+        tick(model, st, Pose{{pad.x, pad.y, pad.z + 8.0}, Quat{}});
+        ASSERT_LE(fields->sample_bone(st.x[0]).value, 1e-9) << deg << " " << offset << " " << s;
+        ASSERT_EQ(st.status & kTickInsideBone, 0u) << deg << " " << offset << " " << s;
+      }
+    }
+  }
+}
+
 TEST(PalpModel, FrictionIsACoulombConeAndIndependentOfSpeedAndRate) {
   const auto fields = std::make_shared<const FieldSampler>(flat_skin());
   for (double mu : {0.3, 0.5, 0.8}) {
