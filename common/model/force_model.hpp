@@ -52,9 +52,11 @@
 //            so an intercostal space (bone beside, not beneath) feels soft; faded in with skin
 //            depth over bone_fade_mm (smoothstep) so first contact brings no step;
 //          - bone as a constraint (the bone proxy of Robust mode, always): a latched point's
-//            contact point is held on the bone's entry plane (a god-object), State::x reports
-//            that point, the skin is sampled there, and the spring bone_fmax + bone_k * pen
-//            pushes the device out, so no contact point is ever inside bone;
+//            contact point is held on the bone's entry plane (a god-object), pushed further
+//            out along its normal where that plane cuts into a curved, voxelised bone, and never
+//            let go while inside bone; State::x reports that point, the skin is sampled there,
+//            and the spring bone_fmax + bone_k * pen pushes the device out, so no contact point
+//            is ever inside bone;
 //          - Coulomb friction: the proxy sticks while |s - p| (tangential) <= mu f_n / k and
 //            slides on that circle beyond it, placed from positions alone: |f_friction| <=
 //            mu f_n always, no friction without pressing, and the same at every speed and rate.
