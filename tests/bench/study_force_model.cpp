@@ -26,8 +26,12 @@
 //    by central differences over 1.5 mm): |f_device| detrended by a centred 10 mm moving
 //    average, its standard deviation and the largest change between two ticks.
 //
+// 4. Contact count  a skin ball (R 30 mm): finger:1/7/19/37 pressed along the radius to
+//    2..8 mm, the pressing force against finger:1's (the paper claims independence of the count).
+//
 // Writes force_model_contrast.csv, force_model_contrast_ratio.csv, force_model_friction.csv,
-// force_model_creep.csv and force_model_smooth.csv. Skips the CT parts when the file is absent.
+// force_model_creep.csv, force_model_contacts.csv and force_model_smooth.csv. Skips the CT parts
+// when the file is absent.
 //
 //   study_force_model [--out DIR] [--quick]
 // PALP_CT: the CT (default ../shared/data/ct_abdomen_3mm.nii.gz).
@@ -477,6 +481,55 @@ void smoothness(const std::string& ct_path, Csv& csv) {
     }
 }
 
+// ---- 4. Contact-count independence on a curved surface -----------------------------------------
+
+// A skin ball of radius 30 mm (exact signed distances at 0.5 mm, no bone); finger:1/7/19/37
+// pressed along the radius to a pad depth of 2..8 mm (0.5 s at 1 kHz, held 0.1 s): the pressing
+// force f_device . n against finger:1's.
+void contact_count(Csv& csv) {
+  const double h = 0.5, side = 80.0, radius = 30.0;
+  const Vec3d c{40.0, 40.0, 40.0};
+  Grid g;
+  const auto n = static_cast<std::int64_t>(std::llround(side / h)) + 1;
+  g.dims = {n, n, n};
+  g.spacing = {h, h, h};
+  DistanceMap surf(g, 0.0f, "ball");
+  for (std::int64_t k = 0; k < n; ++k)
+    for (std::int64_t j = 0; j < n; ++j)
+      for (std::int64_t i = 0; i < n; ++i)
+        surf.at(i, j, k) = static_cast<float>(
+            radius - norm(Vec3d{static_cast<double>(i) * h, static_cast<double>(j) * h,
+                                static_cast<double>(k) * h} -
+                          c));
+  const std::vector<Variant> vars = {
+      {ModelKind::Paper, std::make_shared<const FieldSampler>(surf)},
+      {ModelKind::Palp,
+       std::make_shared<const FieldSampler>(
+           surf, SamplerConfig{GradientScheme::PrecomputedField, Storage::Float32})}};
+  SkinFrame frame;
+  frame.normal = normalized(Vec3d{0.3, 0.4, 1.0});
+  frame.skin = c + radius * frame.normal;
+  frame.slide = normalized(cross(frame.normal, Vec3d{1, 0, 0}));
+  for (const Variant& v : vars) {
+    std::printf("contacts %-5s ball R 30 mm, pressing force against finger:1:", to_string(v.model));
+    for (double d : {2.0, 4.0, 6.0, 8.0}) {
+      double f1 = 0.0;
+      std::printf("  %g mm", d);
+      for (int pts : {1, 7, 19, 37}) {
+        const Tool tool = parse_tool("finger:" + std::to_string(pts));
+        const Model m(v.fields, tool, model_params(v.model, tool.kind));
+        State st = make_state(m);
+        const double f = press_force(m, st, frame, d, pad_offset(tool));
+        if (pts == 1) f1 = f;
+        csv.row({std::string(to_string(v.model)), d, static_cast<double>(pts), f,
+                 100.0 * (f / f1 - 1.0)});
+        if (pts != 1) std::printf(" %d:%+.1f%%", pts, 100.0 * (f / f1 - 1.0));
+      }
+    }
+    std::printf("\n");
+  }
+}
+
 }  // namespace
 }  // namespace palp::study
 
@@ -521,6 +574,10 @@ int main(int argc, char** argv) {
             {"model", "depth_mm", "shift_mm", "f_start_N", "f_end_N", "decay_pct"});
   friction(flags, f_csv, k_csv);
   std::printf("friction: %.1f s\n", now_seconds() - t0);
+
+  Csv n_csv(flags.out_dir + "/force_model_contacts.csv",
+            {"model", "depth_mm", "points", "force_N", "vs_finger1_pct"});
+  contact_count(n_csv);
 
   Csv s_csv(flags.out_dir + "/force_model_smooth.csv",
             {"model", "depth_mm", "mean_N", "detrended_std_N", "max_step_N", "map_skin_error_mm"});
