@@ -141,6 +141,13 @@ inline double value_at_u(const Geometry& g, const MapView<T>& m, const double u[
   return m.scale * trilinear(c, cell.t);
 }
 
+// Interpolated value at x (mm) alone, kOutsideValue outside the box.
+template <class T>
+inline double value(const Geometry& g, const MapView<T>& m, const Vec3d& x) {
+  const double u[3] = {x.x * g.inv_spacing[0], x.y * g.inv_spacing[1], x.z * g.inv_spacing[2]};
+  return in_box(g, u) ? value_at_u(g, m, u) : kOutsideValue;
+}
+
 template <GradientScheme G, class T>
 inline FieldSample sample(const Geometry& g, const MapView<T>& m, const Vec3d& x) {
   FieldSample out;
@@ -205,6 +212,8 @@ struct FieldAccess {
 
   FieldSample surf_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, surf, x); }
   FieldSample bone_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, bone, x); }
+  // D_bone(x) without its gradient (8 fetches), kOutsideValue outside the box.
+  double bone_value_at(const Vec3d& x) const { return sampling::value(*geometry, bone, x); }
 };
 
 // The distance maps in the chosen storage. Built once (may take seconds and memory); constant

@@ -47,13 +47,16 @@
 //          - skin law saturating smoothly at skin_fmax, f = f_s / (1 + (f_s / skin_fmax)^4)^(1/4),
 //            and past the distance band (no gradient) the point keeps its last skin normal;
 //          - bone felt along the skin normal (bone_along_normal): the bone law of the distance
-//            to the bone's tangent plane along -v_s, x / (v_b . v_s), pushing out along v_s, so
-//            an intercostal space (bone beside, not beneath) feels soft; faded in with skin
+//            to bone along -v_s (sphere-traced on D_bone one step past |D_bone(x)|, a lower
+//            bound exact for bone straight beneath), pushing out along v_s, where v_b . v_s > 0,
+//            so an intercostal space (bone beside, not beneath) feels soft; faded in with skin
 //            depth over bone_fade_mm (smoothstep) so first contact brings no step;
 //          - bone as a constraint (the bone proxy of Robust mode, always): a latched point's
-//            contact point is held on the bone's entry plane (a god-object), State::x reports
-//            that point, the skin is sampled there, and the spring bone_fmax + bone_k * pen
-//            pushes the device out, so no contact point is ever inside bone;
+//            contact point is held on the bone's entry plane (a god-object), pushed further
+//            out along its normal where that plane cuts into a curved, voxelised bone, and never
+//            let go while inside bone; State::x reports that point, the skin is sampled there,
+//            and the spring bone_fmax + bone_k * pen pushes the device out, so no contact point
+//            is ever inside bone;
 //          - Coulomb friction: the proxy sticks while |s - p| (tangential) <= mu f_n / k and
 //            slides on that circle beyond it, placed from positions alone: |f_friction| <=
 //            mu f_n always, no friction without pressing, and the same at every speed and rate.

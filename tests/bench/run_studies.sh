@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Runs the force-model studies (speed against accuracy, pop-through, passivity, stability of the
-# default force chain), writes their CSVs and logs into $PALP_BUILD_DIR/studies and renders the
+# default force chain, the palp model beside the paper's), writes their CSVs and logs into $PALP_BUILD_DIR/studies and renders the
 # charts into docs/figures with palpchart (under xvfb-run when there is no display). Prints the
-# figures it measured. Naming studies (speed_accuracy, pop_through, passivity, stability) runs
+# figures it measured. Naming studies (speed_accuracy, pop_through, passivity, stability,
+# force_model) runs
 # and charts only those.
 #
 #   tests/bench/run_studies.sh [--quick] [--charts-only] [STUDY...]
@@ -23,11 +24,11 @@ for arg in "$@"; do
   case $arg in
     --quick) quick=(--quick) ;;
     --charts-only) charts_only=1 ;;
-    speed_accuracy|pop_through|passivity|stability) studies+=("$arg") ;;
-    *) echo "usage: $0 [--quick] [--charts-only] [speed_accuracy|pop_through|passivity|stability]..." >&2; exit 2 ;;
+    speed_accuracy|pop_through|passivity|stability|force_model) studies+=("$arg") ;;
+    *) echo "usage: $0 [--quick] [--charts-only] [speed_accuracy|pop_through|passivity|stability|force_model]..." >&2; exit 2 ;;
   esac
 done
-[[ ${#studies[@]} -gt 0 ]] || studies=(speed_accuracy pop_through passivity stability)
+[[ ${#studies[@]} -gt 0 ]] || studies=(speed_accuracy pop_through passivity stability force_model)
 want() { [[ " ${studies[*]} " == *" $1 "* ]]; }
 chart=$build/client/palpchart
 
@@ -81,6 +82,34 @@ charts() {
     --ylabel "energy injected by the rendering (mW)" \
     --title "Hand pushing 20% of max force onto skin over bone (2.5 N step at contact)" \
     --out "$figures/passivity_energy.png"
+
+  # The palp model beside the paper's (study_force_model, docs/force_model.md).
+  want force_model && for scene in torso ct; do
+    grep -q "^$scene," "$data/force_model_contrast_ratio.csv" || continue
+    local what="torso phantom, 4 paths, 3 ribs each" legend=tr
+    [[ $scene == ct ]] && what="real CT (3 mm), lower right ribs" legend=tl
+    "$chart" "${c[@]}" --csv "$data/force_model_contrast_ratio.csv" --where scene=$scene \
+      --x depth_mm --y ratio_median --group series --style line --legend $legend \
+      --xlabel "pad depth under the skin (mm), pressed along the skin normal" \
+      --ylabel "pressing force over a rib / over the next space (median)" \
+      --title "Rib contrast, $what (goal for palp: >= 1.5 at 6 mm)" \
+      --out "$figures/force_model_contrast_$scene.png"
+  done
+  want force_model && "$chart" "${c[@]}" --csv "$data/force_model_friction.csv" --where sweep=speed \
+    --x speed_mm_s --y change_pct --group model --style line --legend bl \
+    --xlabel "slide speed (mm/s), 1 kHz, 4 mm deep, flat skin" \
+    --ylabel "sliding friction against 100 mm/s (%)" \
+    --title "Friction against speed (goal: within +-5 %)" --out "$figures/force_model_friction_speed.png"
+  want force_model && "$chart" "${c[@]}" --csv "$data/force_model_friction.csv" --where sweep=rate \
+    --x rate_hz --y change_pct --group model,speed_mm_s --style line --logx --legend bl \
+    --xlabel "update rate (Hz), 4 mm deep, flat skin" \
+    --ylabel "sliding friction against 10 kHz (%)" \
+    --title "Friction against the loop rate (goal: within +-5 %)" --out "$figures/force_model_friction_rate.png"
+  want force_model && "$chart" "${c[@]}" --csv "$data/force_model_creep.csv" \
+    --x depth_mm --y decay_pct --group model --style line --legend tr \
+    --xlabel "pad depth (mm); shifted by half the breakaway distance, held 5 s, +-0.05 mm jitter" \
+    --ylabel "decay of the holding force over the hold (%)" \
+    --title "Creep under jitter (goal: none at 1-8 mm)" --out "$figures/force_model_creep.png"
 
   # Stability of palpd's default chain (study_stability, docs/stability.md).
   want stability || { ls -1 "$figures"/*.png; return; }
@@ -159,6 +188,8 @@ if [[ $charts_only == 0 ]]; then
   want passivity && awk '/stable from/ { key = $1 " " $2 " " $3; n[key]++; if ($0 ~ /never/) bad[key]++ }
        END { for (k in n) printf "passivity %-32s %d of %d hand forces unstable at every rate\n",
                                  k, bad[k], n[k] }' "$data/passivity.log" | sort
+  want force_model && { grep -h -E "^  (paper|palp)|^friction|^creep|^bound|^smooth" "$data/force_model.log" || true; }
+  want pop_through && { grep -h "^  tunnel" "$data/pop_through.log" || true; }
   want stability && awk -F, 'NR > 1 && $1 == "all" && $3 >= 1000 {
        printf "stability %-13s %5d Hz: worst p2p %.3g mm (%s), worst step %.3g x bound, %d of %d runs not held\n",
               $2, $3, $4, $5, $7, $8, $9 }' "$data/stability_summary.csv" || true

@@ -20,11 +20,18 @@
 //    the push force at which a point first ends up inside the rib, the push at which the bone
 //    force is lost while the pad is at or past the rib (it vanishes or points inward), how far
 //    past the rib's top the pad gets, and whether the finger still oscillates at the end.
+// 3. Tunnel: the hand pushes 10..150 N (held, not the skin law's force) while dragging the finger
+//    across a round rib 5 or 6 mm across (width = thickness, top 8 mm under the skin) at
+//    20..3000 mm/s, at 1 and 4 kHz, for the paper's model (printed and robust bone modes) and
+//    the palp model (its precomputed gradient): the ticks with a contact point inside bone
+//    (kTickInsideBone) over the whole run, the deepest contact point (State::x, the held point
+//    for palp) inside bone, and whether the pad centre got past the rib's bottom.
 //
 // Writes pop_through_slide.csv (every run), pop_through_thresholds.csv (first indentation with
 // a flip / a point inside bone per speed), pop_through_chart.csv (the slide at 100 mm/s as chart
 // series), pop_through_speed.csv (12 mm indentation against speed), pop_through_push.csv
-// (decimated traces, with the rib's faces as series) and pop_through_push_summary.csv.
+// (decimated traces, with the rib's faces as series), pop_through_push_summary.csv and
+// pop_through_tunnel.csv (one row per tunnel run).
 //
 //   study_pop_through [--out DIR] [--quick]
 #include <cmath>
@@ -96,6 +103,8 @@ struct SlideResult {
   int window_ticks = 0, inward_ticks = 0, inside_ticks = 0;
   double max_inward_N = 0.0;  // largest inward component of the mean bone force
   bool through = false;       // the pad centre got below the rib's bottom over the rib
+  int all_ticks = 0, all_inside_ticks = 0;  // over the whole run, not only the window
+  double max_inside_mm = 0.0;  // deepest contact point (State::x) inside bone, D_bone there
 };
 
 SlideResult slide(const Model& model, const RibMaps& maps, const RibScene& scene, double rate,
@@ -112,6 +121,13 @@ SlideResult slide(const Model& model, const RibMaps& maps, const RibScene& scene
   SlideResult r;
   for (double t = 0.0; t < t_end; t += period) {
     tick(model, st, Pose{b.x, Quat{}});
+    ++r.all_ticks;
+    if (st.status & kTickInsideBone) {
+      ++r.all_inside_ticks;
+      for (std::size_t i = 0; i < st.x.size(); ++i)
+        if (st.in_contact[i])
+          r.max_inside_mm = std::max(r.max_inside_mm, model.fields().sample_bone(st.x[i]).value);
+    }
     const double x_set = t < settle ? x0 : x0 + speed * (t - settle);
     if (std::fabs(b.x.x - scene.rib_x) < half_window) {
       ++r.window_ticks;
@@ -329,6 +345,62 @@ int main(int argc, char** argv) {
       }
     }
   }
+  // ---- 3. Tunnel: 10..150 N across 5-6 mm ribs at 20..3000 mm/s, paper and palp.
+  Csv tunnel_csv(flags.out_dir + "/pop_through_tunnel.csv",
+                 {"tool", "model", "rib_mm", "rate_hz", "speed_mm_s", "push_N", "ticks",
+                  "inside_ticks", "max_inside_mm", "through"});
+  const std::vector<double> pushes =
+      flags.quick ? std::vector<double>{10, 150} : std::vector<double>{10, 25, 50, 100, 150};
+  const std::vector<double> tunnel_speeds =
+      flags.quick ? std::vector<double>{20, 3000} : std::vector<double>{20, 100, 300, 1000, 3000};
+  struct Variant {
+    const char* name;
+    ModelKind model;
+    BoneMode mode;
+  };
+  const Variant variants[] = {{"paper printed", ModelKind::Paper, BoneMode::Printed},
+                              {"paper robust", ModelKind::Paper, BoneMode::Robust},
+                              {"palp", ModelKind::Palp, BoneMode::Robust}};
+  for (double rib : {5.0, 6.0}) {
+    RibScene ts = scene;
+    ts.width = ts.height = rib;
+    const RibMaps tmaps = make_rib_maps(ts);
+    auto analytic = std::make_shared<const FieldSampler>(tmaps.surf, tmaps.bone);
+    auto precomputed = std::make_shared<const FieldSampler>(
+        tmaps.surf, tmaps.bone, SamplerConfig{GradientScheme::PrecomputedField, Storage::Float32});
+    for (const char* tool_name : {"finger:1", "finger:37"})
+      for (const Variant& v : variants) {
+        ForceParams prm = model_params(v.model, ToolKind::Finger);
+        prm.bone_mode = v.mode;
+        const Model model(v.model == ModelKind::Palp ? precomputed : analytic,
+                          parse_tool(tool_name), prm);
+        for (double rate : {1000.0, 4000.0}) {
+          long ticks = 0, inside = 0;
+          double deepest = 0.0;
+          int runs_inside = 0, runs_through = 0, runs = 0;
+          for (double speed : tunnel_speeds)
+            for (double push_N : pushes) {
+              const SlideResult r = slide(model, tmaps, ts, rate, speed, push_N);
+              tunnel_csv.row({std::string(tool_name), std::string(v.name), rib, rate, speed, push_N,
+                              static_cast<double>(r.all_ticks),
+                              static_cast<double>(r.all_inside_ticks), r.max_inside_mm,
+                              r.through ? 1.0 : 0.0});
+              ticks += r.all_ticks;
+              inside += r.all_inside_ticks;
+              deepest = std::max(deepest, r.max_inside_mm);
+              runs_inside += r.all_inside_ticks > 0 ? 1 : 0;
+              runs_through += r.through ? 1 : 0;
+              ++runs;
+            }
+          std::printf(
+              "  tunnel %-9s %-13s rib %g mm %-6s: %ld of %ld ticks with a point inside bone "
+              "(%d of %d runs, at most %.2f mm deep), pad past the rib's bottom in %d runs\n",
+              tool_name, v.name, rib, rate_name(rate).c_str(), inside, ticks, runs_inside, runs,
+              deepest, runs_through);
+        }
+      }
+  }
+
   std::printf(
       "  static threshold (finger:1): f_s(%.2f) + cap = %.2f + 40 = %.2f N; a push above "
       "it ends inside the rib\n",
@@ -337,5 +409,6 @@ int main(int argc, char** argv) {
   std::printf("pop_through: %.1f s, wrote %s, %s, %s, %s\n", now_seconds() - t_start,
               slide_csv.path().c_str(), thr_csv.path().c_str(), push_csv.path().c_str(),
               push_sum.path().c_str());
+  std::printf("pop_through: wrote %s\n", tunnel_csv.path().c_str());
   return 0;
 }

@@ -139,6 +139,38 @@ TEST(PalpModel, BoneBesideTheFingerIsNotFeltAsBoneBeneath) {
   EXPECT_GT(norm(sp.f_bone[0]), 10.0);
 }
 
+TEST(PalpModel, AnIntercostalSpaceIsNotFeltAsBoneBeneath) {
+  // Two ribs (voxel columns x 38..42 and 58..62, rows z 10..13: top 13.5, flanks at 42.5 and
+  // 57.5) and the pad 2 mm deep over each rib and midway between them. Midway the distance
+  // field's gradient is the bisector of both ribs and points straight up, so the nearest bone's
+  // tangent plane (dist / cos) lies beneath as if over a rib: the paper's law there pushes with
+  // f_b(|D_bone|). Along the skin normal the ray passes between the ribs: one sphere-tracing
+  // step (to 7.5 mm under the ribs' bottom, still ~7.7 mm from their corners) puts the bone at
+  // least 16 mm away below, under 0.61 N of bone law before the fade (dist / cos: 2 N).
+  Grid g;
+  g.dims = kDims;
+  Mask ribs(g, 0);
+  for (std::int64_t k = 10; k <= 13; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i : {38, 39, 40, 41, 42, 58, 59, 60, 61, 62}) ribs.at(i, j, k) = 1;
+  const auto fields = std::make_shared<const FieldSampler>(flat_skin(), signed_distance(ribs));
+  const Model model(fields, parse_tool("finger:1"), palp());
+  const Model paper(fields, parse_tool("finger:1"));
+  const double fade = 0.5;  // smoothstep(2 / 4)
+  State over = make_state(model), between = make_state(model), sp = make_state(paper);
+  tick(model, over, press(2.0, 40.0));
+  tick(model, between, press(2.0, 50.0));
+  tick(paper, sp, press(2.0, 50.0));
+  const double gap = kZ0 - 2.0 - 13.5;  // 4.75 mm above the rib's top
+  EXPECT_NEAR(over.f_bone[0].z, bone_force(gap, 40.0) * fade, 0.05 * bone_force(gap, 40.0));
+  EXPECT_GE(between.f_bone[0].z, 0.0);
+  EXPECT_LT(between.f_bone[0].z, bone_force(16.0, 40.0) * fade);
+  EXPECT_NEAR(between.f_bone[0].x, 0.0, 1e-9);
+  // The paper's law midway: the voxelised distance to a rib's corner (10.7 mm), straight up.
+  EXPECT_GT(sp.f_bone[0].z, bone_force(12.0, 40.0));
+  EXPECT_GT(sp.f_bone[0].z, 5.0 * between.f_bone[0].z);
+}
+
 TEST(PalpModel, NoContactPointEverInsideBone) {
   // A thin plate (rows 10..13, top 6.75 mm under the skin) pushed through at 0.5 mm a tick down
   // to 16 mm, far past its bottom: the contact point stays on the plate's top, the force grows
@@ -158,6 +190,38 @@ TEST(PalpModel, NoContactPointEverInsideBone) {
     }
     EXPECT_GE(st.f_device.z, previous - 1e-9) << d;
     previous = st.f_device.z;
+  }
+}
+
+TEST(PalpModel, NoContactPointInsideARoundRibMetFromAnySide) {
+  // A round rib (radius 3 mm about x = 50, z = 10, voxelised at 1 mm) met by a point moving in
+  // straight lines from the skin side at angles from straight down to sideways, 0.25 mm a tick,
+  // 8 mm past the rib's centre: the held point is never inside the voxelised rib, whose
+  // staircase the entry plane (through the distance field's estimate of the entry point) can
+  // cut into on either side.
+  Grid g;
+  g.dims = kDims;
+  Mask rib(g, 0);
+  for (std::int64_t k = 0; k < kDims[2]; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 40; i <= 60; ++i)
+        if (std::hypot(i - 50.0, k - 10.0) <= 3.0) rib.at(i, j, k) = 1;
+  const auto fields = std::make_shared<const FieldSampler>(flat_skin(), signed_distance(rib));
+  const Model model(fields, parse_tool("finger:1"), palp());
+  const double pi = 3.14159265358979323846;
+  for (int deg = 0; deg <= 80; deg += 10) {
+    for (double offset : {-2.0, -1.0, 0.0, 1.0, 2.0}) {
+      const Vec3d dir{std::sin(deg * pi / 180.0), 0.0, -std::cos(deg * pi / 180.0)};
+      const Vec3d aim{50.0 + offset * dir.z, kCy, 10.0 - offset * dir.x};  // offset across dir
+      State st = make_state(model);
+      for (double s = -14.0; s <= 8.0; s += 0.25) {
+        const Vec3d pad = aim + s * dir;
+        if (pad.z > kZ0 - 0.5) continue;
+        tick(model, st, Pose{{pad.x, pad.y, pad.z + 8.0}, Quat{}});
+        ASSERT_LE(fields->sample_bone(st.x[0]).value, 1e-9) << deg << " " << offset << " " << s;
+        ASSERT_EQ(st.status & kTickInsideBone, 0u) << deg << " " << offset << " " << s;
+      }
+    }
   }
 }
 

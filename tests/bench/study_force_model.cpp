@@ -1,0 +1,587 @@
+// The palp force model measured beside the paper's (issue 14, docs/force_model.md "The palp
+// model"). Each model runs on the sampler its commands use: paper with the analytic trilinear
+// gradient, palp with the precomputed field. Kinematic: the device follows the path exactly.
+//
+// 1. Contrast  ribs against intercostal spaces at equal skin depth. Paths of `palp traj ribs`
+//    (ribs_body_axis / ribs_skin_frame): the torso's right side at 0, 15, 30 and 45 deg anterior
+//    of lateral over 0.25-0.75 of the body axis; the real CT at -20, 0, 20 and 40 deg over
+//    0.72-0.97 (its ribs lie in the top quarter), each scanned every 0.5 mm. A rib crest is a
+//    local minimum (within +-6 mm) of the distance from the skin point along -n to bone (within
+//    40 mm), an intercostal space the farthest point between two crests of a path (no bone within
+//    40 mm counts as farthest). At each site the tool (finger:1, finger:37) is pressed along the
+//    skin normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held
+//    0.1 s; the pressing force is f_device . n over the last 50 ticks, also with the bone off.
+//    Ratio: every crest against each neighbouring space; median and smallest over all paths.
+//    Projected beside palp: the bone law reaching r = 6, 7, 8 mm instead of 5 (f_b = 20 (x / r)^-3
+//    scales palp's bone term, the pressing force less the bone-off force, by (r / 5)^3).
+// 2. Friction  flat skin (1 mm voxels, bone off), finger:1 at 1 kHz unless said: a slide at 4 mm
+//    at 100..800 mm/s (mean lateral force over the second half of 40 mm); the same at 200 and
+//    800 mm/s at 1..10 kHz; press to 1..8 mm, shift sideways by half the model's breakaway
+//    distance (paper c f_s, palp mu f_n / k), hold 5 s with +-0.05 mm uniform jitter on both
+//    tangent axes: decay of the lateral force from the hold's first 0.5 s to its last; and over
+//    every tick of all of these the largest |f_friction| / (mu f_n) per point (mu = 0.5 for both).
+// 3. Smoothness  the real CT, bone off, finger:1 slid at 20 mm/s (1 kHz) along the anterior
+//    abdomen (azimuth 90 deg, 0.30-0.60 of the body axis) at a constant true depth (2, 4, 6 mm)
+//    below the -500 HU iso-surface of the trilinearly interpolated CT, along its normal (-grad HU
+//    by central differences over 1.5 mm): |f_device| detrended by a centred 10 mm moving
+//    average, its standard deviation and the largest change between two ticks.
+//
+// 4. Contact count  a skin ball (R 30 mm): finger:1/7/19/37 pressed along the radius to
+//    2..8 mm, the pressing force against finger:1's (the paper claims independence of the count).
+//
+// Writes force_model_contrast.csv, force_model_contrast_ratio.csv, force_model_friction.csv,
+// force_model_creep.csv, force_model_contacts.csv and force_model_smooth.csv. Skips the CT parts
+// when the file is absent.
+//
+//   study_force_model [--out DIR] [--quick]
+// PALP_CT: the CT (default ../shared/data/ct_abdomen_3mm.nii.gz).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "bench/study_util.hpp"
+#include "io/ct_io.hpp"
+#include "model/field_sampler.hpp"
+#include "model/force_model.hpp"
+#include "model/tool.hpp"
+#include "scene/scene.hpp"
+#include "scene/trajectory_gen.hpp"
+
+namespace palp::study {
+namespace {
+
+struct Variant {
+  ModelKind model;
+  std::shared_ptr<const FieldSampler> fields;
+};
+
+std::shared_ptr<const FieldSampler> load_fields(const std::string& scene, GradientScheme g) {
+  SceneOptions options;
+  options.sampler.gradient = g;
+  return load_scene(scene, options).fields;
+}
+
+std::vector<Variant> variants_for(const std::string& scene) {
+  return {{ModelKind::Paper, load_fields(scene, GradientScheme::AnalyticTrilinear)},
+          {ModelKind::Palp, load_fields(scene, GradientScheme::PrecomputedField)}};
+}
+
+// Distance along dir from `from` to the first sample inside bone, NaN within `length` none.
+double ray_to_bone(const FieldSampler& f, const Vec3d& from, const Vec3d& dir, double length) {
+  const double step = 0.25 * f.grid().min_spacing();
+  for (double s = 0.0; s <= length; s += step) {
+    const FieldSample b = f.sample_bone(from + dir * s);
+    if (b.inside && b.value >= 0.0) return s;
+  }
+  return std::nan("");
+}
+
+// ---- 1. Contrast -------------------------------------------------------------------------------
+
+struct Site {
+  double along = 0.0, pos_mm = 0.0, below = 0.0;
+  bool rib = false;
+  SkinFrame frame;
+};
+
+// Rib crests and intercostal spaces along the ribs path, in path order.
+std::vector<Site> find_sites(const FieldSampler& f, const RibsSpec& spec, const BodyAxis& axis) {
+  constexpr double kRay = 40.0;
+  std::vector<Site> prof;
+  const double step = 0.5 / axis.extent;
+  for (double a = spec.from; a <= spec.to; a += step) {
+    Site s;
+    s.along = a;
+    s.pos_mm = (a - spec.from) * axis.extent;
+    try {
+      s.frame = ribs_skin_frame(f, axis, a);
+    } catch (const InputError&) {
+      continue;
+    }
+    const double b = ray_to_bone(f, s.frame.skin, -1.0 * s.frame.normal, kRay);
+    s.below = std::isnan(b) ? kRay + 1.0 : b;
+    prof.push_back(s);
+  }
+  std::vector<std::size_t> crests;
+  const std::size_t w = 12;  // +-6 mm
+  for (std::size_t i = w; i + w < prof.size(); ++i) {
+    if (!(prof[i].below <= kRay)) continue;
+    bool min = true;
+    for (std::size_t j = i - w; j <= i + w && min; ++j)
+      if (prof[j].below < prof[i].below || (j < i && prof[j].below == prof[i].below)) min = false;
+    if (min) crests.push_back(i);
+  }
+  std::vector<Site> out;
+  for (std::size_t c = 0; c < crests.size(); ++c) {
+    Site r = prof[crests[c]];
+    r.rib = true;
+    out.push_back(r);
+    if (c + 1 == crests.size()) break;
+    // The farthest point between two crests (the middle of a run of equals).
+    std::size_t best = crests[c] + 1, best_end = best;
+    for (std::size_t j = crests[c] + 1; j < crests[c + 1]; ++j) {
+      if (prof[j].below > prof[best].below) best = best_end = j;
+      if (prof[j].below == prof[best].below) best_end = j;
+    }
+    out.push_back(prof[(best + best_end) / 2]);
+  }
+  return out;
+}
+
+// Pressing force (f_device . n, mean over the last 50 ticks) after a 0.5 s press to `depth`.
+double press_force(const Model& model, State& st, const SkinFrame& frame, double depth,
+                   double offset) {
+  reset(st);
+  const FieldSampler& f = model.fields();
+  const Quat q = surface_orientation(frame.normal, frame.slide);
+  const Vec3d end = pad_centre_at_depth(f, frame, depth);
+  const Vec3d start = frame.skin + 2.0 * frame.normal;
+  constexpr int kPress = 500, kHold = 100, kAvg = 50;
+  double sum = 0.0;
+  for (int t = 0; t <= kPress + kHold; ++t) {
+    const double u = std::min(1.0, static_cast<double>(t) / kPress);
+    tick(model, st, pad_pose(start + u * (end - start), frame.normal, q, offset));
+    if (t > kPress + kHold - kAvg) sum += dot(st.f_device, frame.normal);
+  }
+  return sum / kAvg;
+}
+
+void contrast(const std::string& scene_name, const std::string& scene,
+              const std::vector<RibsSpec>& specs, const std::vector<double>& depths, Csv& csv,
+              Csv& ratio_csv) {
+  const std::vector<Variant> vars = variants_for(scene);
+  // Sites per path (ratios only within a path).
+  std::vector<std::vector<Site>> paths;
+  for (const RibsSpec& spec : specs) {
+    const BodyAxis axis = ribs_body_axis(*vars[0].fields, spec);
+    paths.push_back(find_sites(*vars[0].fields, spec, axis));
+    int n_rib = 0;
+    for (const Site& s : paths.back()) n_rib += s.rib ? 1 : 0;
+    std::printf(
+        "contrast %s azimuth %g, %g-%g: %d rib crests, %d intercostal spaces:", scene_name.c_str(),
+        spec.azimuth_deg, spec.from, spec.to, n_rib, static_cast<int>(paths.back().size()) - n_rib);
+    for (const Site& s : paths.back())
+      std::printf(" %s%.1f(%.1f)", s.rib ? "R" : "i", s.pos_mm, s.below);
+    std::printf("  [position mm (bone below the skin, mm)]\n");
+  }
+  for (const char* tool_name : {"finger:1", "finger:37"}) {
+    const Tool tool = parse_tool(tool_name);
+    const double offset = pad_offset(tool);
+    for (const Variant& v : vars) {
+      const std::string model_name = to_string(v.model);
+      const ForceParams prm = model_params(v.model, tool.kind);
+      ForceParams skin_only = prm;
+      skin_only.bone_enabled = false;
+      const Model model(v.fields, tool, prm), skin_model(v.fields, tool, skin_only);
+      State st = make_state(model), st_skin = make_state(skin_model);
+      const std::string series = model_name + ", " + tool_name;
+      std::printf("  %-46s", series.c_str());
+      // The bone law's reach r (f_b = 20 (x / r)^-3, printed r = 5 mm) only scales palp's bone
+      // term by (r / 5)^3 below the cap (same distances, same fade): projected from the terms.
+      constexpr double kReach[] = {5.0, 6.0, 7.0, 8.0};
+      std::vector<std::vector<double>> projected(std::size(kReach));
+      for (double d : depths) {
+        std::vector<std::vector<double>> ratios(std::size(kReach));
+        for (std::size_t pi = 0; pi < paths.size(); ++pi) {
+          const std::vector<Site>& sites = paths[pi];
+          std::vector<double> force, skin;
+          for (const Site& s : sites) {
+            force.push_back(press_force(model, st, s.frame, d, offset));
+            skin.push_back(press_force(skin_model, st_skin, s.frame, d, offset));
+            csv.row({scene_name, std::string(tool_name), model_name, specs[pi].azimuth_deg, d,
+                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin.back()});
+          }
+          for (std::size_t r = 0; r < std::size(kReach); ++r) {
+            const double scale = std::pow(kReach[r] / 5.0, 3.0);
+            auto at = [&](std::size_t i) { return skin[i] + scale * (force[i] - skin[i]); };
+            for (std::size_t i = 0; i < sites.size(); ++i) {
+              if (sites[i].rib) continue;
+              if (i > 0) ratios[r].push_back(at(i - 1) / at(i));
+              if (i + 1 < sites.size()) ratios[r].push_back(at(i + 1) / at(i));
+            }
+          }
+        }
+        const double med = median(ratios[0]), lo = percentile(ratios[0], 0.0);
+        ratio_csv.row({scene_name, std::string(tool_name), model_name, series, d, med, lo,
+                       static_cast<double>(ratios[0].size())});
+        std::printf(" %g:%.2f(%.2f)", d, med, lo);
+        for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r)
+          projected[r].push_back(median(ratios[r]));
+      }
+      for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r) {
+        char name[96];
+        std::snprintf(name, sizeof name, "palp, bone reach %g mm (projected), %s", kReach[r],
+                      tool_name);
+        std::printf("\n  %-46s", name);
+        for (std::size_t k = 0; k < depths.size(); ++k) {
+          std::printf(" %g:%.2f", depths[k], projected[r][k]);
+          ratio_csv.row({scene_name, std::string(tool_name), "palp projected", std::string(name),
+                         depths[k], projected[r][k], std::nan(""), std::nan("")});
+        }
+      }
+      std::printf("   [depth mm: median (smallest) rib / space]\n");
+    }
+  }
+}
+
+// ---- 2. Friction on flat skin ------------------------------------------------------------------
+
+struct FlatScene {
+  RibMaps maps;
+  std::vector<Variant> vars;
+  double skin = 0.0;  // z of the skin plane
+  double mid_y = 0.0;
+};
+
+FlatScene flat_scene() {
+  RibScene s;
+  s.h = 1.0;
+  s.size_x = 120.0;
+  s.size_y = 40.0;
+  s.size_z = 50.0;
+  s.skin_z = 35.0;
+  s.depth = 30.0;  // the rib, unused (bone off)
+  FlatScene fs;
+  fs.maps = make_rib_maps(s);
+  fs.vars = {
+      {ModelKind::Paper, std::make_shared<const FieldSampler>(fs.maps.surf, fs.maps.bone)},
+      {ModelKind::Palp, std::make_shared<const FieldSampler>(
+                            fs.maps.surf, fs.maps.bone,
+                            SamplerConfig{GradientScheme::PrecomputedField, Storage::Float32})}};
+  fs.skin = fs.maps.skin_level;
+  fs.mid_y = s.size_y / 2.0;
+  return fs;
+}
+
+// Over the points in contact: the largest |f_friction| / f_n (f_n the pressing force, bone off)
+// where f_n > 1e-6 N, and how many points carry friction (> 1e-6 N) with no pressing force.
+struct Bound {
+  double mu_max = 0.0;
+  long no_press = 0;
+};
+void friction_bound(const State& st, Bound& b) {
+  for (std::size_t i = 0; i < st.f.size(); ++i) {
+    if (!st.in_contact[i]) continue;
+    const double fn = (st.f[i] - st.f_friction[i]).z;  // flat skin: the normal is +z
+    const double fr = norm(st.f_friction[i]);
+    if (fn > 1e-6)
+      b.mu_max = std::max(b.mu_max, fr / fn);
+    else if (fr > 1e-6)
+      ++b.no_press;
+  }
+}
+
+// Mean lateral friction (N, against +x) over the second half of a 40 mm slide at `depth`.
+double slide_friction(const Model& m, const FlatScene& fs, double depth, double speed, double rate,
+                      Bound& bound) {
+  State st = make_state(m);
+  const double period = 1.0 / rate, press_s = 0.3, len = 40.0;
+  const double x0 = 30.0, pad_z = fs.skin - depth;
+  double sum = 0.0;
+  int n = 0;
+  const double t_end = press_s + len / speed;
+  for (double t = 0.0; t <= t_end + 1e-12; t += period) {
+    const double u = std::min(1.0, t / press_s);
+    const double x = x0 + std::max(0.0, t - press_s) * speed;
+    const double z = fs.skin + 1.0 + u * (pad_z - fs.skin - 1.0);
+    tick(m, st, Pose{{x, fs.mid_y, z - kFingerPadZ}, Quat{}});
+    friction_bound(st, bound);
+    if (x > x0 + 0.5 * len) {
+      sum += -st.f_device.x;
+      ++n;
+    }
+  }
+  return n ? sum / n : std::nan("");
+}
+
+// Decay (%) of the lateral holding force over a 5 s jittered hold, shifted by half the breakaway
+// distance at `depth`; the breakaway distance (mm) into *shift.
+double creep_decay(const Model& m, const FlatScene& fs, double depth, double& shift, Bound& bound,
+                   double& f_start, double& f_end) {
+  const ForceParams& p = m.params();
+  const double breakaway = p.model == ModelKind::Palp
+                               ? p.mu * saturated_surface_force(depth, p.skin_fmax) / p.k
+                               : p.c * surface_force(depth);
+  shift = 0.5 * breakaway;
+  State st = make_state(m);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> jit(-0.05, 0.05);
+  const double x0 = 60.0, pad_z = fs.skin - depth;
+  constexpr int kPress = 500, kShift = 200, kHold = 5000, kWin = 500;
+  double s0 = 0.0, s1 = 0.0;
+  for (int t = 0; t < kPress + kShift + kHold; ++t) {
+    Vec3d pad{x0, fs.mid_y, pad_z};
+    if (t < kPress) pad.z = fs.skin + 1.0 + (pad_z - fs.skin - 1.0) * t / kPress;
+    if (t >= kPress) pad.x += shift * std::min(1.0, static_cast<double>(t - kPress) / kShift);
+    const int h = t - kPress - kShift;
+    if (h >= 0) {
+      pad.x += jit(rng);
+      pad.y += jit(rng);
+    }
+    tick(m, st, Pose{{pad.x, pad.y, pad.z - kFingerPadZ}, Quat{}});
+    friction_bound(st, bound);
+    if (h >= 0 && h < kWin) s0 += -st.f_device.x;
+    if (h >= kHold - kWin) s1 += -st.f_device.x;
+  }
+  f_start = s0 / kWin;
+  f_end = s1 / kWin;
+  return 100.0 * (f_start - f_end) / f_start;
+}
+
+void friction(const Flags& flags, Csv& csv, Csv& creep_csv) {
+  const FlatScene fs = flat_scene();
+  for (const Variant& v : fs.vars) {
+    ForceParams prm = model_params(v.model, ToolKind::Finger);
+    prm.bone_enabled = false;
+    const Model m(v.fields, parse_tool("finger:1"), prm);
+    const char* name = to_string(v.model);
+    Bound bound;
+    // Speed.
+    std::printf("friction %-5s 4 mm, 1 kHz, against speed:", name);
+    double ref = 0.0;
+    for (double speed : {100.0, 200.0, 400.0, 800.0}) {
+      const double f = slide_friction(m, fs, 4.0, speed, 1000.0, bound);
+      if (speed == 100.0) ref = f;
+      csv.row({std::string(name), "speed", 4.0, speed, 1000.0, f, 100.0 * (f / ref - 1.0)});
+      std::printf("  %g mm/s %.4f N (%+.1f %%)", speed, f, 100.0 * (f / ref - 1.0));
+    }
+    std::printf("\n");
+    // Rate.
+    for (double speed : {200.0, 800.0}) {
+      std::printf("friction %-5s 4 mm, %g mm/s, against rate:", name, speed);
+      const double f10 = slide_friction(m, fs, 4.0, speed, 10000.0, bound);
+      for (double rate : {1000.0, 2000.0, 4000.0, 10000.0}) {
+        const double f = rate == 10000.0 ? f10 : slide_friction(m, fs, 4.0, speed, rate, bound);
+        csv.row({std::string(name), "rate", 4.0, speed, rate, f, 100.0 * (f / f10 - 1.0)});
+        std::printf("  %g kHz %.4f N (%+.1f %%)", rate / 1000.0, f, 100.0 * (f / f10 - 1.0));
+      }
+      std::printf("\n");
+    }
+    // Creep.
+    std::printf("creep    %-5s hold 5 s, +-0.05 mm jitter, decay of the holding force:", name);
+    const std::vector<double> depths =
+        flags.quick ? std::vector<double>{1, 3, 8} : std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8};
+    for (double d : depths) {
+      double shift = 0.0, f0 = 0.0, f1 = 0.0;
+      const double decay = creep_decay(m, fs, d, shift, bound, f0, f1);
+      creep_csv.row({std::string(name), d, shift, f0, f1, decay});
+      std::printf("  %g mm %.1f %%", d, decay);
+    }
+    std::printf("\n");
+    std::printf(
+        "bound    %-5s over every tick above: largest |f_friction| / f_n %.4f (mu %.2f), "
+        "%ld point-ticks with friction and no pressing force\n",
+        name, bound.mu_max, prm.mu, bound.no_press);
+  }
+}
+
+// ---- 3. Skin smoothness on the real CT ---------------------------------------------------------
+
+struct Hu {
+  CtVolume ct;
+  double at(const Vec3d& x) const {
+    const Grid& g = ct.grid;
+    const double u[3] = {x.x / g.spacing[0], x.y / g.spacing[1], x.z / g.spacing[2]};
+    std::int64_t i0[3];
+    double t[3];
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::clamp(u[a], 0.0, static_cast<double>(g.dims[a] - 1) - 1e-9);
+      i0[a] = static_cast<std::int64_t>(c);
+      t[a] = c - static_cast<double>(i0[a]);
+    }
+    double v = 0.0;
+    for (int c = 0; c < 8; ++c) {
+      const std::int64_t i = i0[0] + (c & 1), j = i0[1] + ((c >> 1) & 1), k = i0[2] + (c >> 2);
+      const double w = ((c & 1) ? t[0] : 1 - t[0]) * (((c >> 1) & 1) ? t[1] : 1 - t[1]) *
+                       ((c >> 2) ? t[2] : 1 - t[2]);
+      v += w * ct.at(i, j, k);
+    }
+    return v;
+  }
+  Vec3d normal(const Vec3d& x) const {  // outward: -grad HU, central differences over 1.5 mm
+    const double h = 1.5;
+    const Vec3d g{at(x + Vec3d{h, 0, 0}) - at(x - Vec3d{h, 0, 0}),
+                  at(x + Vec3d{0, h, 0}) - at(x - Vec3d{0, h, 0}),
+                  at(x + Vec3d{0, 0, h}) - at(x - Vec3d{0, 0, h})};
+    return normalized(-1.0 * g);
+  }
+  // The -500 HU crossing met coming in along -dir from `outside` (bisection to 1e-6 mm): from
+  // outside, so that gas in the bowel is not taken for the skin.
+  Vec3d skin(const Vec3d& outside, const Vec3d& dir) const {
+    double lo = 0.0, hi = 0.0;  // at(outside - lo dir) < -500 <= at(outside - hi dir)
+    while (at(outside - hi * dir) < -500.0 && hi < 100.0) lo = hi, hi += 0.25;
+    for (int i = 0; i < 40; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (at(outside - mid * dir) < -500.0 ? lo : hi) = mid;
+    }
+    return outside - (0.5 * (lo + hi)) * dir;
+  }
+};
+
+void smoothness(const std::string& ct_path, Csv& csv) {
+  const std::vector<Variant> vars = variants_for(ct_path);
+  Hu hu{read_ct(ct_path)};
+  if (hu.ct.grid.dims != vars[0].fields->grid().dims) {
+    std::printf("smooth: the CT was resampled by prep (grids differ): skipped\n");
+    return;
+  }
+  RibsSpec spec;
+  spec.azimuth_deg = 90.0;  // anterior
+  spec.from = 0.30;
+  spec.to = 0.60;
+  const BodyAxis axis = ribs_body_axis(*vars[0].fields, spec);
+  const Tool tool = parse_tool("finger:1");
+  const double offset = pad_offset(tool);
+  const double rate = 1000.0, speed = 20.0;
+  const double len = (spec.to - spec.from) * axis.extent;
+  const int n = static_cast<int>(len / speed * rate);
+  const int half = static_cast<int>(5.0 / speed * rate);  // 5 mm each side
+  for (double depth : {2.0, 4.0, 6.0})
+    for (const Variant& v : vars) {
+      ForceParams prm = model_params(v.model, tool.kind);
+      prm.bone_enabled = false;
+      const Model m(v.fields, tool, prm);
+      State st = make_state(m);
+      std::vector<double> f;
+      double skin_gap = 0.0;  // largest |D_surf| on the HU iso-surface: the maps' own error
+      for (int t = 0; t <= n; ++t) {
+        const double along = spec.from + (spec.to - spec.from) * t / n;
+        // Start 15 mm outside the map's skin point on the ray, come in to the HU iso-surface.
+        const SkinFrame frame = ribs_skin_frame(*v.fields, axis, along);
+        const Vec3d skin = hu.skin(frame.skin + 15.0 * axis.ray, axis.ray);
+        skin_gap = std::max(skin_gap, std::fabs(v.fields->sample_surf(skin).value));
+        const Vec3d nrm = hu.normal(skin);
+        const Quat q = surface_orientation(nrm, axis.superior);
+        tick(m, st, pad_pose(skin - depth * nrm, nrm, q, offset));
+        f.push_back(norm(st.f_device));
+      }
+      double sq = 0.0, step = 0.0, mean = 0.0;
+      int cnt = 0;
+      for (int t = half; t + half < static_cast<int>(f.size()); ++t) {
+        double avg = 0.0;
+        for (int j = t - half; j <= t + half; ++j) avg += f[j];
+        avg /= 2 * half + 1;
+        sq += (f[t] - avg) * (f[t] - avg);
+        mean += f[t];
+        ++cnt;
+      }
+      for (std::size_t t = 1; t < f.size(); ++t) step = std::max(step, std::fabs(f[t] - f[t - 1]));
+      const double sd = std::sqrt(sq / cnt);
+      csv.row({std::string(to_string(v.model)), depth, mean / cnt, sd, step, skin_gap});
+      std::printf(
+          "smooth %-5s finger:1 %g mm true depth, %.0f mm at 20 mm/s: mean %.3f N, detrended "
+          "std %.3f N, largest tick step %.3f N (|D_surf| on the iso-surface up to %.2f mm)\n",
+          to_string(v.model), depth, len, mean / cnt, sd, step, skin_gap);
+    }
+}
+
+// ---- 4. Contact-count independence on a curved surface -----------------------------------------
+
+// A skin ball of radius 30 mm (exact signed distances at 0.5 mm, no bone); finger:1/7/19/37
+// pressed along the radius to a pad depth of 2..8 mm (0.5 s at 1 kHz, held 0.1 s): the pressing
+// force f_device . n against finger:1's.
+void contact_count(Csv& csv) {
+  const double h = 0.5, side = 80.0, radius = 30.0;
+  const Vec3d c{40.0, 40.0, 40.0};
+  Grid g;
+  const auto n = static_cast<std::int64_t>(std::llround(side / h)) + 1;
+  g.dims = {n, n, n};
+  g.spacing = {h, h, h};
+  DistanceMap surf(g, 0.0f, "ball");
+  for (std::int64_t k = 0; k < n; ++k)
+    for (std::int64_t j = 0; j < n; ++j)
+      for (std::int64_t i = 0; i < n; ++i)
+        surf.at(i, j, k) = static_cast<float>(
+            radius - norm(Vec3d{static_cast<double>(i) * h, static_cast<double>(j) * h,
+                                static_cast<double>(k) * h} -
+                          c));
+  const std::vector<Variant> vars = {
+      {ModelKind::Paper, std::make_shared<const FieldSampler>(surf)},
+      {ModelKind::Palp,
+       std::make_shared<const FieldSampler>(
+           surf, SamplerConfig{GradientScheme::PrecomputedField, Storage::Float32})}};
+  SkinFrame frame;
+  frame.normal = normalized(Vec3d{0.3, 0.4, 1.0});
+  frame.skin = c + radius * frame.normal;
+  frame.slide = normalized(cross(frame.normal, Vec3d{1, 0, 0}));
+  for (const Variant& v : vars) {
+    std::printf("contacts %-5s ball R 30 mm, pressing force against finger:1:", to_string(v.model));
+    for (double d : {2.0, 4.0, 6.0, 8.0}) {
+      double f1 = 0.0;
+      std::printf("  %g mm", d);
+      for (int pts : {1, 7, 19, 37}) {
+        const Tool tool = parse_tool("finger:" + std::to_string(pts));
+        const Model m(v.fields, tool, model_params(v.model, tool.kind));
+        State st = make_state(m);
+        const double f = press_force(m, st, frame, d, pad_offset(tool));
+        if (pts == 1) f1 = f;
+        csv.row({std::string(to_string(v.model)), d, static_cast<double>(pts), f,
+                 100.0 * (f / f1 - 1.0)});
+        if (pts != 1) std::printf(" %d:%+.1f%%", pts, 100.0 * (f / f1 - 1.0));
+      }
+    }
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+}  // namespace palp::study
+
+int main(int argc, char** argv) {
+  using namespace palp;
+  using namespace palp::study;
+  const Flags flags = parse_flags(argc, argv, "study_force_model [--out DIR] [--quick]");
+  const double t0 = now_seconds();
+  const char* env_ct = std::getenv("PALP_CT");
+  const std::string ct = env_ct ? env_ct : "../shared/data/ct_abdomen_3mm.nii.gz";
+  const bool have_ct = std::filesystem::exists(ct);
+  if (!have_ct) std::printf("no CT at %s: its parts are skipped\n", ct.c_str());
+
+  Csv c_csv(flags.out_dir + "/force_model_contrast.csv",
+            {"scene", "tool", "model", "azimuth_deg", "depth_mm", "site", "pos_mm", "bone_below_mm",
+             "force_N", "skin_only_N"});
+  Csv r_csv(flags.out_dir + "/force_model_contrast_ratio.csv",
+            {"scene", "tool", "model", "series", "depth_mm", "ratio_median", "ratio_min", "pairs"});
+  const std::vector<double> depths =
+      flags.quick ? std::vector<double>{2, 6, 12} : std::vector<double>{2, 4, 6, 8, 10, 12};
+  std::vector<RibsSpec> torso_paths;
+  for (double az : {0.0, 15.0, 30.0, 45.0}) {
+    torso_paths.emplace_back();
+    torso_paths.back().azimuth_deg = az;
+  }
+  contrast("torso", "phantom:torso", torso_paths, depths, c_csv, r_csv);
+  if (have_ct) {
+    std::vector<RibsSpec> ct_paths;
+    for (double az : {-20.0, 0.0, 20.0, 40.0}) {
+      ct_paths.emplace_back();
+      ct_paths.back().from = 0.72;
+      ct_paths.back().to = 0.97;
+      ct_paths.back().azimuth_deg = az;
+    }
+    contrast("ct", ct, ct_paths, depths, c_csv, r_csv);
+  }
+  std::printf("contrast: %.1f s\n", now_seconds() - t0);
+
+  Csv f_csv(flags.out_dir + "/force_model_friction.csv",
+            {"model", "sweep", "depth_mm", "speed_mm_s", "rate_hz", "friction_N", "change_pct"});
+  Csv k_csv(flags.out_dir + "/force_model_creep.csv",
+            {"model", "depth_mm", "shift_mm", "f_start_N", "f_end_N", "decay_pct"});
+  friction(flags, f_csv, k_csv);
+  std::printf("friction: %.1f s\n", now_seconds() - t0);
+
+  Csv n_csv(flags.out_dir + "/force_model_contacts.csv",
+            {"model", "depth_mm", "points", "force_N", "vs_finger1_pct"});
+  contact_count(n_csv);
+
+  Csv s_csv(flags.out_dir + "/force_model_smooth.csv",
+            {"model", "depth_mm", "mean_N", "detrended_std_N", "max_step_N", "map_skin_error_mm"});
+  if (have_ct) smoothness(ct, s_csv);
+  std::printf("force_model: %.1f s\n", now_seconds() - t0);
+  return 0;
+}
