@@ -170,6 +170,7 @@ std::vector<std::string> param_assignments(const ForceParams& p) {
           "mu=" + number_text(p.mu),
           "skin_fmax=" + number_text(p.skin_fmax),
           "bone_fade_mm=" + number_text(p.bone_fade_mm),
+          "bone_reach_mm=" + number_text(p.bone_reach_mm),
           std::string("bone_along_normal=") + (p.bone_along_normal ? "1" : "0")};
 }
 

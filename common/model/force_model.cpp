@@ -188,8 +188,10 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
             reach += std::max(0.0, -fields.bone_value_at(x - reach * v_s));
         const double fade =
             prm.bone_fade_mm > 0.0 ? smoothstep(skin_x.value / prm.bone_fade_mm) : 1.0;
-        f_struct = (bone_force(reach, prm.bone_fmax) * fade) * v_s;
-        k_struct = bone_force_slope(reach, prm.bone_fmax) * fade;
+        // the printed law f_b = 20 (x / 5)^-3 with its 5 mm scaled to bone_reach_mm
+        const double scale = 5.0 / prm.bone_reach_mm;
+        f_struct = (bone_force(reach * scale, prm.bone_fmax) * fade) * v_s;
+        k_struct = bone_force_slope(reach * scale, prm.bone_fmax) * scale * fade;
       }
       if (!inside_bone && has_vb && cos_b > 0.0) {
         anchor = x + bone.value * v_b;
@@ -502,6 +504,7 @@ void validate(const ForceParams& p) {
   check(in(p.mu, 0.0, 2.0), "mu must be in [0, 2] (finger on skin 0.3-0.8)");
   check(in(p.skin_fmax, 1.0, 200.0), "skin_fmax must be in [1, 200] N (default 30)");
   check(in(p.bone_fade_mm, 0.0, 30.0), "bone_fade_mm must be in [0, 30] mm (default 4)");
+  check(in(p.bone_reach_mm, 1.0, 20.0), "bone_reach_mm must be in [1, 20] mm (printed law: 5)");
 }
 
 void set_param(ForceParams& params, std::string_view name, double value) {
@@ -534,6 +537,8 @@ void set_param(ForceParams& params, std::string_view name, double value) {
     p.skin_fmax = value;
   } else if (name == "bone_fade_mm") {
     p.bone_fade_mm = value;
+  } else if (name == "bone_reach_mm") {
+    p.bone_reach_mm = value;
   } else if (name == "bone_along_normal") {
     if (value != 0.0 && value != 1.0)
       throw UsageError("force parameter bone_along_normal must be 0 or 1");
@@ -546,7 +551,7 @@ void set_param(ForceParams& params, std::string_view name, double value) {
     throw UsageError("unknown force parameter '" + std::string(name) +
                      "' (known: c, k, bone_fmax, bone_flip, bone_enabled, grad_epsilon, "
                      "direction_epsilon, bone_mode, bone_k, model, mu, skin_fmax, bone_fade_mm, "
-                     "bone_along_normal)");
+                     "bone_reach_mm, bone_along_normal)");
   }
   validate(p);
   params = p;

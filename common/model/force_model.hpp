@@ -93,6 +93,9 @@ struct ForceParams {
   double skin_fmax = 30.0;        // palp: N, where the skin law saturates
   double bone_fade_mm = 4.0;      // palp: skin depth over which the bone force fades in (0: none)
   bool bone_along_normal = true;  // palp: bone distance along the skin normal
+  // palp: the printed bone law's 5 mm (f_b = 20 (x / 5)^-3) made this reach, so ribs 15-20 mm
+  // under the skin stand out at working depths (docs/force_model.md, "Rib contrast")
+  double bone_reach_mm = 8.0;
 };
 
 // "paper" | "palp"; UsageError otherwise.
@@ -114,13 +117,14 @@ ForceParams model_params(ModelKind kind, ToolKind tool);
 
 // Overrides one parameter by name: c, k, bone_fmax, bone_flip, bone_enabled (0/1),
 // grad_epsilon, direction_epsilon, bone_mode (0 = printed, 1 = robust), bone_k, model (0 = paper,
-// 1 = palp), mu, skin_fmax, bone_fade_mm, bone_along_normal (0/1).
+// 1 = palp), mu, skin_fmax, bone_fade_mm, bone_reach_mm,
+// bone_along_normal (0/1).
 // UsageError for unknown names or unusable values.
 void set_param(ForceParams& params, std::string_view name, double value);
 
 // UsageError outside the physical ranges: c [0, 20] mm/N, k [0, 5] N/mm, bone_fmax [0, 60] N,
 // bone_flip [0, 10], bone_k [0, 100] N/mm, epsilons (0, 0.1], mu [0, 2], skin_fmax [1, 200] N,
-// bone_fade_mm [0, 30] mm.
+// bone_fade_mm [0, 30] mm, bone_reach_mm [1, 20] mm.
 void validate(const ForceParams& params);
 
 // f_s(x) = 1.78e-2 x^3 + 3.82e-3 x^2 + 2.28e-4 x for x > 0, else 0 (mm -> N).

@@ -307,6 +307,7 @@ class Session {
     out.emplace_back("mu", num(p.mu()));
     out.emplace_back("skin_fmax", num(p.skin_fmax_n()));
     out.emplace_back("bone_fade_mm", num(p.bone_fade_mm()));
+    out.emplace_back("bone_reach_mm", num(p.bone_reach_mm()));
     out.emplace_back("bone_along_normal", p.bone_along_normal() ? "1" : "0");
     return out;
   }

@@ -39,7 +39,8 @@ constexpr const char* kRunOptions =
                             (robust), bone_k [0, 100] N/mm, grad_epsilon and
                             direction_epsilon (0, 0.1], model 0 (paper) | 1 (palp);
                             palp only: mu [0, 2], skin_fmax [1, 200] N,
-                            bone_fade_mm [0, 30] mm, bone_along_normal 0|1
+                            bone_fade_mm [0, 30] mm, bone_reach_mm [1, 20] mm,
+                            bone_along_normal 0|1
   --device-profile NAME   apply a device's limits after the model: touch, falcon,
                           phantom-premium, omega (default: none, the model's own output)
   -q, --quiet             print only errors

@@ -12,8 +12,9 @@
 //    skin normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held
 //    0.1 s; the pressing force is f_device . n over the last 50 ticks, also with the bone off.
 //    Ratio: every crest against each neighbouring space; median and smallest over all paths.
-//    Projected beside palp: the bone law reaching r = 6, 7, 8 mm instead of 5 (f_b = 20 (x / r)^-3
-//    scales palp's bone term, the pressing force less the bone-off force, by (r / 5)^3).
+//    Projected beside palp: the bone law reaching r = 5 (printed), 6 and 10 mm instead of its
+//    bone_reach_mm (f_b = 20 (x / r)^-3 scales palp's bone term, the pressing force less the
+//    bone-off force, by (r / bone_reach_mm)^3).
 // 2. Friction  flat skin (1 mm voxels, bone off), finger:1 at 1 kHz unless said: a slide at 4 mm
 //    at 100..800 mm/s (mean lateral force over the second half of 40 mm); the same at 200 and
 //    800 mm/s at 1..10 kHz; press to 1..8 mm, shift sideways by half the model's breakaway
@@ -182,9 +183,10 @@ void contrast(const std::string& scene_name, const std::string& scene,
       State st = make_state(model), st_skin = make_state(skin_model);
       const std::string series = model_name + ", " + tool_name;
       std::printf("  %-46s", series.c_str());
-      // The bone law's reach r (f_b = 20 (x / r)^-3, printed r = 5 mm) only scales palp's bone
-      // term by (r / 5)^3 below the cap (same distances, same fade): projected from the terms.
-      constexpr double kReach[] = {5.0, 6.0, 7.0, 8.0};
+      // The bone law's reach r (f_b = 20 (x / r)^-3; printed r = 5 mm, palp's bone_reach_mm)
+      // only scales palp's bone term by (r / bone_reach_mm)^3 below the cap (same distances, same
+      // fade): other reaches are projected from the terms. The first is the one measured.
+      const double kReach[] = {prm.bone_reach_mm, 5.0, 6.0, 10.0};
       std::vector<std::vector<double>> projected(std::size(kReach));
       for (double d : depths) {
         std::vector<std::vector<double>> ratios(std::size(kReach));
@@ -198,7 +200,7 @@ void contrast(const std::string& scene_name, const std::string& scene,
                      s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin.back()});
           }
           for (std::size_t r = 0; r < std::size(kReach); ++r) {
-            const double scale = std::pow(kReach[r] / 5.0, 3.0);
+            const double scale = std::pow(kReach[r] / prm.bone_reach_mm, 3.0);
             auto at = [&](std::size_t i) { return skin[i] + scale * (force[i] - skin[i]); };
             for (std::size_t i = 0; i < sites.size(); ++i) {
               if (sites[i].rib) continue;

@@ -112,7 +112,7 @@ TEST(PalpModel, BoneIsFeltAlongTheSkinNormalAndFadedIn) {
     State st = make_state(model);
     tick(model, st, press(d));
     const double fade = d >= 4.0 ? 1.0 : (d / 4.0) * (d / 4.0) * (3.0 - 2.0 * d / 4.0);
-    EXPECT_NEAR(st.f_bone[0].z, bone_force(gap - d, 40.0) * fade, 1e-3) << d;
+    EXPECT_NEAR(st.f_bone[0].z, bone_force((gap - d) * 5.0 / 8.0, 40.0) * fade, 1e-3) << d;
     EXPECT_NEAR(st.f_bone[0].x, 0.0, 1e-9) << d;
   }
   // First contact brings no step: 0.01 mm in, the bone adds under 0.001 N (paper: 2.47 N).
@@ -154,7 +154,9 @@ TEST(PalpModel, AnIntercostalSpaceIsNotFeltAsBoneBeneath) {
     for (std::int64_t j = 0; j < kDims[1]; ++j)
       for (std::int64_t i : {38, 39, 40, 41, 42, 58, 59, 60, 61, 62}) ribs.at(i, j, k) = 1;
   const auto fields = std::make_shared<const FieldSampler>(flat_skin(), signed_distance(ribs));
-  const Model model(fields, parse_tool("finger:1"), palp());
+  ForceParams printed_reach = palp();
+  printed_reach.bone_reach_mm = 5.0;  // the geometry alone, with the printed law's reach
+  const Model model(fields, parse_tool("finger:1"), printed_reach);
   const Model paper(fields, parse_tool("finger:1"));
   const double fade = 0.5;  // smoothstep(2 / 4)
   State over = make_state(model), between = make_state(model), sp = make_state(paper);
