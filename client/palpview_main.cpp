@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <mutex>
@@ -80,7 +81,8 @@ Keys: P next preset, [ ] level, - = width, V next view (anterior, left, posterio
 superior, inferior), Home camera reset, Esc quit; controller: H re-centres a device placed on
 the patient (palpd --home), arrows
 slide, W/S press, Q/E R/F Z/C rotate, 1/2/3 finger:37/twofinger:19/probe:9x3, space pause,
-backspace start pose.
+O start / stop a recording (trial-YYYYMMDD-HHMMSS in palpd's --record-dir), backspace start
+pose. The HUD shows RECORDING and PAUSED, and palpd's answer to the last command.
 )";
 
 struct Options {
@@ -298,7 +300,8 @@ int run(const Options& o) {
     else
       scene.zoom(std::pow(1.1, dy));
   };
-  bool recentre_requested = false;  // H (controller): re-centre a registered device
+  bool recentre_requested = false;       // H (controller): re-centre a registered device
+  bool record_toggle_requested = false;  // O (controller): start or stop a recording
   events.key = [&](int key, int) {
     const CameraAxes axes = scene.camera_axes();
     switch (key) {
@@ -325,6 +328,9 @@ int run(const Options& o) {
         return;
       case GLFW_KEY_H:
         if (o.controller) recentre_requested = true;  // sent from the main loop below
+        return;
+      case GLFW_KEY_O:
+        if (o.controller) record_toggle_requested = true;  // sent from the main loop below
         return;
       case GLFW_KEY_V: {
         const auto at = std::find(kViewCycle.begin(), kViewCycle.end(), scene.view());
@@ -437,6 +443,18 @@ int run(const Options& o) {
       if (recentre_requested) {
         client.recentre();
         recentre_requested = false;
+      }
+      if (record_toggle_requested) {
+        // named by the time it starts, as palp ctl does; palpd refuses a name that exists
+        if (state.link.server_recording) {
+          client.stop_recording();
+        } else {
+          const std::time_t now = std::time(nullptr);
+          char name[64];
+          std::strftime(name, sizeof name, "trial-%Y%m%d-%H%M%S", std::localtime(&now));
+          client.start_recording(name);
+        }
+        record_toggle_requested = false;
       }
     }
     const auto t1 = Clock::now();

@@ -67,6 +67,7 @@ std::string banner_text(const LatestState& state) {
       lines.push_back("DEVICE FAULT " + std::to_string(state.frame.fault) + dev);
   }
   if (link.server_paused) lines.push_back("PAUSED");
+  if (link.server_recording) lines.push_back("RECORDING");
   std::string out;
   for (const std::string& line : lines) out += (out.empty() ? "" : "\n") + line;
   return out;
@@ -105,6 +106,13 @@ std::string hud_text(const LatestState& state, const HudInputs& inputs) {
       if (link.recentres > 0) out << "   re-centred " << link.recentres << "x";
       out << "\n";
     }
+  }
+  if (inputs.controller) {
+    out << "keys  1/2/3 tool  space pause  O record  H re-centre";
+    if (link.last_request_id > 0)
+      out << "\nlast command " << (link.last_result_ok ? "ok" : "refused")
+          << (link.last_result_message.empty() ? "" : ": " + link.last_result_message);
+    out << "\n";
   }
   out << "contacts " << state.frame.n_contact << "/" << state.frame.contact_points;
   out << "   deformation " << (inputs.deformation ? "on" : "off") << "\n";

@@ -473,4 +473,16 @@ std::uint64_t StreamClient::recentre() {
   return impl_->queue_command(m, "");
 }
 
+std::uint64_t StreamClient::start_recording(const std::string& name) {
+  v1::ClientMessage m;
+  m.mutable_command()->mutable_start_recording()->set_name(name);
+  return impl_->queue_command(m, "");
+}
+
+std::uint64_t StreamClient::stop_recording() {
+  v1::ClientMessage m;
+  m.mutable_command()->mutable_stop_recording();
+  return impl_->queue_command(m, "");
+}
+
 }  // namespace palp::view

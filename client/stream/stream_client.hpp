@@ -190,6 +190,9 @@ class StreamClient {
   std::uint64_t set_paused(bool paused);
   // Re-centre a registered device (palpd moves its home at the next tick out of contact).
   std::uint64_t recentre();
+  // Start a recording named `name` in palpd's --record-dir (refused when it exists), or stop it.
+  std::uint64_t start_recording(const std::string& name);
+  std::uint64_t stop_recording();
 
   const StreamOptions& options() const { return options_; }
 

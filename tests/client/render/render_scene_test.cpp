@@ -118,6 +118,23 @@ TEST(Hud, BannerShowsStallsDropsAndDeviceProblems) {
   EXPECT_EQ(banner_text(s), "LOADING scene 50%");
 }
 
+TEST(Hud, ControllerSeesItsKeysRecordingAndTheLastAnswer) {
+  LatestState s = live_state();
+  HudInputs in;
+  in.controller = true;
+  EXPECT_NE(hud_text(s, in).find("O record"), std::string::npos);
+  EXPECT_EQ(hud_text(s, in).find("last command"), std::string::npos);  // none yet
+  s.link.last_request_id = 3;
+  s.link.last_result_ok = false;
+  s.link.last_result_message = "trial-1 already exists";
+  EXPECT_NE(hud_text(s, in).find("last command refused: trial-1 already exists"),
+            std::string::npos);
+  in.controller = false;
+  EXPECT_EQ(hud_text(s, in).find("O record"), std::string::npos);
+  s.link.server_recording = true;
+  EXPECT_NE(banner_text(s).find("RECORDING"), std::string::npos);
+}
+
 TEST(Hud, TextShowsRatesAndForceRendering) {
   LatestState s = live_state();
   s.frame.n_contact = 7;

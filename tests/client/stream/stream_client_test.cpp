@@ -490,6 +490,17 @@ TEST(StreamClient, ControllerDrivesTheRemoteDeviceAndGetsCommandResults) {
   EXPECT_TRUE(s.link.server_paused);
   s = result(client.set_paused(false));
   EXPECT_TRUE(s.link.last_result_ok);
+
+  // Recording commands reach palpd (a path-like name is refused there, writing nothing; stop
+  // without a recording is refused too): palpview's O key sends these.
+  s = result(client.start_recording("../escape"));
+  EXPECT_FALSE(s.link.last_result_ok);
+  EXPECT_NE(s.link.last_result_message.find("plain file name"), std::string::npos)
+      << s.link.last_result_message;
+  s = result(client.stop_recording());
+  EXPECT_FALSE(s.link.last_result_ok);
+  EXPECT_NE(s.link.last_result_message.find("not recording"), std::string::npos)
+      << s.link.last_result_message;
 }
 
 // ------------------------------------------------------------------------------ fake servers
