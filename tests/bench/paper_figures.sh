@@ -2,29 +2,35 @@
 # Reproduces the paper's results (Fig. 4a, 4b, 5a-like, 5b-like; docs/paper_results.md): runs
 # `palp traj` / `palp run` on the cube and torso phantoms and on the real CT in ../shared/data
 # (when present), times the tick against the number of contact points, writes the CSVs into
-# docs/figures/data, renders the charts into docs/figures with palpchart (under xvfb-run when
-# there is no display) and prints the numbers the docs quote (also in docs/figures/data/summary.txt).
+# FIGURES/data, renders the charts into FIGURES with palpchart (under xvfb-run when there is no
+# display) and prints the numbers the docs quote (also in FIGURES/data/summary.txt).
 #
-#   tests/bench/paper_figures.sh [BUILD_DIR] [--charts-only]
+#   tests/bench/paper_figures.sh [BUILD_DIR] [--charts-only] [--build] [--docs]
 #
+# FIGURES is outside the repository unless told: $PALP_FIGURES_DIR, default
+# ${TMPDIR:-/tmp}/palp-paper-figures/figures; --docs writes docs/figures, where the docs show them.
 # BUILD_DIR (or $PALP_BUILD_DIR, default build) must hold server/palp, client/palpchart and
-# tests/bench/{tick_vs_contacts,bone_along_path} (built here when missing, -j$PALP_JOBS, default 1).
-# Environment: PALP_FIGURES_DIR (default docs/figures), PALP_CT (default ../shared/data/
+# tests/bench/{tick_vs_contacts,bone_along_path}; what is missing is named, and built only with
+# --build (-j$PALP_JOBS, default 1).
+# Environment: PALP_FIGURES_DIR, PALP_CT (default ../shared/data/
 # ct_abdomen_3mm.nii.gz), PALP_PAPER_TICKS (timed ticks per tool, default 20000). Scratch files go
 # to a work directory under /tmp (kept, printed). Takes about a minute on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build=${PALP_BUILD_DIR:-build}
 charts_only=0
+build_missing=0
+figures=${PALP_FIGURES_DIR:-${TMPDIR:-/tmp}/palp-paper-figures/figures}
 for arg in "$@"; do
   case $arg in
     --charts-only) charts_only=1 ;;
-    -h | --help) sed -n '2,15p' "$0"; exit 0 ;;
-    -*) echo "usage: $0 [BUILD_DIR] [--charts-only]" >&2; exit 2 ;;
+    --build) build_missing=1 ;;
+    --docs) figures=docs/figures ;;
+    -h | --help) sed -n '2,18p' "$0"; exit 0 ;;
+    -*) echo "usage: $0 [BUILD_DIR] [--charts-only] [--build] [--docs]" >&2; exit 2 ;;
     *) build=$arg ;;
   esac
 done
-figures=${PALP_FIGURES_DIR:-docs/figures}
 data=$figures/data
 ct=${PALP_CT:-../shared/data/ct_abdomen_3mm.nii.gz}
 ticks=${PALP_PAPER_TICKS:-20000}
@@ -123,6 +129,12 @@ targets=()
 [[ -x $build/tests/bench/tick_vs_contacts ]] || targets+=(tick_vs_contacts)
 [[ -x $build/tests/bench/bone_along_path ]] || targets+=(bone_along_path)
 if ((${#targets[@]})); then
+  if [[ $build_missing == 0 ]]; then
+    echo "$0: not built in $build: ${targets[*]}; build them with" >&2
+    echo "  cmake --build $build --target ${targets[*]}" >&2
+    echo "or run this script with --build" >&2
+    exit 2
+  fi
   if [[ ! -f "$build/build.ninja" && ! -f "$build/Makefile" ]]; then
     cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
   fi

@@ -1,31 +1,37 @@
 #!/usr/bin/env bash
 # Runs the force-model studies (speed against accuracy, pop-through, passivity, stability of the
-# default force chain, the palp model beside the paper's), writes their CSVs and logs into $PALP_BUILD_DIR/studies and renders the
-# charts into docs/figures with palpchart (under xvfb-run when there is no display). Prints the
-# figures it measured. Naming studies (speed_accuracy, pop_through, passivity, stability,
-# force_model) runs
+# default force chain, the palp model beside the paper's), writes their CSVs and logs and renders
+# the charts with palpchart (under xvfb-run when there is no display). Prints the figures it
+# measured. Naming studies (speed_accuracy, pop_through, passivity, stability, force_model) runs
 # and charts only those.
 #
-#   tests/bench/run_studies.sh [--quick] [--charts-only] [STUDY...]
+#   tests/bench/run_studies.sh [--quick] [--charts-only] [--build] [--docs] [STUDY...]
 #
-# Environment: PALP_BUILD_DIR (default build), PALP_FIGURES_DIR (default docs/figures),
-# PALP_STUDIES_DIR (CSVs and logs, default $PALP_BUILD_DIR/studies), PALP_JOBS (build
-# parallelism, default 1). The studies measure; nothing here gates CI.
+# Writes outside the repository unless told: CSVs and logs into $PALP_STUDIES_DIR (default
+# ${TMPDIR:-/tmp}/palp-studies), charts into $PALP_FIGURES_DIR (default that directory's figures/);
+# --docs puts the charts into docs/figures, where the docs show them. Never builds on its own: a
+# missing study binary is named with the command that builds it; --build builds what is missing
+# (in $PALP_BUILD_DIR, default build, -j$PALP_JOBS, default 1). The studies measure; nothing here
+# gates CI.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build=${PALP_BUILD_DIR:-build}
-figures=${PALP_FIGURES_DIR:-docs/figures}
-data=${PALP_STUDIES_DIR:-$build/studies}
+data=${PALP_STUDIES_DIR:-${TMPDIR:-/tmp}/palp-studies}
+figures=${PALP_FIGURES_DIR:-$data/figures}
 jobs=${PALP_JOBS:-1}
 quick=()
 charts_only=0
+build_missing=0
 studies=()
 for arg in "$@"; do
   case $arg in
     --quick) quick=(--quick) ;;
     --charts-only) charts_only=1 ;;
+    --build) build_missing=1 ;;
+    --docs) figures=docs/figures ;;
+    -h | --help) sed -n '2,16p' "$0"; exit 0 ;;
     speed_accuracy|pop_through|passivity|stability|force_model) studies+=("$arg") ;;
-    *) echo "usage: $0 [--quick] [--charts-only] [speed_accuracy|pop_through|passivity|stability|force_model]..." >&2; exit 2 ;;
+    *) echo "usage: $0 [--quick] [--charts-only] [--build] [--docs] [speed_accuracy|pop_through|passivity|stability|force_model]..." >&2; exit 2 ;;
   esac
 done
 [[ ${#studies[@]} -gt 0 ]] || studies=(speed_accuracy pop_through passivity stability force_model)
@@ -146,12 +152,28 @@ charts() {
   ls -1 "$figures"/*.png
 }
 
+# What is missing is built only when asked (--build); otherwise named.
+missing=()
 if [[ $charts_only == 0 ]]; then
+  for study in "${studies[@]}"; do
+    [[ -x $build/tests/bench/study_$study ]] || missing+=("study_$study")
+  done
+fi
+[[ -x $chart ]] || missing+=(palpchart)
+if ((${#missing[@]})); then
+  if [[ $build_missing == 0 ]]; then
+    echo "$0: not built in $build: ${missing[*]}; build them with" >&2
+    echo "  cmake --build $build --target ${missing[*]}" >&2
+    echo "or run this script with --build" >&2
+    exit 2
+  fi
   if [[ ! -f "$build/build.ninja" && ! -f "$build/Makefile" ]]; then
     cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
   fi
-  cmake --build "$build" --parallel "$jobs" \
-    --target "${studies[@]/#/study_}"
+  cmake --build "$build" --parallel "$jobs" --target "${missing[@]}"
+fi
+
+if [[ $charts_only == 0 ]]; then
   mkdir -p "$data"
   for study in "${studies[@]}"; do
     echo "== study_$study ${quick[*]}"
@@ -161,9 +183,6 @@ if [[ $charts_only == 0 ]]; then
   done
 fi
 
-if [[ ! -x "$chart" ]]; then
-  cmake --build "$build" --parallel "$jobs" --target palpchart 2>/dev/null || true
-fi
 if [[ ! -x "$chart" ]]; then
   echo "palpchart was not built (VTK missing?): CSVs are in $data, no charts" >&2
   exit 1
