@@ -54,16 +54,6 @@ int raw_connect(int port, int receive_buffer = 0) {
   return fd;
 }
 
-bool send_all(int fd, const std::string& bytes) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::send(fd, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
-    if (n <= 0) return false;
-    done += static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
 // Reads until the peer closes or `seconds` pass; true when it closed.
 bool drained_until_closed(int fd, double seconds) {
   const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);

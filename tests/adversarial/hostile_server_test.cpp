@@ -25,16 +25,6 @@ constexpr std::size_t kViewerBound = std::size_t{256} << 20;  // its baseline is
 constexpr double kTimeoutSeconds = 3.0;
 constexpr double kGraceSeconds = 10.0;
 
-bool send_all(int fd, const std::string& bytes) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::send(fd, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
-    if (n <= 0) return false;
-    done += static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
 std::string welcome() {
   v1::ServerMessage m;
   v1::Welcome* w = m.mutable_welcome();
