@@ -6,6 +6,7 @@
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "prep/output_guard.hpp"
 #include "prep/prep.hpp"
 
 namespace palp::cli {
@@ -31,6 +32,8 @@ formats: check a header from elsewhere before prepping it); for a directory, eve
 in it and in its immediate subdirectories. Only regular files are read (a device, FIFO or socket
 is refused), and nothing is allocated for a header's sizes before the bytes behind them exist
 (docs/security.md).
+Failed or interrupted (Ctrl-C, SIGTERM), prep removes its temporary files, and when it created
+DIR, what it wrote there and DIR itself.
 Options:
   --out DIR               output directory (required; created if missing)
   --no-cache              recompute even if DIR already holds the result for this input
@@ -110,6 +113,7 @@ int cmd_prep(const Arguments& argv) {
       std::fflush(stderr);
     };
   }
+  install_prep_interrupt_cleanup();  // Ctrl-C leaves no *.partial files and no new empty DIR
   const PrepResult r = run_prep(input, *out, params, progress);
   if (quiet) return 0;
   const Index3& d = r.grid.dims;
