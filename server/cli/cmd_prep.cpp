@@ -6,7 +6,6 @@
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
-#include "prep/output_guard.hpp"
 #include "prep/prep.hpp"
 
 namespace palp::cli {
@@ -113,7 +112,6 @@ int cmd_prep(const Arguments& argv) {
       std::fflush(stderr);
     };
   }
-  install_prep_interrupt_cleanup();  // Ctrl-C leaves no *.partial files and no new empty DIR
   const PrepResult r = run_prep(input, *out, params, progress);
   if (quiet) return 0;
   const Index3& d = r.grid.dims;

@@ -1,6 +1,6 @@
 // palp prep interrupted: SIGINT or SIGTERM while a map is being written leaves no temporary file
 // and, when prep created the output directory, no directory; the process still ends by the
-// signal (a shell sees 130 / 143).
+// signal (a shell sees 130 / 143). The same for a scene that palp bench preps into its cache.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "support/cli_test_util.hpp"
 
@@ -34,47 +35,72 @@ class PrepInterrupt : public ::testing::TestWithParam<int> {
 
 bool holds_partial_file(const fs::path& dir) {
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+  for (const auto& entry : fs::recursive_directory_iterator(dir, ec)) {
     if (entry.path().filename().string().find(".partial") != std::string::npos) return true;
   }
   return false;
 }
 
-TEST_P(PrepInterrupt, MidWriteLeavesNoTemporaryFileAndNoDirectory) {
-  const fs::path ct = dir_ / "torso.nii.gz";
-  const auto made = testing::run_palp_cli(
-      "phantom torso --out " + ct.string() + " --dims 256x256x200", dir_ / "cache");
-  ASSERT_EQ(made.exit_code, 0) << made.output;
-  const fs::path out = dir_ / "new" / "prep";
+// Runs palp ARGS, interrupts it with `signal` once a temporary file appears under `watch`, and
+// returns what is left under `watch` (empty when it does not exist).
+std::string interrupt_mid_write(const std::vector<std::string>& args, int signal,
+                                const fs::path& watch) {
   const pid_t child = fork();
-  ASSERT_GE(child, 0);
+  if (child < 0) return "fork failed";
   if (child == 0) {
     const int null = open("/dev/null", O_WRONLY);
     dup2(null, 1);
     dup2(null, 2);
-    execl(PALP_CLI_PATH, PALP_CLI_PATH, "prep", ct.c_str(), "--out", out.c_str(), "--threads", "1",
-          static_cast<char*>(nullptr));
+    std::vector<char*> argv{const_cast<char*>(PALP_CLI_PATH)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(PALP_CLI_PATH, argv.data());
     _exit(127);
   }
-  // Wait for the first temporary file, then interrupt while it is being written.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   bool seen = false;
   int status = 0;
   while (!seen && std::chrono::steady_clock::now() < deadline) {
-    if (waitpid(child, &status, WNOHANG) == child) break;
-    seen = holds_partial_file(out);
+    if (waitpid(child, &status, WNOHANG) == child) return "exited before a temporary file";
+    seen = holds_partial_file(watch);
     if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
-  ASSERT_TRUE(seen) << "prep finished or stalled before writing a temporary file";
-  ASSERT_EQ(kill(child, GetParam()), 0);
-  ASSERT_EQ(waitpid(child, &status, 0), child);
-  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == GetParam()) << status;
+  kill(child, seen ? signal : SIGKILL);
+  waitpid(child, &status, 0);
+  if (!seen) return "no temporary file within 120 s";
+  if (!WIFSIGNALED(status) || WTERMSIG(status) != signal) return "did not end by the signal";
   std::string left;
   std::error_code ec;
-  for (const auto& entry : fs::recursive_directory_iterator(dir_ / "new", ec)) {
-    left.append(" ").append(entry.path().filename().string());
-  }
-  EXPECT_FALSE(fs::exists(dir_ / "new")) << "prep left behind:" << left;
+  for (const auto& entry : fs::recursive_directory_iterator(watch, ec))
+    left.append(" ").append(entry.path().lexically_relative(watch).string());
+  return left;
+}
+
+fs::path write_torso(const fs::path& dir) {
+  const fs::path ct = dir / "torso.nii.gz";
+  const auto made = testing::run_palp_cli(
+      "phantom torso --out " + ct.string() + " --dims 256x256x200", dir / "cache");
+  EXPECT_EQ(made.exit_code, 0) << made.output;
+  return ct;
+}
+
+TEST_P(PrepInterrupt, MidWriteLeavesNoTemporaryFileAndNoDirectory) {
+  const fs::path ct = write_torso(dir_);
+  const fs::path out = dir_ / "new" / "prep";
+  EXPECT_EQ(interrupt_mid_write({"prep", ct.string(), "--out", out.string(), "--threads", "1"},
+                                GetParam(), dir_ / "new"),
+            "");
+  EXPECT_FALSE(fs::exists(dir_ / "new"));
+}
+
+TEST_P(PrepInterrupt, SceneCachePrepLeavesNothingInTheCache) {
+  const fs::path ct = write_torso(dir_);
+  const fs::path cache = dir_ / "scenes";
+  fs::create_directories(cache);
+  EXPECT_EQ(interrupt_mid_write({"bench", "--scene", ct.string(), "--tool", "finger:1", "--ticks",
+                                 "1", "--cache-dir", cache.string()},
+                                GetParam(), cache),
+            "");
 }
 
 INSTANTIATE_TEST_SUITE_P(Signals, PrepInterrupt, ::testing::Values(SIGINT, SIGTERM));
