@@ -1,5 +1,6 @@
 // The docs and the tools' --help agree (issue 24): every option a command's --help lists is
-// mentioned in docs/ or README.md; every option a docs code block gives a command is one its
+// mentioned in docs/ or README.md; every option a docs code block or inline code span gives a
+// command is one its
 // --help lists; and every command line in a docs code block parses (run with --help appended,
 // exit 0: an unknown option or a malformed value exits 2; palp-lab (deploy/lab.sh) with
 // --dry-run and the example lab file).
@@ -8,6 +9,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -73,14 +75,19 @@ std::vector<std::string> command_prefix(const std::string& command) {
   return {};
 }
 
-// The options of the option lines of a --help text: lines indented a little that start with a
-// dash; the option column ends where two spaces start the description.
+// The options of a --help text: those of its usage line, and of its option lines (indented a
+// little, starting with a dash; the option column ends where two spaces start the description).
 std::set<std::string> help_options(const std::string& help) {
   std::set<std::string> options;
   std::istringstream lines(help);
   const std::regex option_line("^ {1,6}-");
   const std::regex option("--[a-z][a-z0-9-]*");
   for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("usage:", 0) == 0) {
+      for (std::sregex_iterator it(line.begin(), line.end(), option), end; it != end; ++it)
+        options.insert(it->str());
+      continue;
+    }
     if (!std::regex_search(line, option_line)) continue;
     const auto first = line.find_first_not_of(' ');
     const auto gap = line.find("  ", first);
@@ -116,12 +123,50 @@ struct DocCommand {
   std::string where;  // file:line
   std::string command;
   std::vector<std::string> args;  // after the command (and the palp subcommand)
+  bool inline_span = false;       // a fragment in prose: its options are checked, it is not run
 };
 
-// The command lines of the docs' fenced code blocks that run one of the commands, `\`
-// continuations joined, a leading `$ `, `xvfb-run -a`, `/usr/bin/time -v` and the binary's
-// directory dropped, cut at a comment or a shell operator; [ ] of a synopsis dropped. Blocks
-// tagged other than sh (```text: diagrams) are not commands.
+// A command line as a doc writes it -> the command and its arguments (none: not one of the
+// commands): a leading `$ `, `xvfb-run -a`, `/usr/bin/time -v` and the binary's directory
+// dropped, cut at a comment or a shell operator, [ ] ( ) and " dropped.
+std::optional<DocCommand> parse_command(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) {
+    if (w == "#" || w == "|" || w == "&&" || w == ";" || w == "&" || w[0] == '>' || w[0] == '<' ||
+        w.rfind("2>", 0) == 0)
+      break;
+    std::string clean;
+    for (char c : w)
+      if (c != '[' && c != ']' && c != '(' && c != ')' && c != '"') clean += c;
+    if (!clean.empty()) words.push_back(clean);
+  }
+  if (!words.empty() && words[0] == "$") words.erase(words.begin());
+  if (words.size() >= 2 && words[0] == "xvfb-run" && words[1] == "-a")
+    words.erase(words.begin(), words.begin() + 2);
+  if (words.size() >= 2 && words[0] == "/usr/bin/time" && words[1] == "-v")
+    words.erase(words.begin(), words.begin() + 2);
+  if (words.empty()) return std::nullopt;
+  if (words[0] == "deploy/lab.sh") words[0] = "palp-lab";
+  std::string program = fs::path(words[0]).filename().string();
+  if (words[0].find('/') != std::string::npos && words[0].rfind("build/", 0) != 0)
+    return std::nullopt;
+  std::string command = program;
+  std::size_t args_from = 1;
+  if (program == "palp") {
+    if (words.size() < 2) return std::nullopt;
+    command += " " + words[1];
+    args_from = 2;
+  }
+  if (!commands().contains(command)) return std::nullopt;
+  DocCommand doc{"", command, {}, false};
+  doc.args.assign(words.begin() + static_cast<std::ptrdiff_t>(args_from), words.end());
+  return doc;
+}
+
+// The command lines of the docs' fenced code blocks that run one of the commands (`\`
+// continuations joined; blocks tagged other than sh, ```text for diagrams, are not commands),
+// and the inline code spans that start with one (`palp prep --not-hu-ok`: inline).
 std::vector<DocCommand> doc_commands() {
   std::vector<DocCommand> found;
   for (const auto& file : doc_files()) {
@@ -136,7 +181,18 @@ std::vector<DocCommand> doc_commands() {
         commands_block = tag.empty() || tag == "sh" || tag == "bash" || tag == "console";
         continue;
       }
-      if (!in_code || !commands_block) continue;
+      if (!in_code) {
+        const std::regex span("`([^`]+)`");
+        for (std::sregex_iterator it(line.begin(), line.end(), span), end; it != end; ++it) {
+          if (auto doc = parse_command((*it)[1].str())) {
+            doc->where = file.filename().string() + ":" + std::to_string(number);
+            doc->inline_span = true;
+            found.push_back(*doc);
+          }
+        }
+        continue;
+      }
+      if (!commands_block) continue;
       const int start = number;
       while (!line.empty() && line.back() == '\\') {
         std::string next;
@@ -145,37 +201,10 @@ std::vector<DocCommand> doc_commands() {
         line.pop_back();
         line += " " + next;
       }
-      std::istringstream in(line);
-      std::vector<std::string> words;
-      for (std::string w; in >> w;) {
-        if (w == "#" || w == "|" || w == "&&" || w == ";" || w == "&" || w[0] == '>' ||
-            w[0] == '<' || w.rfind("2>", 0) == 0)
-          break;
-        std::string clean;
-        for (char c : w)
-          if (c != '[' && c != ']' && c != '(' && c != ')' && c != '"') clean += c;
-        if (!clean.empty()) words.push_back(clean);
+      if (auto doc = parse_command(line)) {
+        doc->where = file.filename().string() + ":" + std::to_string(start);
+        found.push_back(*doc);
       }
-      if (!words.empty() && words[0] == "$") words.erase(words.begin());
-      if (words.size() >= 2 && words[0] == "xvfb-run" && words[1] == "-a")
-        words.erase(words.begin(), words.begin() + 2);
-      if (words.size() >= 2 && words[0] == "/usr/bin/time" && words[1] == "-v")
-        words.erase(words.begin(), words.begin() + 2);
-      if (words.empty()) continue;
-      if (words[0] == "deploy/lab.sh") words[0] = "palp-lab";
-      std::string program = fs::path(words[0]).filename().string();
-      if (words[0].find('/') != std::string::npos && words[0].rfind("build/", 0) != 0) continue;
-      std::string command = program;
-      std::size_t args_from = 1;
-      if (program == "palp") {
-        if (words.size() < 2) continue;
-        command += " " + words[1];
-        args_from = 2;
-      }
-      if (!commands().contains(command)) continue;
-      DocCommand doc{file.filename().string() + ":" + std::to_string(start), command, {}};
-      doc.args.assign(words.begin() + static_cast<std::ptrdiff_t>(args_from), words.end());
-      found.push_back(doc);
     }
   }
   return found;
@@ -211,6 +240,7 @@ TEST(DocsHelp, EveryDocumentedOptionExists) {
 
 TEST(DocsHelp, EveryDocumentedCommandLineParses) {
   for (const auto& doc : doc_commands()) {
+    if (doc.inline_span) continue;
     const fs::path& binary = commands().at(doc.command);
     if (!fs::exists(binary)) continue;
     auto args = command_prefix(doc.command);
