@@ -1,9 +1,8 @@
 // The docs and the tools' --help agree (issue 24): every option a command's --help lists is
 // mentioned in docs/ or README.md; every option a docs code block or inline code span gives a
-// command is one its
-// --help lists; and every command line in a docs code block parses (run with --help appended,
-// exit 0: an unknown option or a malformed value exits 2; palp-lab (deploy/lab.sh) with
-// --dry-run and the example lab file).
+// command is one its --help lists; and every command line in a docs code block parses (run with
+// --help appended, exit 0: an unknown option or a malformed value exits 2; palp-lab
+// (deploy/lab.sh) with --dry-run and the example lab file).
 #include <gtest/gtest.h>
 
 #include <algorithm>
