@@ -441,6 +441,13 @@ trap 'stop_all; exit 130' INT
 trap 'stop_all; exit 143' TERM
 trap 'stop_all' EXIT
 
+# A server already answering on the port is not the one about to be started: the probe below
+# could not tell them apart, and the new palpd would only find its port taken.
+if [[ $server_start == true ]] && "${probe_command[@]}" >/dev/null 2>&1; then
+  echo "$program: error: a server already answers at $(address_from localhost) before lab.sh" \
+    "started palpd (another palpd?): stop it, or set another [server] port in $lab_file" >&2
+  exit 1
+fi
 if [[ $server_start == true ]]; then
   start palpd "$server_host" no_env "${palpd_command[@]}"
 fi
@@ -460,6 +467,14 @@ until probe_output=$("${probe_command[@]}" 2>&1); do
   fi
   sleep 1
 done
+# The palpd lab.sh started must still run: one that found its port taken has exited, and what
+# answered is another server.
+if [[ $server_start == true ]] && ! alive palpd; then
+  echo "$program: error: a server answers at $(address_from localhost) but it is not the palpd" \
+    "lab.sh started, which exited; its log:" >&2
+  tail -n 20 "${log_of[palpd]}" >&2
+  exit 1
+fi
 echo "$program: palpd answers: ${probe_output##*$'\n'}"
 
 for ((n = 1; n <= observer_count; n++)); do

@@ -18,6 +18,7 @@
 
 #include "base/errors.hpp"
 #include "cli/commands.hpp"
+#include "prep/output_guard.hpp"
 
 namespace palp {
 namespace {
@@ -70,6 +71,9 @@ int dispatch(int argc, char** argv) {
 }  // namespace palp
 
 int main(int argc, char** argv) {
+  // Ctrl-C or SIGTERM during a prep (palp prep, or a scene prepped into the cache by run, traj
+  // or bench) leaves no temporary file and no directory it created; otherwise they act as ever.
+  palp::install_prep_interrupt_cleanup();
   try {
     return palp::dispatch(argc, argv);
   } catch (const palp::UsageError& e) {

@@ -25,6 +25,7 @@
 #include "io/ct_io.hpp"
 #include "io/gzip.hpp"
 #include "prep/ct_check.hpp"
+#include "prep/output_guard.hpp"
 #include "prep/reorient.hpp"
 #include "prep/subvoxel_distance.hpp"
 
@@ -201,6 +202,10 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   result.input = input;
   result.out_dir = out_dir;
   const fs::path dir(out_dir);
+  // A failed or interrupted run leaves no temporary file, and no output at all in a directory
+  // it created (which is removed).
+  PrepOutputGuard guard(
+      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kPrepJsonFile});
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
@@ -217,6 +222,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     result.stats.bone_voxels = cached["voxels"]["bone"].get<std::uint64_t>();
     result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     result.peak_rss_bytes = peak_rss_bytes();
+    guard.commit();
     return result;
   }
   // Remove a previous prep.json first: until the new one is written the directory is not a
@@ -350,6 +356,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   }
   fs::rename(json_path.string() + ".partial", json_path, ec);
   if (ec) throw Error(json_path.string() + ": cannot be written: " + ec.message());
+  guard.commit();
   return result;
 }
 

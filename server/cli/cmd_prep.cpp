@@ -31,6 +31,8 @@ formats: check a header from elsewhere before prepping it); for a directory, eve
 in it and in its immediate subdirectories. Only regular files are read (a device, FIFO or socket
 is refused), and nothing is allocated for a header's sizes before the bytes behind them exist
 (docs/security.md).
+Failed or interrupted (Ctrl-C, SIGTERM), prep removes its temporary files, and when it created
+DIR, what it wrote there and DIR itself.
 Options:
   --out DIR               output directory (required; created if missing)
   --no-cache              recompute even if DIR already holds the result for this input

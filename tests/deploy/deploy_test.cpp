@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <toml++/toml.h>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -23,6 +24,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "support/cli_test_util.hpp"
@@ -385,6 +387,38 @@ TEST(Deploy, LabFailsWhenPalpdDoesNotComeUp) {
                                    quoted(dir / "logs") + " " + quoted(dir / "lab.toml"));
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("palpd exited before answering"), std::string::npos) << run.output;
+}
+
+TEST(Deploy, LabRefusesWhenAnotherServerHoldsThePort) {
+  if (!fs::exists(kPalpd)) GTEST_SKIP() << kPalpd << " not built (ninja palpd)";
+  const fs::path dir = test_dir("labforeign");
+  const fs::path log = dir / "foreign.log";
+  const CliOutcome started = run_shell(
+      quoted(kPalpd) + " --scene phantom:cube --device sim --no-realtime --port 0 --duration 120" +
+      " --cache-dir " + quoted(dir / "cache") + " >" + quoted(log) + " 2>&1 </dev/null & echo $!");
+  ASSERT_EQ(started.exit_code, 0) << started.output;
+  const std::string pid = started.output.substr(0, started.output.find('\n'));
+  const std::regex listening("listening on 127\\.0\\.0\\.1:([0-9]+)");
+  std::smatch match;
+  std::string text;
+  for (int i = 0; i < 600 && !std::regex_search(text, match, listening); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    text = read_text(log);
+  }
+  ASSERT_TRUE(std::regex_search(text, match, listening)) << text;
+  write_file(dir / "lab.toml", "[lab]\npalp = \"" + std::string(PALP_CLI_PATH) +
+                                   "\"\n[server]\npalpd = \"" + kPalpd.string() +
+                                   "\"\nport = " + match[1].str() +
+                                   "\noptions = [\"--scene\", \"phantom:cube\", \"--device\", "
+                                   "\"sim\", \"--no-realtime\"]\n");
+  const CliOutcome run = run_shell(quoted(kSourceDir / "deploy/lab.sh") + " --wait 30 --log-dir " +
+                                   quoted(dir / "logs") + " " + quoted(dir / "lab.toml"));
+  run_shell("kill -TERM " + pid);
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("a server already answers at 127.0.0.1:" + match[1].str()),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(run.output.find("palpd answers"), std::string::npos) << run.output;
 }
 
 // ------------------------------------------------------------------------------ install-lab.sh

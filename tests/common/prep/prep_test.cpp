@@ -219,6 +219,29 @@ TEST_F(PrepTest, BadInputThrowsAndLeavesNoPrepJson) {
   EXPECT_THROW(run_prep((dir_ / "missing.nii").string(), (dir_ / "out").string(), {}), InputError);
 }
 
+TEST_F(PrepTest, RefusedInputLeavesNoOutputDirectory) {
+  const fs::path out = dir_ / "new" / "out";
+  EXPECT_THROW(run_prep((dir_ / "missing.nii").string(), out.string(), {}), InputError);
+  EXPECT_FALSE(fs::exists(dir_ / "new"));
+  EXPECT_THROW(run_prep("phantom:nonexistent", out.string(), {}), UsageError);
+  EXPECT_FALSE(fs::exists(dir_ / "new"));
+}
+
+TEST_F(PrepTest, FailedWriteLeavesNoTemporaryFile) {
+  // d_surf.nii.gz is a directory holding a file: the rename onto it fails after the partial
+  // file was written.
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out / kSurfaceDistanceFile);
+  std::ofstream(out / kSurfaceDistanceFile / "keep") << "x";
+  PrepParams params;
+  params.distance.threads = 2;
+  EXPECT_THROW(run_prep("phantom:cube", out.string(), params), Error);
+  for (const auto& entry : fs::directory_iterator(out)) {
+    EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
+  }
+  EXPECT_TRUE(fs::exists(out / kSurfaceDistanceFile / "keep"));
+}
+
 TEST_F(PrepTest, NotACtIsRefusedUnlessAllowed) {
   CtVolume ct;
   write_small_ct(dir_, &ct);
