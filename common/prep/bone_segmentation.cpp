@@ -262,13 +262,23 @@ void fill_enclosed_cavities(double max_ml, Mask& bone) {
 
 // Surface refinement: a bone voxel with a face neighbour outside the bone stays bone only if its
 // HU reaches halfway between its brightest bone neighbour and the mean of its outside neighbours —
-// the half-maximum edge, where partial volume puts the true surface.
+// the half-maximum edge, where partial volume puts the true surface. Only where the bone is thick
+// enough to hold an interior voxel (one with no face neighbour outside) next to it: in a rib or
+// cortex one or two voxels across every voxel is partial volume, no neighbour gives the bone's
+// full HU, and the rule would erode the structure instead of placing its edge.
 void refine_surface(const CtVolume& ct, Mask& bone) {
   const Grid& g = bone.grid;
   Mask trim(g, 0, "bone surface");
+  Mask surface(g, 0, "bone surface voxels");
+  for_each_nonzero(bone, [&](std::size_t n) {
+    if (any_face_neighbour(g, n, [&](std::int64_t m) { return !bone.data[m]; }))
+      surface.data[n] = 1;
+  });
+  const auto interior = [&](std::int64_t m) { return bone.data[m] && !surface.data[m]; };
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
   for_each_nonzero(bone, [&](std::size_t n) {
+    if (!any_face_neighbour(g, n, interior)) return;  // thin: no voxel of full HU beside it
     const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
     const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
     const std::int64_t j = jk % ny, k = jk / ny;
