@@ -15,9 +15,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Emptied on first use: a leftover of an earlier process with the same pid would make the
+// recorder's exclusive create refuse (recordings are never written over).
 fs::path temp_dir() {
-  const fs::path dir = fs::temp_directory_path() / ("palp-recording-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  static const fs::path dir = [] {
+    const fs::path d = fs::temp_directory_path() / ("palp-recording-" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+  }();
   return dir;
 }
 
