@@ -375,7 +375,8 @@ double within(const cli::Args& args, const std::string& key, double fallback, do
   return v;
 }
 
-int run_configured(const cli::Arguments& argv_in, const std::optional<std::string>& config);
+// palpd with its arguments: the config file's first, then the command line's (which win).
+int run_configured(cli::Arguments argv);
 
 int run(const cli::Arguments& argv_in) {
   // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
@@ -390,17 +391,14 @@ int run(const cli::Arguments& argv_in) {
   if (config) from_config = cli::config_arguments(*config, kFlags, kValued, &lines);
   try {
     from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
-    return run_configured(from_config, config);
+    return run_configured(std::move(from_config));
   } catch (const UsageError& e) {
     if (!config) throw;
     throw UsageError(cli::config_error(e.what(), *config, lines, argv_in));
   }
 }
 
-int run_configured(const cli::Arguments& argv_in, const std::optional<std::string>& config) {
-  (void)config;
-  cli::Arguments argv;
-  argv.insert(argv.end(), argv_in.begin(), argv_in.end());
+int run_configured(cli::Arguments argv) {
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;
   valued.insert(valued.end(), kValued.begin(), kValued.end());

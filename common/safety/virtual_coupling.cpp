@@ -87,7 +87,6 @@ CouplingOutput couple(CouplingState& s, const CouplingGains& gains, const Vec3d&
   out.force = kc * (s.tool - device_position) + bc * (delta * (1.0 / t) - v_d);
   // the free step's force is 0 but for rounding, which must not read as a (pulling) force
   if (free_step || dot(out.force, s.out_direction) < 0.0) out.force = Vec3d{};
-  out.stiffness_N_per_mm = k_env;
   if (!is_finite(out.force) || !is_finite(s.tool)) {
     reset_coupling(s);
     out.force = Vec3d{};

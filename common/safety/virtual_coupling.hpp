@@ -60,8 +60,7 @@ struct CouplingState {
 Vec3d coupled_tool(const CouplingState& state, const Vec3d& device_position);
 
 struct CouplingOutput {
-  Vec3d force{};                    // what the device is to be written (N, device frame)
-  double stiffness_N_per_mm = 0.0;  // K used this tick
+  Vec3d force{};  // what the device is to be written (N, device frame)
 };
 
 // One tick: `model_force` (N) and `model_stiffness` (N/mm) the model's at coupled_tool(),

@@ -13,7 +13,6 @@ class ClientLog {
   static constexpr int kBurst = 20;
   // Writes "palpd: LINE" unless this second's budget is spent (then counts it).
   void say(const std::string& line);
-  std::uint64_t held() const { return held_; }
 
  private:
   std::int64_t window_ns_ = -1'000'000'000'000;

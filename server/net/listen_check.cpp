@@ -1,7 +1,8 @@
-// Whether palpd could listen on an address: see server.hpp (check_listen_address).
+// Binding palpd's listening socket: see listen_check.hpp; and the early check of server.hpp.
+#include "net/listen_check.hpp"
+
 #include <string>
 
-#include "asio.hpp"
 #include "base/errors.hpp"
 #include "net/server.hpp"
 
@@ -9,17 +10,14 @@ namespace palp::net {
 
 using asio::ip::tcp;
 
-void check_listen_address(const std::string& bind, std::uint16_t port) {
+void bind_acceptor(tcp::acceptor& acceptor, const std::string& bind, std::uint16_t port) {
   asio::error_code ec;
   const asio::ip::address address = asio::ip::make_address(bind, ec);
   if (ec) throw UsageError("--bind: '" + bind + "' is not an IP address");
-  if (port == 0) return;
-  asio::io_context io;
-  tcp::acceptor probe(io);
   const tcp::endpoint endpoint(address, port);
-  probe.open(endpoint.protocol(), ec);
-  if (!ec) probe.set_option(tcp::acceptor::reuse_address(true), ec);
-  if (!ec) probe.bind(endpoint, ec);
+  acceptor.open(endpoint.protocol(), ec);
+  if (!ec) acceptor.set_option(tcp::acceptor::reuse_address(true), ec);
+  if (!ec) acceptor.bind(endpoint, ec);
   if (ec) {
     throw ResourceError("cannot listen on " + bind + ":" + std::to_string(port) + ": " +
                         ec.message() +
@@ -29,6 +27,12 @@ void check_listen_address(const std::string& bind, std::uint16_t port) {
                                "--port 0 takes any free port)"
                              : ""));
   }
+}
+
+void check_listen_address(const std::string& bind, std::uint16_t port) {
+  asio::io_context io;
+  tcp::acceptor probe(io);
+  bind_acceptor(probe, bind, port);  // port 0 takes any free one; closed again on return
 }
 
 }  // namespace palp::net

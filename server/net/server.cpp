@@ -15,6 +15,7 @@
 #include "base/errors.hpp"
 #include "net/client_log.hpp"
 #include "net/client_queue.hpp"
+#include "net/listen_check.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
 #include "net/token_guard.hpp"
@@ -57,14 +58,9 @@ class Server::Impl {
         acceptor_(io_),
         poll_timer_(io_),
         house_timer_(io_) {
+    bind_acceptor(acceptor_, config_.bind, config_.port);
     asio::error_code ec;
-    const asio::ip::address address = asio::ip::make_address(config_.bind, ec);
-    if (ec) throw UsageError("--bind: '" + config_.bind + "' is not an IP address");
-    const tcp::endpoint endpoint(address, config_.port);
-    acceptor_.open(endpoint.protocol(), ec);
-    if (!ec) acceptor_.set_option(tcp::acceptor::reuse_address(true), ec);
-    if (!ec) acceptor_.bind(endpoint, ec);
-    if (!ec) acceptor_.listen(asio::socket_base::max_listen_connections, ec);
+    acceptor_.listen(asio::socket_base::max_listen_connections, ec);
     if (ec)
       throw ResourceError("cannot listen on " + config_.bind + ":" + std::to_string(config_.port) +
                           ": " + ec.message());
