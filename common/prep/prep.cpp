@@ -36,8 +36,9 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // Bump when the algorithms change what prep writes, so old caches are not reused.
-// 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces
-constexpr int kPrepAlgorithmVersion = 3;
+// 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
+// bone too thin for an interior voxel
+constexpr int kPrepAlgorithmVersion = 4;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
