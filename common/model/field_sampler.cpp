@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "base/errors.hpp"
+#include "model/bone_beneath.hpp"
 
 namespace palp {
 namespace {
@@ -211,6 +212,27 @@ FieldSample FieldSampler::sample_surf(const Vec3d& x) const {
 FieldSample FieldSampler::sample_bone(const Vec3d& x) const {
   if (!has_bone_) return FieldSample{};
   return dispatch([&](const auto& access) { return access.bone_at(x); });
+}
+
+double FieldSampler::bone_value(const Vec3d& x) const {
+  if (!has_bone_) return kOutsideValue;
+  return dispatch([&](const auto& access) { return access.bone_value_at(x); });
+}
+
+void FieldSampler::prepare_bone_beneath() const {
+  if (!has_bone_) return;
+  std::call_once(beneath_->once, [this] {
+    beneath_->map = bone_beneath_map(*this);
+    beneath_->ready.store(beneath_->map.data(), std::memory_order_release);
+  });
+}
+
+bool FieldSampler::has_bone_beneath() const {
+  return bone_beneath_data() != nullptr;
+}
+
+const float* FieldSampler::bone_beneath_data() const {
+  return beneath_ ? beneath_->ready.load(std::memory_order_acquire) : nullptr;
 }
 
 }  // namespace palp

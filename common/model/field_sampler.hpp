@@ -26,8 +26,11 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -209,11 +212,15 @@ struct FieldAccess {
   const sampling::Geometry* geometry = nullptr;
   sampling::MapView<T> surf, bone;
   bool has_bone = false;
+  // The bone-beneath map (model/bone_beneath.hpp) once prepared, else value == nullptr.
+  sampling::MapView<float> beneath;
 
   FieldSample surf_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, surf, x); }
   FieldSample bone_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, bone, x); }
   // D_bone(x) without its gradient (8 fetches), kOutsideValue outside the box.
   double bone_value_at(const Vec3d& x) const { return sampling::value(*geometry, bone, x); }
+  // Distance along the skin's inward normal to bone (mm), kOutsideValue outside the box.
+  double beneath_at(const Vec3d& x) const { return sampling::value(*geometry, beneath, x); }
 };
 
 // The distance maps in the chosen storage. Built once (may take seconds and memory); constant
@@ -253,6 +260,16 @@ class FieldSampler {
   // Convenience (tests, tools): one sample, dispatched per call.
   FieldSample sample_surf(const Vec3d& x) const;
   FieldSample sample_bone(const Vec3d& x) const;
+  // D_bone(x) alone (kOutsideValue outside the box or without a bone map).
+  double bone_value(const Vec3d& x) const;
+
+  // palp's bone-beneath map (model/bone_beneath.hpp): traced on the first call (a fraction of a
+  // second for a CT, 4 B/voxel more), at once afterwards; safe from several threads. Ticks see
+  // it (FieldAccess::beneath) only after it is prepared. No-op without a bone map.
+  void prepare_bone_beneath() const;
+  bool has_bone_beneath() const;
+  // The prepared map, nullptr before (tests, tools).
+  const float* bone_beneath_data() const;
 
  private:
   void build(DistanceMap& surf, DistanceMap* bone);
@@ -296,6 +313,7 @@ class FieldSampler {
     a.surf = view<T>(false);
     a.bone = view<T>(true);
     a.has_bone = has_bone_;
+    a.beneath.value = bone_beneath_data();
     return a;
   }
 
@@ -309,6 +327,13 @@ class FieldSampler {
   std::vector<float> interleaved_;                 // Interleaved records
   std::size_t record_ = 0;                         // floats per Interleaved record
   std::vector<float> surf_grad_, bone_grad_;       // PrecomputedField with Float32 / Int16
+  // Built lazily, once (a unique_ptr so the sampler stays movable).
+  struct Beneath {
+    std::once_flag once;
+    std::vector<float> map;
+    std::atomic<const float*> ready{nullptr};
+  };
+  std::unique_ptr<Beneath> beneath_ = std::make_unique<Beneath>();
 };
 
 }  // namespace palp
