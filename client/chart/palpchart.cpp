@@ -290,6 +290,7 @@ chart::ChartSpec build(const Options& o, const chart::Table& table, const std::s
       }
       sort_by_x(m);
     }
+    if (m.x.size() == 1) m.style = chart::Style::Points;  // a line needs two points
     if (!m.x.empty()) spec.series.push_back(std::move(m));
   }
   return spec;
