@@ -16,14 +16,15 @@ std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneat
   std::vector<float> out(g.voxel_count(), 0.0f);
   const double outside_margin = 2.0 * std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const Vec3d origin = fields.origin();
 
   parallel_for_chunks(nz, 1, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
       for (std::int64_t j = 0; j < ny; ++j)
         for (std::int64_t i = 0; i < nx; ++i) {
-          const Vec3d c{static_cast<double>(i) * g.spacing[0],
-                        static_cast<double>(j) * g.spacing[1],
-                        static_cast<double>(k) * g.spacing[2]};
+          const Vec3d c = origin + Vec3d{static_cast<double>(i) * g.spacing[0],
+                                         static_cast<double>(j) * g.spacing[1],
+                                         static_cast<double>(k) * g.spacing[2]};
           const double near = -fields.bone_value(c);  // distance to the nearest bone
           double beneath = std::max(0.0, near);
           const FieldSample skin = fields.sample_surf(c);

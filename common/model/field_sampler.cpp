@@ -102,6 +102,15 @@ FieldSampler::FieldSampler(DistanceMap surf, DistanceMap bone, SamplerConfig con
   build(surf, &bone);
 }
 
+FieldSampler::FieldSampler(DistanceMap surf, DistanceMap bone, SamplerConfig config,
+                           const Vec3d& origin)
+    : config_(config) {
+  build(surf, &bone);
+  geometry_.origin[0] = origin.x;
+  geometry_.origin[1] = origin.y;
+  geometry_.origin[2] = origin.z;
+}
+
 FieldSampler::FieldSampler(DistanceMap surf, SamplerConfig config) : config_(config) {
   build(surf, nullptr);
 }
@@ -225,6 +234,18 @@ void FieldSampler::prepare_bone_beneath() const {
     beneath_->map = bone_beneath_map(*this);
     beneath_->ready.store(beneath_->map.data(), std::memory_order_release);
   });
+}
+
+void FieldSampler::adopt_bone_beneath(std::vector<float> map) const {
+  if (map.size() != grid_.voxel_count())
+    throw UsageError("bone-beneath map: its size does not match the maps");
+  bool adopted = false;
+  std::call_once(beneath_->once, [&] {
+    beneath_->map = std::move(map);
+    beneath_->ready.store(beneath_->map.data(), std::memory_order_release);
+    adopted = true;
+  });
+  if (!adopted) throw UsageError("bone-beneath map: already prepared");
 }
 
 bool FieldSampler::has_bone_beneath() const {
