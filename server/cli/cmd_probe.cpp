@@ -19,6 +19,7 @@
 #include "asio.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
+#include "cli/check_rate.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "loop/haptic_loop.hpp"
@@ -29,6 +30,7 @@ namespace palp::cli {
 namespace {
 
 constexpr const char* kProbeUsage = R"(usage: palp probe HOST:PORT [options]
+       palp probe --check-rate HZ [--duration S] [options]
 
 A headless palpd observer: prints frames/s, the delivered fraction, latency percentiles and the
 server's stats, and exits non-zero (1) if the stream stalls or the server refuses the client.
@@ -286,13 +288,16 @@ std::string json_number(double v) {
 }  // namespace
 
 int cmd_probe(const Arguments& argv) {
+  if (wants_check_rate(argv) && std::find(argv.begin(), argv.end(), "--help") == argv.end() &&
+      std::find(argv.begin(), argv.end(), "-h") == argv.end())
+    return cmd_check_rate(argv);
   const Args args(argv, {"help", "quiet", "contacts", "same-host"},
                   {"duration", "rate", "stall", "volume-max-dim", "role", "token", "name"});
   if (args.has("help")) {
-    std::cout << kProbeUsage;
+    std::cout << kProbeUsage << kCheckRateHelp;
     return 0;
   }
-  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT");
+  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT (or --check-rate HZ)");
   const std::string target = args.positional()[0];
   const auto colon = target.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == target.size())

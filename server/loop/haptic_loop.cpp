@@ -92,7 +92,7 @@ void HapticLoop::start() {
     throw ResourceError(std::string("cannot start the haptic thread: ") + e.what());
   }
   realtime_report_ = realtime_setup();
-  // the thread calibrates its wake-up once set up (at most 0.25 s); its outcome goes in the report
+  // the thread calibrates its wake-up once set up (at most 0.1 s); its outcome goes in the report
   setup_.store(1, std::memory_order_release);
   for (int i = 0; i < 2000 && setup_.load(std::memory_order_acquire) != 2; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(1));

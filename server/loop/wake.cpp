@@ -168,7 +168,7 @@ std::int64_t Waker::calibrate() noexcept {
   if (config_.mode != WakeMode::Hybrid || !adaptive_) return spin_window_ns();
   fine_.fill(0);
   fine_count_ = 0;
-  const std::int64_t budget_ns = 250'000'000;
+  const std::int64_t budget_ns = 100'000'000;
   const std::int64_t sleep_ns = std::min<std::int64_t>(period_ns_, 1'000'000);
   std::int64_t spent = 0;
   for (std::uint32_t i = 0; i < config_.calibrate_sleeps && spent < budget_ns; ++i) {

@@ -50,7 +50,7 @@ struct WakeConfig {
   double margin_us = 20.0;               // added to the latency quantile
   double quantile = 0.99;                // of the wake-up latency the window covers
   std::uint32_t adapt_every = 1024;      // wake-ups per adaptation
-  std::uint32_t calibrate_sleeps = 200;  // sleeps of calibrate() (at most 0.25 s of them)
+  std::uint32_t calibrate_sleeps = 100;  // sleeps of calibrate() (at most 0.1 s of them)
 };
 
 // The time source of the wake-up logic: the real one, or one injected by tests.
@@ -87,7 +87,7 @@ class Waker {
 
   // Returns once `deadline_ns` has come (or at once when it has passed), with the time then.
   std::int64_t wait_until(std::int64_t deadline_ns) noexcept;
-  // Hybrid and adaptive: measures calibrate_sleeps sleeps (a period each, at most 1 ms; 0.25 s
+  // Hybrid and adaptive: measures calibrate_sleeps sleeps (a period each, at most 1 ms; 0.1 s
   // in all at most) and sets the first window from them. Returns the window.
   std::int64_t calibrate() noexcept;
 
