@@ -450,6 +450,21 @@ int cmd_probe(const Arguments& argv) {
           std::printf(" more:%llu", static_cast<unsigned long long>(s.jitter_counts(b)));
       }
       std::printf("\n");
+      if (!s.wake_mode().empty()) {
+        std::printf(
+            "  wake-up   %s, spin window %.0f us; the loop thread uses %.1f %% of a CPU, "
+            "%.1f %% spinning; kernel wake-up latency max %.1f us:\n           ",
+            s.wake_mode().c_str(), s.spin_window_us(), 100 * s.loop_cpu_fraction(),
+            100 * s.spin_cpu_fraction(), s.wake_latency_max_us());
+        for (int b = 0; b < s.wake_latency_counts_size(); ++b) {
+          if (b < s.jitter_bucket_upper_us_size())
+            std::printf(" <%gus:%llu", s.jitter_bucket_upper_us(b),
+                        static_cast<unsigned long long>(s.wake_latency_counts(b)));
+          else
+            std::printf(" more:%llu", static_cast<unsigned long long>(s.wake_latency_counts(b)));
+        }
+        std::printf("\n");
+      }
     }
   }
   std::printf(
@@ -457,7 +472,7 @@ int cmd_probe(const Arguments& argv) {
       "\"gap_frames\":%llu,\"max_gap\":%llu,\"max_interval_ms\":%s,\"intervals_over_50ms\":%llu,"
       "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
       "\"server_rate_hz\":%s,\"overruns\":%llu,\"faults\":%llu,\"jitter_max_us\":%s,"
-      "\"clients\":%u}\n",
+      "\"clients\":%u,\"wake\":\"%s\",\"spin_window_us\":%s,\"spin_cpu_fraction\":%s}\n",
       r.failure.empty() && r.frames > 0 ? "true" : "false",
       static_cast<unsigned long long>(r.frames), json_number(fps).c_str(),
       json_number(delivered).c_str(), static_cast<unsigned long long>(r.gaps),
@@ -468,7 +483,10 @@ int cmd_probe(const Arguments& argv) {
       json_number(lmax).c_str(), json_number(r.have_stats ? r.stats.rate_hz() : NAN).c_str(),
       static_cast<unsigned long long>(r.stats.overruns()),
       static_cast<unsigned long long>(r.stats.faults()),
-      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients());
+      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients(),
+      r.stats.wake_mode().c_str(),
+      json_number(r.have_stats ? r.stats.spin_window_us() : NAN).c_str(),
+      json_number(r.have_stats ? r.stats.spin_cpu_fraction() : NAN).c_str());
   if (!r.failure.empty()) {
     std::fprintf(stderr, "palp: error: probe: %s\n", r.failure.c_str());
     return 1;

@@ -1,5 +1,7 @@
 #include "cli/palpd_stats.hpp"
 
+#include <sys/resource.h>
+
 #include <cmath>
 #include <fstream>
 
@@ -77,7 +79,10 @@ void write_stats_json(const std::string& path, const rt::LoopStats& s, const net
         json_number(static_cast<double>(s.wake.calibrated_window_ns) * 1e-3));
   field("adaptations", u(s.wake.adaptations));
   field("spin_cpu_fraction", json_number(of_running(static_cast<double>(s.wake.spin_ns))));
-  field("loop_cpu_fraction", json_number(of_running(static_cast<double>(s.loop_cpu_ns))));
+  field("loop_cpu_fraction",
+        json_number(s.loop_cpu_wall_ns > 0 ? static_cast<double>(s.loop_cpu_ns) /
+                                                 static_cast<double>(s.loop_cpu_wall_ns)
+                                           : 0.0));
   field("latency_p50_us_at_most", json_number(histogram_bound_us(s.wake.latency, 0.5)));
   field("latency_p99_us_at_most", json_number(histogram_bound_us(s.wake.latency, 0.99)));
   field("latency_p999_us_at_most", json_number(histogram_bound_us(s.wake.latency, 0.999)));
@@ -86,6 +91,12 @@ void write_stats_json(const std::string& path, const rt::LoopStats& s, const net
   for (std::size_t b = 0; b < s.wake.latency.size(); ++b)
     out.append(b ? "," : "").append(u(s.wake.latency[b]));
   out.append("]}");
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const auto seconds = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+  };
+  field("process_cpu_s", json_number(seconds(usage.ru_utime) + seconds(usage.ru_stime)));
   field("net_signals", u(s.net_signals));
   field("net_wakeups", u(c.net_wakeups));
   field("net_published", u(s.net_published));

@@ -166,12 +166,18 @@ void HapticLoop::run() {
     step(due.deadline_ns, due.now_ns);
     if (const std::uint64_t missed = ticker.finish(monotonic_ns()))
       overruns_.fetch_add(missed, std::memory_order_relaxed);
-    if (++since_cpu == 1024) {
+    if (++since_cpu == 256) {
       since_cpu = 0;
-      loop_cpu_ns_.store(thread_cpu_ns() - cpu0, std::memory_order_relaxed);
+      sample_cpu(cpu0);
     }
   }
+  sample_cpu(cpu0);
+}
+
+void HapticLoop::sample_cpu(std::int64_t cpu0) noexcept {
   loop_cpu_ns_.store(thread_cpu_ns() - cpu0, std::memory_order_relaxed);
+  loop_cpu_wall_ns_.store(monotonic_ns() - started_ns_.load(std::memory_order_relaxed),
+                          std::memory_order_relaxed);
 }
 
 void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
@@ -420,6 +426,7 @@ LoopStats HapticLoop::stats() const {
   const std::int64_t started = started_ns_.load(std::memory_order_relaxed);
   s.running_ns = started > 0 ? monotonic_ns() - started : 0;
   s.loop_cpu_ns = loop_cpu_ns_.load(std::memory_order_relaxed);
+  s.loop_cpu_wall_ns = loop_cpu_wall_ns_.load(std::memory_order_relaxed);
   s.net_signals = net_signal_.writes();
   return s;
 }

@@ -116,10 +116,11 @@ struct LoopStats {
   double passivity_dissipated_mJ = 0.0;             // energy it took out, in all
   std::uint64_t net_published = 0, net_dropped = 0;
   std::uint64_t record_published = 0, record_dropped = 0;
-  WakeStats wake;                 // wake-up latency histogram, spin window and time spun
-  std::int64_t running_ns = 0;    // since the thread's first tick (0: not started)
-  std::int64_t loop_cpu_ns = 0;   // CPU time of the loop thread (updated every 1024 ticks)
-  std::uint64_t net_signals = 0;  // eventfd writes toward the network thread
+  WakeStats wake;                     // wake-up latency histogram, spin window and time spun
+  std::int64_t running_ns = 0;        // since the thread's first tick (0: not started)
+  std::int64_t loop_cpu_ns = 0;       // CPU time of the loop thread (sampled every 256 ticks)
+  std::int64_t loop_cpu_wall_ns = 0;  // the time running that loop_cpu_ns covers
+  std::uint64_t net_signals = 0;      // eventfd writes toward the network thread
 };
 
 class HapticLoop {
@@ -179,6 +180,7 @@ class HapticLoop {
     State state;
   };
   void run();
+  void sample_cpu(std::int64_t cpu0) noexcept;  // the loop thread's CPU time since cpu0
   std::string realtime_setup();  // pinning and scheduling of the started thread; its report
   void collect_retired();
   void publish(const TickRecord& record, const State* state, std::uint32_t points,
@@ -228,7 +230,7 @@ class HapticLoop {
   WakeSignal net_signal_;
   Waker waker_;
   std::atomic<int> setup_{0};  // 1: start() set the thread up; 2: the thread calibrated
-  std::atomic<std::int64_t> started_ns_{0}, loop_cpu_ns_{0};
+  std::atomic<std::int64_t> started_ns_{0}, loop_cpu_ns_{0}, loop_cpu_wall_ns_{0};
 
   mutable std::mutex model_mutex_;  // guards requested_ (never taken by the loop)
   std::shared_ptr<const Model> requested_;

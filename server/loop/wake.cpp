@@ -84,6 +84,7 @@ Waker::Waker(WakeConfig config, std::int64_t period_ns, WakeClock& clock)
   max_window_ns_ =
       static_cast<std::int64_t>(config.spin_max_fraction * static_cast<double>(period_ns));
   max_window_ns_ = std::clamp<std::int64_t>(max_window_ns_, 0, period_ns);
+  max_window_ns_ = std::min(max_window_ns_, us_to_ns(config.spin_max_us));
   if (config.mode == WakeMode::Hybrid) {
     adaptive_ = config.spin_us == 0.0;
     const std::int64_t start =

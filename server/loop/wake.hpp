@@ -7,9 +7,10 @@
 //                           clock up to it (bounded by the deadline itself). The window follows
 //                           the measured wake-up latency: calibrated at start, then every
 //                           `adapt_every` wake-ups set to its `quantile` plus a margin, between
-//                           `spin_min_us` and `spin_max_fraction` of the period (a loop that
-//                           spins too much of the period would meet the kernel's real-time
-//                           throttling, and leaves no CPU to the rest of the machine).
+//                           `spin_min_us` and the smaller of `spin_max_us` and
+//                           `spin_max_fraction` of the period (a loop that spins too much of
+//                           the period would meet the kernel's real-time throttling, and
+//                           leaves no CPU to the rest of the machine).
 //                   Every wake-up's latency (woke - asked) goes into a histogram; the time spent
 //                   spinning is summed (the CPU cost of the precision).
 //   DeadlineTicker  tick n is due at first + n * period; when a tick ends past the next deadline
@@ -46,7 +47,9 @@ struct WakeConfig {
   WakeMode mode = WakeMode::Hybrid;
   double spin_us = 0.0;                  // hybrid: a fixed window (at most the period); 0: adaptive
   double spin_min_us = 10.0;             // adaptive window bounds
-  double spin_max_fraction = 0.5;        // of the period
+  double spin_max_fraction = 0.5;        // of the period,
+  double spin_max_us = 200.0;            // and at most this: later wake-ups are stalls a spin
+                                         // cannot hide, only pay for
   double margin_us = 20.0;               // added to the latency quantile
   double quantile = 0.99;                // of the wake-up latency the window covers
   std::uint32_t adapt_every = 1024;      // wake-ups per adaptation

@@ -167,7 +167,9 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_spin_window_us(static_cast<double>(ls.wake.spin_window_ns) * 1e-3);
   const double running = static_cast<double>(ls.running_ns);
   st->set_spin_cpu_fraction(running > 0 ? static_cast<double>(ls.wake.spin_ns) / running : 0.0);
-  st->set_loop_cpu_fraction(running > 0 ? static_cast<double>(ls.loop_cpu_ns) / running : 0.0);
+  st->set_loop_cpu_fraction(ls.loop_cpu_wall_ns > 0 ? static_cast<double>(ls.loop_cpu_ns) /
+                                                          static_cast<double>(ls.loop_cpu_wall_ns)
+                                                    : 0.0);
 }
 
 }  // namespace palp::net

@@ -129,11 +129,14 @@ TEST(Wake, AFixedWindowIsAtMostThePeriod) {
 
 TEST(Wake, TheAdaptiveWindowIsTheLatencyQuantilePlusAMarginWithinBounds) {
   FakeClock clock;
-  WakeConfig c;  // adaptive: quantile 0.99, margin 20 us, at least 10 us, at most half the period
+  // adaptive: quantile 0.99, margin 20 us, at least 10 us, at most half the period and 200 us
+  WakeConfig c;
   Waker w(c, kMs, clock);
   EXPECT_EQ(w.window_for(0), 20 * kUs);
   EXPECT_EQ(w.window_for(44 * kUs), 64 * kUs);
-  EXPECT_EQ(w.window_for(10 * kMs), kMs / 2);
+  EXPECT_EQ(w.window_for(10 * kMs), 200 * kUs);
+  Waker fast(c, 250 * kUs, clock);  // 4 kHz: half the period is the smaller bound
+  EXPECT_EQ(fast.window_for(10 * kMs), 125 * kUs);
   c.margin_us = 0;
   Waker v(c, kMs, clock);
   EXPECT_EQ(v.window_for(0), 10 * kUs);  // the minimum
@@ -148,27 +151,28 @@ TEST(Wake, TheWindowGrowsAtOnceAndShrinksGently) {
   c.adapt_every = 100;
   Waker w(c, kMs, clock);
   std::int64_t deadline = 0;
-  const auto run = [&](std::int64_t latency, int n) {
+  const auto run = [&](Waker& waker, std::int64_t latency, int n) {
     clock.latency = latency;
     for (int i = 0; i < n; ++i) {
       deadline = std::max(deadline + kMs, clock.t + 2 * kMs);
-      w.wait_until(deadline);
+      waker.wait_until(deadline);
     }
   };
-  run(40 * kUs, 100);  // 40 us is in the 4 us bin [40, 44): the quantile reads 44 us
+  run(w, 40 * kUs, 100);  // 40 us is in the 4 us bin [40, 44): the quantile reads 44 us
   EXPECT_EQ(w.spin_window_ns(), 64 * kUs);
-  run(4 * kUs, 100);  // quantile 8 us -> 28 us wanted; a quarter of the way there
+  run(w, 4 * kUs, 100);  // quantile 8 us -> 28 us wanted; a quarter of the way there
   EXPECT_EQ(w.spin_window_ns(), 64 * kUs - (64 - 28) * kUs / 4);
-  run(700 * kUs, 100);  // at once, up to the cap (half the period)
-  EXPECT_EQ(w.spin_window_ns(), kMs / 2);
+  run(w, 700 * kUs, 100);  // at once, up to the cap (200 us)
+  EXPECT_EQ(w.spin_window_ns(), 200 * kUs);
   EXPECT_EQ(w.stats().adaptations, 3u);
-  // one slow wake-up in a hundred is beyond the 0.99 quantile: the window stays where it was
+  // one slow wake-up in a hundred is beyond the 0.99 quantile: the window follows the other 99
+  // (8 us: bin [8, 12) -> 12 us + 20 us), not the 900 us one
   Waker v(c, kMs, clock);
   clock.script.assign(99, 8 * kUs);
   clock.script.push_back(900 * kUs);
-  const std::int64_t before = v.spin_window_ns();
-  run(8 * kUs, 100);
-  EXPECT_EQ(v.spin_window_ns(), before);
+  run(v, 8 * kUs, 100);
+  EXPECT_EQ(v.spin_window_ns(), 32 * kUs);
+  EXPECT_EQ(v.stats().latency_max_ns, 900 * kUs);
 }
 
 TEST(Wake, CalibrationMeasuresSleepsAndSetsTheFirstWindow) {
