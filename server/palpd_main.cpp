@@ -317,7 +317,8 @@ int run(const cli::Arguments& argv_in) {
   const auto config = cli::config_path(argv_in);
   std::map<std::string, int> lines;
   cli::Arguments from_config;
-  if (config) from_config = cli::config_arguments(*config, kFlags, cli::with_rt_options(kValued), &lines);
+  if (config)
+    from_config = cli::config_arguments(*config, kFlags, cli::with_rt_options(kValued), &lines);
   try {
     from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
     return run_configured(std::move(from_config));
@@ -577,7 +578,7 @@ int run_configured(cli::Arguments argv) {
   const net::ServerCounters c = server.counters();
   if (!stats_json.empty())
     cli::write_stats_json(stats_json, s, c, loop_config.rate_hz,
-                     static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9);
+                          static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9);
   if (!quiet) {
     std::printf(
         "palpd: %llu ticks, %llu overruns, %llu faults, max lateness %.1f us, "

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <string>
 #include <thread>
 
@@ -74,6 +75,12 @@ bool wants_check_rate(const Arguments& argv) {
 int cmd_check_rate(const Arguments& argv) {
   const Args args(argv, {"help", "quiet", "no-realtime"},
                   {"check-rate", "duration", "wake", "spin-us", "rt-cpu", "work-us", "max-miss"});
+  if (args.has("help")) {
+    std::cout << "usage: palp probe --check-rate HZ [--duration S] [options]\n\n"
+              << "A timing test of this machine, no server needed (--duration: default 5 s).\n"
+              << kCheckRateHelp;
+    return 0;
+  }
   if (!args.positional().empty())
     throw UsageError("probe --check-rate takes no HOST:PORT (it times this machine)");
   const double rate = args.number("check-rate", 0);

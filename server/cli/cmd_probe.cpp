@@ -288,9 +288,7 @@ std::string json_number(double v) {
 }  // namespace
 
 int cmd_probe(const Arguments& argv) {
-  if (wants_check_rate(argv) && std::find(argv.begin(), argv.end(), "--help") == argv.end() &&
-      std::find(argv.begin(), argv.end(), "-h") == argv.end())
-    return cmd_check_rate(argv);
+  if (wants_check_rate(argv)) return cmd_check_rate(argv);
   const Args args(argv, {"help", "quiet", "contacts", "same-host"},
                   {"duration", "rate", "stall", "volume-max-dim", "role", "token", "name"});
   if (args.has("help")) {

@@ -56,8 +56,8 @@ class Server::Impl {
         loop_(loop),
         control_(control),
         acceptor_(io_),
-        pump_(io_, loop.net_ring(), loop.net_signal(), config_.net_wake,
-              config_.poll_interval_s, [this] { frames_published(); }),
+        pump_(io_, loop.net_ring(), loop.net_signal(), config_.net_wake, config_.poll_interval_s,
+              [this] { frames_published(); }),
         house_timer_(io_) {
     bind_acceptor(acceptor_, config_.bind, config_.port);
     asio::error_code ec;

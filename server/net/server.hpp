@@ -92,7 +92,7 @@ struct ServerCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t frames_dropped = 0;  // stale frames dropped from client queues
   std::uint64_t timeouts = 0;
-  std::uint64_t overflows = 0;  // clients dropped for exceeding max_queue_bytes
+  std::uint64_t overflows = 0;    // clients dropped for exceeding max_queue_bytes
   std::uint64_t net_wakeups = 0;  // times the io thread took frames from the loop (frame_pump)
 };
 

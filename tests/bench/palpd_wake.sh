@@ -11,6 +11,8 @@
 #   before         --wake sleep --net-wake poll   (the plain sleep and the 500 us poll)
 #   after          palpd's defaults               (hybrid wake-up, eventfd hand-off)
 #   pinned         after + --rt-cpu 1 --net-cpu 0 (the loop keeps CPU 1 to itself)
+# and, to tell the two changes apart, hybrid-poll (--net-wake poll), sleep-event (--wake sleep)
+# and every (--net-wake event-every: the eventfd written every tick, not coalesced).
 # A row per run goes to OUT/results.jsonl (with the 1-minute load average at its start); the
 # table (median and worst of the repeats per case and variant: misses, lateness, wake-up
 # latency, latency p99, palpd's CPU and the loop thread's, of it spinning) to stdout and
@@ -24,7 +26,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build=${1:-${PALP_BUILD_DIR:-build}}
-case $build in -h | --help) sed -n '2,27p' "$0"; exit 0 ;; esac
+case $build in -h | --help) sed -n '2,29p' "$0"; exit 0 ;; esac
 repeats=${PALP_WAKE_REPEATS:-3}
 seconds=${PALP_WAKE_SECONDS:-10}
 cases=${PALP_WAKE_CASES:-4k_4obs 10k_4obs 1k_16obs_hog 1k_16obs}
@@ -70,6 +72,9 @@ variant_args() {
     before) echo "--wake sleep --net-wake poll" ;;
     after) echo "" ;;
     pinned) echo "--rt-cpu 1 --net-cpu 0" ;;
+    hybrid-poll) echo "--net-wake poll" ;;
+    sleep-event) echo "--wake sleep" ;;
+    every) echo "--net-wake event-every" ;;
     *) echo "unknown variant $1" >&2; return 2 ;;
   esac
 }
