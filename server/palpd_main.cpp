@@ -27,6 +27,8 @@
 #include "cli/config_file.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/model_setup.hpp"
+#include "cli/palpd_stats.hpp"
+#include "cli/rt_options.hpp"
 #include "devices/device.hpp"
 #include "io/gzip.hpp"
 #include "loop/haptic_loop.hpp"
@@ -113,7 +115,7 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   --hello-timeout S       close clients that send no Hello within S s (5; 0.1..600)
   --write-timeout S       close clients whose socket accepts nothing for S s (5; 0 = never;
                           at most 600)
-  --poll-us US            how often the network thread takes new frames from the loop
+  --poll-us US            --net-wake poll: how often the network thread takes new frames
                           (500; 50..100000)
   --record FILE           record every tick into FILE (binary, see server/rt/recording.hpp) and a
                           CSV beside it: FILE with its extension replaced by .csv (rec/s1.palprec
@@ -283,79 +285,6 @@ class App final : public net::ControlTarget {
   std::unique_ptr<rt::Recorder> recorder_;
 };
 
-// The smallest histogram bucket bound (us) at or below which a fraction q of the ticks woke up;
-// NaN when the quantile falls in the open last bucket or there are no ticks.
-double lateness_bound_us(const rt::LoopStats& s, double q) {
-  std::uint64_t total = 0;
-  for (const std::uint64_t n : s.jitter) total += n;
-  if (total == 0) return NAN;
-  const double wanted = q * static_cast<double>(total);
-  std::uint64_t seen = 0;
-  for (std::size_t b = 0; b < rt::kJitterBucketUpperUs.size(); ++b) {
-    seen += s.jitter[b];
-    if (static_cast<double>(seen) >= wanted) return rt::kJitterBucketUpperUs[b];
-  }
-  return NAN;
-}
-
-std::string json_number(double v) {
-  return std::isfinite(v) ? number_text(v) : "null";
-}
-
-// --stats-json: one object with the loop's and the server's final counters.
-void write_stats_json(const std::string& path, const rt::LoopStats& s, const net::ServerCounters& c,
-                      double rate_hz, double elapsed_s) {
-  const auto u = [](std::uint64_t v) { return std::to_string(v); };
-  const std::uint64_t deadlines = s.ticks + s.overruns;
-  // Appended piece by piece: one long operator+ chain trips GCC 12's -Wrestrict false positive.
-  std::string out;
-  const auto field = [&out](const char* key, const std::string& value, const char* sep = ",") {
-    out.append(sep).append("\"").append(key).append("\":").append(value);
-  };
-  field("rate_hz", json_number(rate_hz), "{");
-  field("elapsed_s", json_number(elapsed_s));
-  field("ticks", u(s.ticks));
-  field("overruns", u(s.overruns));
-  field("deadline_miss_fraction",
-        json_number(deadlines ? static_cast<double>(s.overruns) / static_cast<double>(deadlines)
-                              : 0.0));
-  field("faults", u(s.faults));
-  field("device_absent_events", u(s.absent_events));
-  field("realtime", s.realtime ? "true" : "false");
-  field("lateness_us", "");
-  field("p50_at_most", json_number(lateness_bound_us(s, 0.5)), "{");
-  field("p99_at_most", json_number(lateness_bound_us(s, 0.99)));
-  field("p999_at_most", json_number(lateness_bound_us(s, 0.999)));
-  field("max", json_number(static_cast<double>(s.max_late_ns) * 1e-3));
-  field("bucket_upper_us", "[");
-  for (std::size_t b = 0; b < rt::kJitterBucketUpperUs.size(); ++b)
-    out.append(b ? "," : "").append(json_number(rt::kJitterBucketUpperUs[b]));
-  out.append("]");
-  field("counts", "[");
-  for (std::size_t b = 0; b < s.jitter.size(); ++b) out.append(b ? "," : "").append(u(s.jitter[b]));
-  out.append("]}");
-  field("tick_us", "");
-  field(
-      "mean",
-      json_number(s.ticks ? static_cast<double>(s.tick_ns_sum) * 1e-3 / static_cast<double>(s.ticks)
-                          : 0.0),
-      "{");
-  field("max", json_number(static_cast<double>(s.tick_ns_max) * 1e-3));
-  out.append("}");
-  field("net_published", u(s.net_published));
-  field("net_dropped", u(s.net_dropped));
-  field("clients_accepted", u(c.accepted));
-  field("clients_rejected", u(c.rejected));
-  field("protocol_errors", u(c.protocol_errors));
-  field("timeouts", u(c.timeouts));
-  field("frames_sent", u(c.frames_sent));
-  field("frames_dropped", u(c.frames_dropped));
-  out.append("}\n");
-  std::ofstream file(path);
-  file << out;
-  if (!file) throw Error("cannot write " + path);
-}
-
 double positive(const cli::Args& args, const std::string& key, double fallback) {
   const double v = args.number(key, fallback);
   if (v < 0) throw UsageError("--" + key + " must not be negative");
@@ -382,13 +311,14 @@ int run(const cli::Arguments& argv_in) {
   // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
-      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions;
+      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
   std::map<std::string, int> lines;
   cli::Arguments from_config;
-  if (config) from_config = cli::config_arguments(*config, kFlags, kValued, &lines);
+  if (config)
+    from_config = cli::config_arguments(*config, kFlags, cli::with_rt_options(kValued), &lines);
   try {
     from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
     return run_configured(std::move(from_config));
@@ -401,10 +331,11 @@ int run(const cli::Arguments& argv_in) {
 int run_configured(cli::Arguments argv) {
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;
+  valued = cli::with_rt_options(std::move(valued));
   valued.insert(valued.end(), kValued.begin(), kValued.end());
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
-    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions;
+    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -480,6 +411,7 @@ int run_configured(cli::Arguments argv) {
   server_config.hello_timeout_s = within(args, "hello-timeout", 5, 0.1, 600);
   server_config.write_timeout_s = within(args, "write-timeout", 5, 0, 600);
   server_config.poll_interval_s = within(args, "poll-us", 500, 50, 100000) * 1e-6;
+  cli::apply_rt_options(args, loop_config, server_config);
   const double duration = within(args, "duration", 0, 0, 1e7);
   const std::string record_dir = args.get("record-dir").value_or(".");
   {
@@ -645,8 +577,8 @@ int run_configured(cli::Arguments argv) {
   const rt::LoopStats s = loop.stats();
   const net::ServerCounters c = server.counters();
   if (!stats_json.empty())
-    write_stats_json(stats_json, s, c, loop_config.rate_hz,
-                     static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9);
+    cli::write_stats_json(stats_json, s, c, loop_config.rate_hz,
+                          static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9);
   if (!quiet) {
     std::printf(
         "palpd: %llu ticks, %llu overruns, %llu faults, max lateness %.1f us, "

@@ -19,6 +19,7 @@
 #include "asio.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
+#include "cli/check_rate.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "loop/haptic_loop.hpp"
@@ -29,6 +30,7 @@ namespace palp::cli {
 namespace {
 
 constexpr const char* kProbeUsage = R"(usage: palp probe HOST:PORT [options]
+       palp probe --check-rate HZ [--duration S] [options]
 
 A headless palpd observer: prints frames/s, the delivered fraction, latency percentiles and the
 server's stats, and exits non-zero (1) if the stream stalls or the server refuses the client.
@@ -286,13 +288,14 @@ std::string json_number(double v) {
 }  // namespace
 
 int cmd_probe(const Arguments& argv) {
+  if (wants_check_rate(argv)) return cmd_check_rate(argv);
   const Args args(argv, {"help", "quiet", "contacts", "same-host"},
                   {"duration", "rate", "stall", "volume-max-dim", "role", "token", "name"});
   if (args.has("help")) {
-    std::cout << kProbeUsage;
+    std::cout << kProbeUsage << kCheckRateHelp;
     return 0;
   }
-  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT");
+  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT (or --check-rate HZ)");
   const std::string target = args.positional()[0];
   const auto colon = target.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == target.size())
@@ -445,6 +448,21 @@ int cmd_probe(const Arguments& argv) {
           std::printf(" more:%llu", static_cast<unsigned long long>(s.jitter_counts(b)));
       }
       std::printf("\n");
+      if (!s.wake_mode().empty()) {
+        std::printf(
+            "  wake-up   %s, spin window %.0f us; the loop thread uses %.1f %% of a CPU, "
+            "%.1f %% spinning; kernel wake-up latency max %.1f us:\n           ",
+            s.wake_mode().c_str(), s.spin_window_us(), 100 * s.loop_cpu_fraction(),
+            100 * s.spin_cpu_fraction(), s.wake_latency_max_us());
+        for (int b = 0; b < s.wake_latency_counts_size(); ++b) {
+          if (b < s.jitter_bucket_upper_us_size())
+            std::printf(" <%gus:%llu", s.jitter_bucket_upper_us(b),
+                        static_cast<unsigned long long>(s.wake_latency_counts(b)));
+          else
+            std::printf(" more:%llu", static_cast<unsigned long long>(s.wake_latency_counts(b)));
+        }
+        std::printf("\n");
+      }
     }
   }
   std::printf(
@@ -452,7 +470,7 @@ int cmd_probe(const Arguments& argv) {
       "\"gap_frames\":%llu,\"max_gap\":%llu,\"max_interval_ms\":%s,\"intervals_over_50ms\":%llu,"
       "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
       "\"server_rate_hz\":%s,\"overruns\":%llu,\"faults\":%llu,\"jitter_max_us\":%s,"
-      "\"clients\":%u}\n",
+      "\"clients\":%u,\"wake\":\"%s\",\"spin_window_us\":%s,\"spin_cpu_fraction\":%s}\n",
       r.failure.empty() && r.frames > 0 ? "true" : "false",
       static_cast<unsigned long long>(r.frames), json_number(fps).c_str(),
       json_number(delivered).c_str(), static_cast<unsigned long long>(r.gaps),
@@ -463,7 +481,10 @@ int cmd_probe(const Arguments& argv) {
       json_number(lmax).c_str(), json_number(r.have_stats ? r.stats.rate_hz() : NAN).c_str(),
       static_cast<unsigned long long>(r.stats.overruns()),
       static_cast<unsigned long long>(r.stats.faults()),
-      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients());
+      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients(),
+      r.stats.wake_mode().c_str(),
+      json_number(r.have_stats ? r.stats.spin_window_us() : NAN).c_str(),
+      json_number(r.have_stats ? r.stats.spin_cpu_fraction() : NAN).c_str());
   if (!r.failure.empty()) {
     std::fprintf(stderr, "palp: error: probe: %s\n", r.failure.c_str());
     return 1;

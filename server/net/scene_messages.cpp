@@ -161,6 +161,15 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_engage_gain(ls.engage_gain);
   st->set_passivity_ticks(ls.passivity_ticks);
   st->set_passivity_dissipated_mj(ls.passivity_dissipated_mJ);
+  st->set_wake_mode(rt::to_string(ls.wake.mode));
+  for (std::uint64_t c : ls.wake.latency) st->add_wake_latency_counts(c);
+  st->set_wake_latency_max_us(static_cast<double>(ls.wake.latency_max_ns) * 1e-3);
+  st->set_spin_window_us(static_cast<double>(ls.wake.spin_window_ns) * 1e-3);
+  const double running = static_cast<double>(ls.running_ns);
+  st->set_spin_cpu_fraction(running > 0 ? static_cast<double>(ls.wake.spin_ns) / running : 0.0);
+  st->set_loop_cpu_fraction(ls.loop_cpu_wall_ns > 0 ? static_cast<double>(ls.loop_cpu_ns) /
+                                                          static_cast<double>(ls.loop_cpu_wall_ns)
+                                                    : 0.0);
 }
 
 }  // namespace palp::net

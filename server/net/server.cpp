@@ -56,7 +56,8 @@ class Server::Impl {
         loop_(loop),
         control_(control),
         acceptor_(io_),
-        poll_timer_(io_),
+        pump_(io_, loop.net_ring(), loop.net_signal(), config_.net_wake, config_.poll_interval_s,
+              [this] { frames_published(); }),
         house_timer_(io_) {
     bind_acceptor(acceptor_, config_.bind, config_.port);
     asio::error_code ec;
@@ -74,9 +75,12 @@ class Server::Impl {
     last_stats_ns_ = rt::monotonic_ns();
     last_stats_ticks_ = loop_.stats().ticks;
     accept();
-    schedule_poll();
+    pump_.start();
     schedule_house();
-    thread_ = std::thread([this] { io_.run(); });
+    thread_ = std::thread([this] {
+      if (config_.cpu >= 0) rt::pin_this_thread(config_.cpu);  // checked by palpd's options
+      io_.run();
+    });
   }
 
   void stop() {
@@ -84,7 +88,7 @@ class Server::Impl {
     asio::post(io_, [this] {
       asio::error_code ec;
       acceptor_.close(ec);
-      poll_timer_.cancel();
+      pump_.stop();
       house_timer_.cancel();
       for (auto& s : sessions_) close(*s);
       sessions_.clear();
@@ -109,6 +113,7 @@ class Server::Impl {
     c.frames_dropped = frames_dropped_.load();
     c.timeouts = timeouts_.load();
     c.overflows = overflows_.load();
+    c.net_wakeups = pump_.wakeups();
     return c;
   }
 
@@ -491,16 +496,11 @@ class Server::Impl {
   }
 
   // ------------------------------------------------------------------ frames from the loop
-  void schedule_poll() {
-    poll_timer_.expires_after(std::chrono::nanoseconds(
-        std::max<std::int64_t>(seconds_to_ns(config_.poll_interval_s), 50'000)));
-    poll_timer_.async_wait([this](const asio::error_code& ec) {
-      if (ec) return;
-      if (scene_dirty_) send_scene_to_all();
-      drain();
-      graveyard_.free_some(kFreePerPoll);
-      schedule_poll();
-    });
+  // Run by the frame pump (frame_pump.hpp) whenever the loop published, and on its backstop.
+  void frames_published() {
+    if (scene_dirty_) send_scene_to_all();
+    drain();
+    graveyard_.free_some(kFreePerPoll);
   }
 
   void drain() {
@@ -601,7 +601,8 @@ class Server::Impl {
   ControlTarget* control_;
   asio::io_context io_;
   tcp::acceptor acceptor_;
-  asio::steady_timer poll_timer_, house_timer_;
+  FramePump pump_;
+  asio::steady_timer house_timer_;
   std::thread thread_;
   std::vector<SessionPtr> sessions_;
   // Queues of dropped clients, freed kFreePerPoll messages per poll.

@@ -15,17 +15,20 @@
 # BUILD_DIR (or $PALP_BUILD_DIR, default build) holds server/palpd and server/palp.
 # Environment: PALP_FANOUT_RATES (default "1000 4000"), PALP_FANOUT_OBSERVERS (8),
 # PALP_FANOUT_SECONDS (10 per scenario), PALP_FANOUT_SCENARIOS ("plain stalled garbage"),
-# PALP_FANOUT_OUT (default /tmp/palp-fanout; logs and JSON kept there). Loopback only; every
-# process is bounded by a duration and everything started here is stopped on exit.
+# PALP_FANOUT_OUT (default /tmp/palp-fanout; logs and JSON kept there), PALP_FANOUT_PALPD_ARGS
+# (more palpd options, e.g. "--wake sleep --net-wake poll" for palpd's pre-issue-18 timing; the
+# before/after table of those is tests/bench/palpd_wake.sh). Loopback only; every process is
+# bounded by a duration and everything started here is stopped on exit.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build=${1:-${PALP_BUILD_DIR:-build}}
-case $build in -h | --help) sed -n '2,20p' "$0"; exit 0 ;; esac
+case $build in -h | --help) sed -n '2,22p' "$0"; exit 0 ;; esac
 rates=${PALP_FANOUT_RATES:-1000 4000}
 observers=${PALP_FANOUT_OBSERVERS:-8}
 seconds=${PALP_FANOUT_SECONDS:-10}
 scenarios=${PALP_FANOUT_SCENARIOS:-plain stalled garbage}
 out=${PALP_FANOUT_OUT:-/tmp/palp-fanout}
+read -r -a palpd_args <<<"${PALP_FANOUT_PALPD_ARGS:-}"
 palpd=$build/server/palpd
 palp=$build/server/palp
 py=/usr/bin/python3
@@ -80,7 +83,8 @@ for rate in $rates; do
     dir=$out/$name
     rm -rf "$dir"; mkdir -p "$dir"
     start_palpd "$dir/palpd.log" --scene phantom:torso --device sim --tool finger:37 \
-      --rate "$rate" --port 0 --duration $((seconds + 4)) --stats-json "$dir/stats.json"
+      --rate "$rate" --port 0 --duration $((seconds + 4)) --stats-json "$dir/stats.json" \
+      "${palpd_args[@]}"
     palpd_pid=${pids[-1]}
     extra=()
     case $scenario in

@@ -569,6 +569,8 @@ TEST_F(ServerTest, PingGetsPongAndStatsArrive) {
   ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kStats, m));
   EXPECT_EQ(m.stats().target_rate_hz(), 1000.0);
   EXPECT_EQ(m.stats().jitter_counts_size(), m.stats().jitter_bucket_upper_us_size() + 1);
+  EXPECT_EQ(m.stats().wake_latency_counts_size(), m.stats().jitter_bucket_upper_us_size() + 1);
+  EXPECT_EQ(m.stats().wake_mode(), "hybrid");  // the default
   EXPECT_GE(m.stats().clients(), 1u);
   EXPECT_GT(m.stats().ticks(), 0u);
 }
