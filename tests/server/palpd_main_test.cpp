@@ -422,7 +422,9 @@ TEST(Palpd, StatsJsonAndProbeArrivals) {
   const std::string text = read_text(stats);
   std::smatch m;
   ASSERT_TRUE(std::regex_search(text, m, std::regex("\"ticks\":([0-9]+)"))) << text;
-  EXPECT_GT(std::stoull(m[1]), 1000u);
+  // 2 s at 1 kHz; without real-time priority a loaded machine skips deadlines (half of them
+  // were seen with the load average at 6), so only that the loop ran and counted is checked.
+  EXPECT_GT(std::stoull(m[1]), 500u);
   EXPECT_TRUE(std::regex_search(text, m, std::regex("\"clients_accepted\":([0-9]+)")));
   EXPECT_EQ(m[1], "1");
   for (const char* key : {"\"overruns\":", "\"deadline_miss_fraction\":", "\"p99_at_most\":",
