@@ -48,14 +48,7 @@ std::string quoted(const fs::path& path) {
 
 // Runs a shell command line, stderr with stdout.
 CliOutcome run_shell(const std::string& command) {
-  CliOutcome outcome;
-  FILE* pipe = popen((command + " 2>&1 </dev/null").c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
+  return palp::testing::run_command(command + " 2>&1 </dev/null");
 }
 
 bool have_program(const std::string& name) {

@@ -29,14 +29,7 @@ namespace v1 = palp::v1;
 testing::CliOutcome run_palpd(const std::string& args) {
   const std::string command = "PALP_SCENE_CACHE='" + (shared_cli_dir() / "cache").string() + "' " +
                               PALPD_PATH + " " + args + " 2>&1 </dev/null";
-  testing::CliOutcome outcome;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
+  return testing::run_command(command);
 }
 
 TEST(Palpd, HelpAndUsageErrors) {

@@ -22,15 +22,7 @@ using testing::start_palpd;
 using testing::wait_palpd_exit;
 
 testing::CliOutcome run_palpd(const std::string& args) {
-  const std::string command = std::string(PALPD_PATH) + " " + args + " 2>&1 </dev/null";
-  testing::CliOutcome outcome;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
+  return testing::run_command(std::string(PALPD_PATH) + " " + args + " 2>&1 </dev/null");
 }
 
 double number_after(const std::string& text, const std::string& key) {
