@@ -144,6 +144,11 @@ DeviceStatus FalconDevice::activate() {
     config.out_transfers = 4;
     config.on_open = [this](libusb_device_handle* handle) { return setup(handle); };
     config.on_in = [this](const std::uint8_t* data, std::size_t size) { on_packet(data, size); };
+    config.on_close = [this] {  // unplugged or stopped: homing is lost with the power
+      device_homed_ = 0;
+      awaiting_ = false;
+      homed_bits_.store(0, std::memory_order_relaxed);
+    };
     link_ = std::make_unique<usb::UsbLink>(context_, std::move(config));
     link_->start();
   } catch (const Error& e) {

@@ -89,7 +89,8 @@ class FalconDevice final : public Device {
   };
   Counters counters() const noexcept;
   usb::LinkState link_state() const noexcept;
-  bool homed() const noexcept { return homed_.load(std::memory_order_relaxed); }
+  // All three motors homed, as the firmware last said (false while absent).
+  bool homed() const noexcept { return (homed_bits_.load(std::memory_order_relaxed) & 7) == 7; }
   // The last end-effector position in the Falcon frame (mm), from the loop thread's last read.
   Vec3d falcon_position() const noexcept;
 

@@ -1,0 +1,378 @@
+// `--device falcon` (server/devices/falcon_device.cpp) against an emulated Novint Falcon on an
+// in-process umockdev device (tests/support/falcon_emulator): FTDI bridge, bootloader, echo-checked
+// firmware upload, homing, the runtime frame exchange, a simulated delta mechanism, and a
+// HapticLoop pressing the torso phantom through it. Runs under umockdev-wrapper; skipped without.
+#include "devices/falcon_device.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "base/errors.hpp"
+#include "base/patient_frame.hpp"
+#include "loop/haptic_loop.hpp"
+#include "model/falcon_kinematics.hpp"
+#include "model/registration.hpp"
+#include "safety/engagement.hpp"
+#include "safety/safety.hpp"
+#include "scene/home_site.hpp"
+#include "scene/scene.hpp"
+#include "support/falcon_emulator.hpp"
+#include "support/palpd_test_util.hpp"
+#include "support/usb_emulator.hpp"
+
+namespace palp::rt {
+namespace {
+
+namespace fp = usb::falcon;
+using usbemu::EmulatedFalcon;
+using usbemu::UsbTestbed;
+using usbemu::wait_until;
+
+constexpr double kWait = 30.0;  // generous: a loaded 2-core machine
+
+// A stand-in for Novint's firmware image (palp never ships the real one).
+std::vector<std::uint8_t> fake_firmware(std::uint32_t seed = 7, std::size_t size = 3000) {
+  std::vector<std::uint8_t> image(size);
+  for (auto& b : image) {
+    seed = seed * 1664525u + 1013904223u;
+    b = static_cast<std::uint8_t>(seed >> 24);
+  }
+  return image;
+}
+
+// Forwards to the Falcon and keeps what the loop read and wrote (the force through the limits).
+class Tap final : public Device {
+ public:
+  explicit Tap(FalconDevice& d) : d_(d) {}
+  std::string_view kind() const noexcept override { return d_.kind(); }
+  DeviceStatus configure(const DeviceConfig& c) override { return d_.configure(c); }
+  DeviceStatus activate() override { return d_.activate(); }
+  DeviceStatus read(std::int64_t now, DeviceSample& s) noexcept override {
+    last_read_ = d_.read(now, s);
+    return last_read_;
+  }
+  DeviceStatus write(const DeviceCommand& c) noexcept override {
+    if (last_read_ == DeviceStatus::Absent && norm(c.force) > 0.0)
+      force_after_absent_.fetch_add(1);
+    force_[0].store(c.force.x), force_[1].store(c.force.y), force_[2].store(c.force.z);
+    return d_.write(c);
+  }
+  DeviceStatus deactivate() override { return d_.deactivate(); }
+  DeviceState state() const noexcept override { return d_.state(); }
+  DeclaredLimits declared_limits() const noexcept override { return d_.declared_limits(); }
+  Vec3d force() const { return {force_[0].load(), force_[1].load(), force_[2].load()}; }
+  std::uint64_t force_after_absent() const { return force_after_absent_.load(); }
+
+ private:
+  FalconDevice& d_;
+  DeviceStatus last_read_ = DeviceStatus::NoData;
+  std::atomic<double> force_[3] = {};
+  std::atomic<std::uint64_t> force_after_absent_{0};
+};
+
+class FalconTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!UsbTestbed::in_mock_environment()) GTEST_SKIP() << "needs umockdev-wrapper";
+    testbed_ = std::make_unique<UsbTestbed>();
+  }
+  static std::unique_ptr<FalconDevice> falcon(std::vector<std::uint8_t> image = fake_firmware()) {
+    auto device = std::make_unique<FalconDevice>(FalconDevice::Options{});
+    device->set_firmware(std::move(image), "test.bin");
+    EXPECT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
+    return device;
+  }
+  // The user homes it: pull the handle all the way out, then push it straight in.
+  static void home(EmulatedFalcon& emu, FalconDevice& device) {
+    emu.hold({0, 0, 160}, 1.0, 0.02);
+    ASSERT_TRUE(wait_until([&] { return emu.snapshot().homed == 7; }, kWait));
+    emu.hold(falcon::kWorkspaceCentre, 1.0, 0.02);
+    ASSERT_TRUE(wait_until([&] { return device.homed(); }, kWait));
+  }
+  static LoopConfig loop_config() {
+    LoopConfig c;
+    c.realtime = false;
+    c.watchdog_late_s = 0;     // a loaded CI machine: no deadline faults
+    c.device_timeout_s = 1.0;  // nor NoData ones
+    return c;
+  }
+  std::unique_ptr<UsbTestbed> testbed_;
+};
+
+TEST(FalconSpec, MakeDeviceParsesIndexAndRefusesBadFirmwareFiles) {
+  EXPECT_EQ(make_device("falcon")->kind(), "falcon");
+  EXPECT_EQ(make_device("falcon:1")->kind(), "falcon");
+  EXPECT_THROW(make_device("falcon:x"), UsageError);
+  EXPECT_THROW(make_device("falcon:99"), UsageError);
+  const std::string missing = "/nonexistent/novint.bin";
+  try {
+    FalconDevice::read_firmware(missing);
+    FAIL() << "a missing firmware file was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Novint"), std::string::npos) << e.what();
+  }
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("palp-falcon-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string empty = (dir / "empty.bin").string();
+  std::ofstream(empty).close();
+  try {
+    FalconDevice::read_firmware(empty);
+    FAIL() << "an empty firmware file was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("empty"), std::string::npos) << e.what();
+  }
+  const std::string good = (dir / "fw.bin").string();
+  {
+    std::ofstream f(good, std::ios::binary);
+    const auto image = fake_firmware();
+    f.write(reinterpret_cast<const char*>(image.data()), std::streamsize(image.size()));
+  }
+  EXPECT_EQ(FalconDevice::read_firmware(good), fake_firmware());
+  std::filesystem::remove_all(dir);
+  // no firmware at all: configure refuses, naming the option
+  FalconDevice bare(FalconDevice::Options{});
+  EXPECT_EQ(bare.configure(DeviceConfig{}), DeviceStatus::Error);
+  EXPECT_NE(bare.last_error().find("--falcon-firmware"), std::string::npos);
+}
+
+TEST_F(FalconTest, EnumeratesUploadsVerifiesAndWaitsForHoming) {
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.power_on();
+  auto device = falcon();
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait))
+      << device->status_message();
+  auto s = emu.snapshot();
+  EXPECT_EQ(s.loads, 1u);
+  EXPECT_EQ(s.echoed, fake_firmware().size());  // every byte echoed once
+  EXPECT_GE(s.probes, 1u);
+  EXPECT_EQ(device->counters().uploads, 1u);
+  EXPECT_EQ(device->counters().already_running, 0u);
+  // not homed: Absent for the loop, red LED and homing asked, the user told what to do
+  DeviceSample sample;
+  ASSERT_TRUE(wait_until([&] { return device->counters().frames > 20; }, kWait));
+  EXPECT_EQ(device->read(0, sample), DeviceStatus::Absent);
+  EXPECT_EQ(device->state(), DeviceState::Absent);
+  EXPECT_NE(device->status_message().find("pull the handle all the way out"), std::string::npos)
+      << device->status_message();
+  s = emu.snapshot();
+  EXPECT_EQ(s.control, fp::kLedRed | fp::kHomingMode);
+  // a force asked before homing never reaches the motors
+  device->write(DeviceCommand{{0, 0, 5.0}, {}});
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  home(emu, *device);
+  EXPECT_EQ(emu.snapshot().nonzero_while_unhomed, 0u);
+  ASSERT_TRUE(wait_until([&] { return device->read(0, sample) == DeviceStatus::Ok; }, kWait));
+  EXPECT_EQ(device->state(), DeviceState::Present);
+  // the pose: the handle's position about the workspace centre, within the encoder resolution
+  const Vec3d expected = emu.snapshot().position - falcon::kWorkspaceCentre;
+  EXPECT_LT(norm(sample.pose.position - expected), 0.5);
+  ASSERT_TRUE(wait_until([&] { return emu.snapshot().control == fp::kLedGreen; }, kWait));
+  EXPECT_NE(device->status_message().find("homed"), std::string::npos);
+  ASSERT_EQ(device->deactivate(), DeviceStatus::Ok);
+}
+
+TEST_F(FalconTest, EchoMismatchIsRetriedThenRefusedWithTheByte) {
+  {
+    EmulatedFalcon emu(*testbed_, fake_firmware());
+    emu.corrupt_echo_attempts(1);  // the first load's echo is wrong, the second is right
+    emu.power_on();
+    auto device = falcon();
+    ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+    ASSERT_TRUE(
+        wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait))
+        << device->status_message();
+    EXPECT_EQ(device->counters().upload_failures, 1u);
+    EXPECT_EQ(device->counters().uploads, 1u);
+    EXPECT_EQ(emu.snapshot().loads, 1u);
+    device->deactivate();
+  }
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.corrupt_echo_attempts(100);  // always wrong: refused after the bounded retries
+  emu.power_on();
+  auto device = falcon();
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Fault; }, kWait));
+  const std::string message = device->status_message();
+  EXPECT_NE(message.find("firmware load failed after 3 attempts"), std::string::npos) << message;
+  EXPECT_NE(message.find("echo mismatch at byte 99"), std::string::npos) << message;
+  EXPECT_EQ(device->counters().upload_failures, 3u);
+  DeviceSample sample;
+  EXPECT_EQ(device->read(0, sample), DeviceStatus::Absent);
+  device->deactivate();
+}
+
+TEST_F(FalconTest, WrongFirmwareIsRefusedWithTheRightMessage) {
+  EmulatedFalcon emu(*testbed_, fake_firmware(7));
+  emu.power_on();
+  auto device = falcon(fake_firmware(8));  // echoed fine, but not what the DSP runs
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Fault; }, kWait));
+  const std::string message = device->status_message();
+  EXPECT_NE(message.find("does not answer runtime frames"), std::string::npos) << message;
+  EXPECT_NE(message.find("test.bin"), std::string::npos) << message;
+  EXPECT_EQ(emu.snapshot().loads, 0u);
+  device->deactivate();
+}
+
+TEST_F(FalconTest, RunningFirmwareIsDetectedAndNotReloaded) {
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.power_on();
+  emu.set_running();
+  auto device = falcon();
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait));
+  EXPECT_EQ(device->counters().already_running, 1u);
+  EXPECT_EQ(device->counters().uploads, 0u);
+  EXPECT_EQ(emu.snapshot().echoed, 0u);
+  EXPECT_EQ(emu.snapshot().dtr_resets, 0u);  // not even reset
+  device->deactivate();
+}
+
+// Streams under a running loop; corrupt, short and stray bytes are counted and survived; the
+// exchange rate (strictly request / reply over the FTDI bridge) is measured against the loop's.
+TEST_F(FalconTest, StreamsAndSurvivesCorruptAndShortFrames) {
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.power_on();
+  auto device = falcon();
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait));
+  home(emu, *device);
+  HapticLoop loop(testing::ball_model(), *device, loop_config());
+  loop.start();
+  const auto c0 = device->counters();
+  const std::uint64_t t0 = loop.stats().ticks;
+  const auto start = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));  // measures, asserts no timing
+  const auto c1 = device->counters();
+  const std::uint64_t t1 = loop.stats().ticks;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("falcon exchange: %.0f exchanges/s (%.0f host frames/s) at a loop of %.0f ticks/s; "
+              "%llu lost replies\n",
+              double(c1.frames - c0.frames) / s, double(c1.host_frames - c0.host_frames) / s,
+              double(t1 - t0) / s, static_cast<unsigned long long>(c1.lost_replies));
+  EXPECT_GT(c1.frames - c0.frames, 50u);
+  EXPECT_EQ(c1.corrupt, 0u);
+  EXPECT_EQ(c1.short_frames, 0u);
+
+  emu.corrupt_replies(5);
+  ASSERT_TRUE(wait_until([&] { return device->counters().corrupt >= 5; }, kWait));
+  emu.cut_replies(3);
+  ASSERT_TRUE(wait_until([&] { return device->counters().short_frames >= 3; }, kWait));
+  emu.inject({0x00, 0x13, 0x37});
+  ASSERT_TRUE(wait_until([&] { return device->counters().frames > c1.frames + 100; }, kWait));
+  const auto c2 = device->counters();
+  EXPECT_EQ(c2.corrupt, 5u);
+  EXPECT_EQ(c2.short_frames, 3u);
+  EXPECT_EQ(loop.stats().faults, 0u);
+  EXPECT_EQ(device->state(), DeviceState::Present);
+  loop.stop();
+  // the loop stopped: zero-effort frames keep the exchange going
+  ASSERT_TRUE(wait_until([&] { return device->counters().zero_frames > c2.zero_frames + 5; },
+                         kWait));
+  const auto e = emu.snapshot().efforts;
+  EXPECT_EQ(e[0] | e[1] | e[2], 0);
+  device->deactivate();
+}
+
+// The registration palpd uses for a Falcon on the torso: IAR axes, home 20 mm above the anterior
+// skin (cli/device_placement.cpp).
+struct Placed {
+  Scene scene;
+  Registration registration;
+};
+Placed torso_placement() {
+  SceneOptions options;
+  options.cache_dir = (std::filesystem::temp_directory_path() / "palp-falcon-test-scenes").string();
+  Placed p{load_scene("phantom:torso", options), {}};
+  const HomeSite site = find_home_site(*p.scene.fields, "auto", 20.0);
+  p.registration.rotation = rotation_from_axes(patient_frame(p.scene.grid), "IAR");
+  p.registration.home = site.home;
+  return p;
+}
+
+// palpd's loop pressing the torso phantom through the emulated mechanism: the force the motors
+// put on the handle is the model's force through the limits; then an unplug mid-press zeroes the
+// force within one tick, and a replug reloads the firmware, asks for homing and ramps in.
+TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
+  const Placed placed = torso_placement();
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.power_on();
+  auto device = falcon();
+  Tap tap(*device);
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait));
+  home(emu, *device);
+
+  LoopConfig lc = loop_config();
+  lc.profile = &device_profile("falcon");
+  EngageParams engage;
+  engage.ramp_s = 0.3;
+  lc.engage = engage;
+  lc.passivity = true;
+  lc.registration = placed.registration;
+  auto model = std::make_shared<const Model>(placed.scene.fields, parse_tool("finger:7"));
+  HapticLoop loop(model, tap, lc);
+  loop.start();
+  // the hand pushes the handle toward the patient (device -y = posterior), into the skin
+  emu.hold(falcon::kWorkspaceCentre + Vec3d{0, -40, 0}, 0.4, 0.02);
+  ASSERT_TRUE(wait_until([&] { return norm(tap.force()) > 1.0; }, kWait));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // settle against the hand
+  double worst = 0.0, pressed = 0.0;
+  for (int i = 0; i < 20; ++i) {
+    const Vec3d commanded = tap.force();  // device frame = Falcon frame axes
+    const Vec3d at_handle = emu.snapshot().motor_force;
+    worst = std::max(worst, norm(at_handle - commanded) / std::max(norm(commanded), 1e-9));
+    pressed = std::max(pressed, norm(commanded));
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::printf("torso press: %.2f N commanded through the falcon limits, worst mismatch at the "
+              "handle %.2f %%\n",
+              pressed, 100 * worst);
+  EXPECT_GT(pressed, 1.0);
+  EXPECT_LE(pressed, 8.0 + 1e-9);  // the falcon profile's limit
+  EXPECT_LT(worst, 0.05);          // the end-effector force is the commanded one (see docs)
+  EXPECT_GT(emu.snapshot().motor_force.y, 0.5);  // pushed back up, toward anterior
+
+  // unplug mid-press: the first tick that sees it writes zero
+  const std::uint64_t absent0 = loop.stats().absent_events;
+  emu.unplug();
+  ASSERT_TRUE(wait_until([&] { return loop.stats().absent_events > absent0; }, kWait));
+  EXPECT_EQ(tap.force_after_absent(), 0u);
+  EXPECT_EQ(norm(tap.force()), 0.0);
+  EXPECT_EQ(loop.stats().engage_gain, 0.0);
+
+  // replug: firmware reloaded, homing asked again, no force until homed, then the ramp
+  emu.power_on();
+  ASSERT_TRUE(wait_until([&] { return device->counters().uploads == 2; }, kWait))
+      << device->status_message();
+  EXPECT_EQ(emu.snapshot().loads, 2u);  // loaded again after the power came back
+  EXPECT_FALSE(device->homed());
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(norm(tap.force()), 0.0);
+  home(emu, *device);
+  emu.hold(falcon::kWorkspaceCentre + Vec3d{0, -40, 0}, 0.4, 0.02);
+  bool ramping = false;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const double g = loop.stats().engage_gain;
+        ramping |= g > 0.0 && g < 1.0;
+        return g == 1.0;
+      },
+      kWait));
+  EXPECT_TRUE(ramping);
+  EXPECT_EQ(emu.snapshot().nonzero_while_unhomed, 0u);
+  loop.stop();
+  device->deactivate();
+}
+
+}  // namespace
+}  // namespace palp::rt
