@@ -95,14 +95,14 @@ bool invert(const Mat3& a, Mat3& out) {
 
 // Degrees per count: the shaft's arc per quadrature count over the arm capstan's circumference.
 double joint_angle(std::int32_t encoder) {
-  const double deg_per_count = (kShaftDiameter * kPi / (4.0 * kWheelSlots)) /
-                               (kPi * kSmallArmDiameter / 360.0);
+  const double deg_per_count =
+      (kShaftDiameter * kPi / (4.0 * kWheelSlots)) / (kPi * kSmallArmDiameter / 360.0);
   return (static_cast<double>(encoder) * deg_per_count + kThetaOffsetDeg) * kPi / 180.0;
 }
 
 double encoder_counts(double joint_angle_rad) {
-  const double deg_per_count = (kShaftDiameter * kPi / (4.0 * kWheelSlots)) /
-                               (kPi * kSmallArmDiameter / 360.0);
+  const double deg_per_count =
+      (kShaftDiameter * kPi / (4.0 * kWheelSlots)) / (kPi * kSmallArmDiameter / 360.0);
   return (joint_angle_rad * 180.0 / kPi - kThetaOffsetDeg) / deg_per_count;
 }
 
@@ -187,8 +187,8 @@ Efforts efforts_for_force(const Vec3d& p, const Vec3d& force, int max_effort) {
     e.clamped = true;
   }
   for (int i = 0; i < 3; ++i) {
-    const double v = std::clamp(std::round(component(raw, i)), -double(max_effort),
-                                double(max_effort));
+    const double v =
+        std::clamp(std::round(component(raw, i)), -double(max_effort), double(max_effort));
     e.value[static_cast<std::size_t>(i)] = static_cast<std::int16_t>(v);
   }
   return e;

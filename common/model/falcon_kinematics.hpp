@@ -28,14 +28,14 @@ namespace palp::falcon {
 
 // Published constants, each with its source.
 // libnifalcon include/falcon/kinematic/FalconGeometry.h (Kevin Ouellet), after Stamper 1997 p. 30:
-inline constexpr double kA = 60.0;     // mm, leg base to knee ("a")
-inline constexpr double kB = 102.5;    // mm, shin parallelogram side ("b")
-inline constexpr double kC = 14.43;    // mm, shin joint to effector centre, u component ("c")
-inline constexpr double kD = 11.25;    // mm, shin to effector joint ("d")
-inline constexpr double kE = kD;       // mm, knee to shin joint ("e" = d)
-inline constexpr double kF = -25.0;    // mm, shin joint to effector centre, v component ("f")
-inline constexpr double kR = 40.0;     // mm, frame origin to leg base, u component ("r")
-inline constexpr double kS = -23.09;   // mm, frame origin to leg base, v component ("s")
+inline constexpr double kA = 60.0;    // mm, leg base to knee ("a")
+inline constexpr double kB = 102.5;   // mm, shin parallelogram side ("b")
+inline constexpr double kC = 14.43;   // mm, shin joint to effector centre, u component ("c")
+inline constexpr double kD = 11.25;   // mm, shin to effector joint ("d")
+inline constexpr double kE = kD;      // mm, knee to shin joint ("e" = d)
+inline constexpr double kF = -25.0;   // mm, shin joint to effector centre, v component ("f")
+inline constexpr double kR = 40.0;    // mm, frame origin to leg base, u component ("r")
+inline constexpr double kS = -23.09;  // mm, frame origin to leg base, v component ("s")
 inline constexpr double kPi = 3.14159265358979323846;
 // Leg directions: 90, -30, -150 degrees plus the 15 degree tilt of every axis from the desk plane
 // (same file, phy[] and OFFSET_ANGLE).
@@ -44,8 +44,8 @@ inline constexpr std::array<double, 3> kPhi = {kPi / 2 + kPi / 12, -kPi / 6 + kP
 // Encoders (same file): 320 slots read in quadrature on the motor shaft (14.25 mm) driving the
 // arm's capstan (110 mm); encoder 0 is about 35 degrees.
 inline constexpr double kWheelSlots = 320.0;
-inline constexpr double kShaftDiameter = 14.25;      // mm
-inline constexpr double kSmallArmDiameter = 110.0;   // mm
+inline constexpr double kShaftDiameter = 14.25;     // mm
+inline constexpr double kSmallArmDiameter = 110.0;  // mm
 inline constexpr double kThetaOffsetDeg = 35.0;
 // Motor effort per joint torque: libnifalcon src/kinematic/FalconKinematicStamper.cpp getForces()
 // sends -10000 x torque (N m) as the motor value, i.e. -10 per N mm.

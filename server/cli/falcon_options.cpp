@@ -30,9 +30,10 @@ void orient_falcon(const Args& args, rt::Device& device, const Scene& scene,
   const std::string from = args.get("falcon-tool-from").value_or("anterior");
   Anatomy direction{};
   if (!parse_anatomy(from, &direction))
-    throw UsageError("--falcon-tool-from must be a patient direction (anterior, left, right, "
-                     "posterior, superior, inferior), not '" +
-                     from + "'");
+    throw UsageError(
+        "--falcon-tool-from must be a patient direction (anterior, left, right, "
+        "posterior, superior, inferior), not '" +
+        from + "'");
   const PatientFrame frame = patient_frame(scene.grid);
   const Anatomy along = (direction == Anatomy::Superior || direction == Anatomy::Inferior)
                             ? Anatomy::Left

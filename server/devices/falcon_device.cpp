@@ -35,8 +35,8 @@ struct Port {
   std::string error;
 
   bool control(std::uint8_t request, std::uint16_t value, const char* what) {
-    const int rc = libusb_control_transfer(handle, fp::kFtdiRequestType, request, value, 0,
-                                           nullptr, 0, 1000);
+    const int rc =
+        libusb_control_transfer(handle, fp::kFtdiRequestType, request, value, 0, nullptr, 0, 1000);
     if (rc < 0) error = std::string("FTDI ") + what + " failed: " + usb::error_text(rc);
     return rc >= 0;
   }
@@ -57,8 +57,7 @@ struct Port {
     std::uint8_t packet[fp::kUsbPacket];
     while (got < want && clock_ns() < end) {
       int n = 0;
-      const int rc =
-          libusb_bulk_transfer(handle, fp::kEndpointIn, packet, sizeof packet, &n, 20);
+      const int rc = libusb_bulk_transfer(handle, fp::kEndpointIn, packet, sizeof packet, &n, 20);
       if (rc == LIBUSB_ERROR_TIMEOUT) continue;
       if (rc != 0) {
         error = "reading from the Falcon failed: " + usb::error_text(rc);
@@ -426,8 +425,9 @@ std::string FalconDevice::status_message() const {
   if (link_->state() != usb::LinkState::Present) return text;
   const std::uint8_t bits = homed_bits_.load(std::memory_order_relaxed);
   if ((bits & 7) != 7) {
-    text += "; homing (red LED): pull the handle all the way out, then push it straight in "
-            "(motors homed:";
+    text +=
+        "; homing (red LED): pull the handle all the way out, then push it straight in "
+        "(motors homed:";
     for (int i = 0; i < 3; ++i) text += (bits >> i) & 1 ? " yes" : " no";
     text += ")";
   } else {

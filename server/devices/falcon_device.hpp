@@ -70,21 +70,21 @@ class FalconDevice final : public Device {
   DeclaredLimits declared_limits() const noexcept override { return {8.0, 3.0, 0.020}; }
 
   struct Counters {
-    std::uint64_t frames = 0;          // valid device frames (= completed exchanges)
-    std::uint64_t corrupt = 0;         // frames with a byte out of range or no '>' at 16
-    std::uint64_t short_frames = 0;    // frames cut short (resynced on the next '<')
-    std::uint64_t short_packets = 0;   // IN packets shorter than the FTDI status
-    std::uint64_t host_frames = 0;     // host frames sent
-    std::uint64_t zero_frames = 0;     // of them, zero efforts sent because the loop stalled
-    std::uint64_t lost_replies = 0;    // requests with no reply within reply_timeout_ms
-    std::uint64_t clamped = 0;         // commands whose efforts were scaled into 16 bits
-    std::uint64_t fk_failures = 0;     // encoder readings forward kinematics could not solve
-    std::uint64_t uploads = 0;         // firmware loads that succeeded
+    std::uint64_t frames = 0;           // valid device frames (= completed exchanges)
+    std::uint64_t corrupt = 0;          // frames with a byte out of range or no '>' at 16
+    std::uint64_t short_frames = 0;     // frames cut short (resynced on the next '<')
+    std::uint64_t short_packets = 0;    // IN packets shorter than the FTDI status
+    std::uint64_t host_frames = 0;      // host frames sent
+    std::uint64_t zero_frames = 0;      // of them, zero efforts sent because the loop stalled
+    std::uint64_t lost_replies = 0;     // requests with no reply within reply_timeout_ms
+    std::uint64_t clamped = 0;          // commands whose efforts were scaled into 16 bits
+    std::uint64_t fk_failures = 0;      // encoder readings forward kinematics could not solve
+    std::uint64_t uploads = 0;          // firmware loads that succeeded
     std::uint64_t upload_failures = 0;  // load attempts that failed (handshake, echo, silence)
     std::uint64_t already_running = 0;  // opens that found the firmware running
     std::uint64_t opens = 0;            // setups completed (1 + replugs)
     std::uint8_t buttons = 0;
-    std::uint8_t homed = 0;             // bit per motor, from the last frame
+    std::uint8_t homed = 0;  // bit per motor, from the last frame
     std::array<std::int16_t, 3> last_efforts{};
   };
   Counters counters() const noexcept;

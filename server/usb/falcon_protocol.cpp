@@ -36,7 +36,8 @@ bool strip_ftdi_status(const std::uint8_t* packet, std::size_t size, const std::
 void encode_host_frame(const HostFrame& frame, std::uint8_t out[kFrameSize]) {
   out[0] = kFrameStart;
   for (int i = 0; i < 3; ++i)
-    put_word(static_cast<std::uint16_t>(frame.efforts[static_cast<std::size_t>(i)]), out + 1 + 4 * i);
+    put_word(static_cast<std::uint16_t>(frame.efforts[static_cast<std::size_t>(i)]),
+             out + 1 + 4 * i);
   out[13] = static_cast<std::uint8_t>(kNibbleBase + (frame.control & 0x0f));
   out[14] = kNibbleBase;
   out[15] = kFrameEnd;
@@ -47,7 +48,8 @@ void encode_device_frame(const DeviceFrame& frame, std::uint8_t out[kFrameSize])
   for (int i = 0; i < 3; ++i)
     put_word(static_cast<std::uint16_t>(frame.encoders[static_cast<std::size_t>(i)]),
              out + 1 + 4 * i);
-  out[13] = static_cast<std::uint8_t>(kNibbleBase + (frame.buttons & 0x0f) + ((frame.homed & 7) << 4));
+  out[13] =
+      static_cast<std::uint8_t>(kNibbleBase + (frame.buttons & 0x0f) + ((frame.homed & 7) << 4));
   out[14] = kNibbleBase;
   out[15] = kFrameEnd;
 }

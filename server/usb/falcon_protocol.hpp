@@ -29,12 +29,12 @@ inline constexpr std::size_t kFtdiStatusBytes = 2;
 
 // FTDI vendor requests (bmRequestType 0x40, wIndex 0 = the one port).
 inline constexpr std::uint8_t kFtdiRequestType = 0x40;
-inline constexpr std::uint8_t kSioReset = 0;          // wValue: 0 reset, 1 purge RX, 2 purge TX
-inline constexpr std::uint8_t kSioModemCtrl = 1;      // DTR / RTS lines
-inline constexpr std::uint8_t kSioSetFlowCtrl = 2;    // 0: none
-inline constexpr std::uint8_t kSioSetBaudRate = 3;    // wValue: divisor
-inline constexpr std::uint8_t kSioSetData = 4;        // 8: 8 data bits, no parity, 1 stop bit
-inline constexpr std::uint8_t kSioSetLatency = 9;     // ms the bridge waits before a short IN
+inline constexpr std::uint8_t kSioReset = 0;        // wValue: 0 reset, 1 purge RX, 2 purge TX
+inline constexpr std::uint8_t kSioModemCtrl = 1;    // DTR / RTS lines
+inline constexpr std::uint8_t kSioSetFlowCtrl = 2;  // 0: none
+inline constexpr std::uint8_t kSioSetBaudRate = 3;  // wValue: divisor
+inline constexpr std::uint8_t kSioSetData = 4;      // 8: 8 data bits, no parity, 1 stop bit
+inline constexpr std::uint8_t kSioSetLatency = 9;   // ms the bridge waits before a short IN
 inline constexpr std::uint16_t kPurgeRx = 1, kPurgeTx = 2;
 inline constexpr std::uint16_t kDtrLow = 0x0100, kDtrHigh = 0x0101;  // (mask << 8) | value
 inline constexpr std::uint16_t kRtsLow = 0x0200, kRtsHigh = 0x0202;
@@ -93,8 +93,8 @@ bool decode_device_frame(const std::uint8_t in[kFrameSize], DeviceFrame& frame);
 class FrameParser {
  public:
   struct Counters {
-    std::uint64_t frames = 0;   // valid frames
-    std::uint64_t corrupt = 0;  // 16 bytes '<'..'>' with a byte out of range, or no '>' at 16
+    std::uint64_t frames = 0;        // valid frames
+    std::uint64_t corrupt = 0;       // 16 bytes '<'..'>' with a byte out of range, or no '>' at 16
     std::uint64_t short_frames = 0;  // '>' or a new '<' before 16 bytes
     std::uint64_t skipped = 0;       // bytes outside any frame
   };

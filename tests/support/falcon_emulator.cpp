@@ -27,9 +27,9 @@ DeviceSpec falcon_spec() {
   return s;
 }
 
-constexpr double kMassKg = 0.15;         // the handle and arms, moving mass (emulation choice)
-constexpr double kFriction = 0.002;      // N s/mm, the mechanism's own damping (emulation choice)
-constexpr double kIndexZ = 150.0;        // mm: pulling out past here crosses the encoder index
+constexpr double kMassKg = 0.15;     // the handle and arms, moving mass (emulation choice)
+constexpr double kFriction = 0.002;  // N s/mm, the mechanism's own damping (emulation choice)
+constexpr double kIndexZ = 150.0;    // mm: pulling out past here crosses the encoder index
 
 }  // namespace
 
@@ -41,7 +41,9 @@ EmulatedFalcon::EmulatedFalcon(UsbTestbed& testbed, std::vector<std::uint8_t> fi
   });
 }
 
-EmulatedFalcon::~EmulatedFalcon() { usb_.stop_in_stream(); }
+EmulatedFalcon::~EmulatedFalcon() {
+  usb_.stop_in_stream();
+}
 
 void EmulatedFalcon::reset_power() {
   mode_ = Mode::Boot;
@@ -67,8 +69,7 @@ void EmulatedFalcon::power_on() {
   }
   usb_.plug();
   usb_.start_in_stream(
-      fp::kEndpointIn, 1000.0,
-      [this](std::uint64_t, std::int64_t t_ns) { return tick(t_ns); }, 16);
+      fp::kEndpointIn, 1000.0, [this](std::uint64_t, std::int64_t t_ns) { return tick(t_ns); }, 16);
 }
 
 void EmulatedFalcon::unplug() {
@@ -200,8 +201,7 @@ void EmulatedFalcon::out(const std::vector<std::uint8_t>& packet) {
         }
         return;
       }
-      if (baud_ == fp::kBaudUpload && !dtr_ && packet.size() == 1 &&
-          packet[0] == fp::kBootEnter) {
+      if (baud_ == fp::kBaudUpload && !dtr_ && packet.size() == 1 && packet[0] == fp::kBootEnter) {
         tx_.push_back(fp::kBootEnter);
         mode_ = Mode::Loading;
         image_.clear();

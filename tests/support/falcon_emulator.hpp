@@ -47,16 +47,16 @@ class EmulatedFalcon {
   struct Snapshot {
     bool running = false;
     std::uint8_t homed = 0;
-    Vec3d position{};      // Falcon frame, mm
-    Vec3d motor_force{};   // N, what the motors push on the handle now (J^T tau)
-    Vec3d hand_force{};    // N, what the hand pushes
+    Vec3d position{};     // Falcon frame, mm
+    Vec3d motor_force{};  // N, what the motors push on the handle now (J^T tau)
+    Vec3d hand_force{};   // N, what the hand pushes
     std::array<std::int16_t, 3> efforts{};
     std::uint8_t control = 0;
-    std::uint64_t frames_in = 0;     // host frames taken
-    std::uint64_t replies = 0;       // device frames sent
-    std::uint64_t probes = 0;        // bootloader probes answered
-    std::uint64_t loads = 0;         // firmware images received whole
-    std::uint64_t echoed = 0;        // firmware bytes echoed
+    std::uint64_t frames_in = 0;  // host frames taken
+    std::uint64_t replies = 0;    // device frames sent
+    std::uint64_t probes = 0;     // bootloader probes answered
+    std::uint64_t loads = 0;      // firmware images received whole
+    std::uint64_t echoed = 0;     // firmware bytes echoed
     std::uint64_t dtr_resets = 0;
     std::uint64_t nonzero_while_unhomed = 0;  // host frames with effort before homing
   };
@@ -69,9 +69,9 @@ class EmulatedFalcon {
   ControlReply control(const ControlRequest& r);
   void out(const std::vector<std::uint8_t>& packet);
   std::optional<std::vector<std::uint8_t>> tick(std::int64_t device_time_ns);
-  void step(double dt_s);     // the mechanism (mutex held)
-  void reply();               // one device frame (mutex held)
-  void reset_power();         // (mutex held)
+  void step(double dt_s);  // the mechanism (mutex held)
+  void reply();            // one device frame (mutex held)
+  void reset_power();      // (mutex held)
 
   std::vector<std::uint8_t> firmware_;
   EmulatedUsbDevice usb_;
@@ -79,9 +79,9 @@ class EmulatedFalcon {
   Mode mode_ = Mode::Boot;
   std::uint16_t baud_ = 0, latency_ = 16;
   bool dtr_ = false, dtr_reset_ = false;
-  std::vector<std::uint8_t> tx_;          // serial bytes waiting for the IN endpoint
-  std::vector<std::uint8_t> boot_rx_;     // bootloader input
-  std::vector<std::uint8_t> image_;       // firmware received
+  std::vector<std::uint8_t> tx_;       // serial bytes waiting for the IN endpoint
+  std::vector<std::uint8_t> boot_rx_;  // bootloader input
+  std::vector<std::uint8_t> image_;    // firmware received
   int echo_faults_ = 0;
   bool echo_fault_this_load_ = false;
   usb::falcon::FrameParser host_parser_;  // parses host frames (same framing, other direction)

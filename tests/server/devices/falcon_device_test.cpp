@@ -58,8 +58,7 @@ class Tap final : public Device {
     return last_read_;
   }
   DeviceStatus write(const DeviceCommand& c) noexcept override {
-    if (last_read_ == DeviceStatus::Absent && norm(c.force) > 0.0)
-      force_after_absent_.fetch_add(1);
+    if (last_read_ == DeviceStatus::Absent && norm(c.force) > 0.0) force_after_absent_.fetch_add(1);
     force_[0].store(c.force.x), force_[1].store(c.force.y), force_[2].store(c.force.z);
     return d_.write(c);
   }
@@ -118,8 +117,8 @@ TEST(FalconSpec, MakeDeviceParsesIndexAndRefusesBadFirmwareFiles) {
     EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("Novint"), std::string::npos) << e.what();
   }
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("palp-falcon-" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("palp-falcon-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string empty = (dir / "empty.bin").string();
   std::ofstream(empty).close();
@@ -187,8 +186,7 @@ TEST_F(FalconTest, EchoMismatchIsRetriedThenRefusedWithTheByte) {
     emu.power_on();
     auto device = falcon();
     ASSERT_EQ(device->activate(), DeviceStatus::Ok);
-    ASSERT_TRUE(
-        wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait))
+    ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait))
         << device->status_message();
     EXPECT_EQ(device->counters().upload_failures, 1u);
     EXPECT_EQ(device->counters().uploads, 1u);
@@ -255,10 +253,11 @@ TEST_F(FalconTest, StreamsAndSurvivesCorruptAndShortFrames) {
   const auto c1 = device->counters();
   const std::uint64_t t1 = loop.stats().ticks;
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("falcon exchange: %.0f exchanges/s (%.0f host frames/s) at a loop of %.0f ticks/s; "
-              "%llu lost replies\n",
-              double(c1.frames - c0.frames) / s, double(c1.host_frames - c0.host_frames) / s,
-              double(t1 - t0) / s, static_cast<unsigned long long>(c1.lost_replies));
+  std::printf(
+      "falcon exchange: %.0f exchanges/s (%.0f host frames/s) at a loop of %.0f ticks/s; "
+      "%llu lost replies\n",
+      double(c1.frames - c0.frames) / s, double(c1.host_frames - c0.host_frames) / s,
+      double(t1 - t0) / s, static_cast<unsigned long long>(c1.lost_replies));
   EXPECT_GT(c1.frames - c0.frames, 50u);
   EXPECT_EQ(c1.corrupt, 0u);
   EXPECT_EQ(c1.short_frames, 0u);
@@ -276,10 +275,46 @@ TEST_F(FalconTest, StreamsAndSurvivesCorruptAndShortFrames) {
   EXPECT_EQ(device->state(), DeviceState::Present);
   loop.stop();
   // the loop stopped: zero-effort frames keep the exchange going
-  ASSERT_TRUE(wait_until([&] { return device->counters().zero_frames > c2.zero_frames + 5; },
-                         kWait));
+  ASSERT_TRUE(
+      wait_until([&] { return device->counters().zero_frames > c2.zero_frames + 5; }, kWait));
   const auto e = emu.snapshot().efforts;
   EXPECT_EQ(e[0] | e[1] | e[2], 0);
+  device->deactivate();
+}
+
+// The centre grip button is a clutch: held, no force (Absent) and the handle moves freely;
+// released, the tool goes on from where it was, not from where the handle now is.
+TEST_F(FalconTest, CentreButtonIsAClutch) {
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.power_on();
+  auto device = falcon();
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait));
+  home(emu, *device);
+  DeviceSample sample;
+  const auto settle = [&](const Vec3d& target) {
+    emu.hold(target, 1.0, 0.02);
+    return wait_until([&] { return norm(emu.snapshot().position - target) < 0.2; }, kWait);
+  };
+  ASSERT_TRUE(settle(falcon::kWorkspaceCentre));
+  ASSERT_TRUE(wait_until([&] { return device->read(0, sample) == DeviceStatus::Ok; }, kWait));
+  const Vec3d before = sample.pose.position;
+  emu.set_buttons(fp::kButtonCentre);
+  ASSERT_TRUE(wait_until([&] { return device->read(0, sample) == DeviceStatus::Absent; }, kWait));
+  EXPECT_NE(device->status_message().find("clutch held"), std::string::npos);
+  ASSERT_TRUE(settle(falcon::kWorkspaceCentre + Vec3d{15, 0, -10}));  // the handle moves away
+  ASSERT_TRUE(wait_until([&] { return device->read(0, sample) == DeviceStatus::Absent; }, kWait));
+  emu.set_buttons(0);
+  ASSERT_TRUE(wait_until([&] { return device->read(0, sample) == DeviceStatus::Ok; }, kWait));
+  EXPECT_LT(norm(sample.pose.position - before), 0.5);  // the tool did not jump with the handle
+  // and moves on from there with the handle
+  ASSERT_TRUE(settle(falcon::kWorkspaceCentre + Vec3d{15, 0, -5}));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        return device->read(0, sample) == DeviceStatus::Ok &&
+               std::abs(sample.pose.position.z - (before.z + 5)) < 0.5;
+      },
+      kWait));
   device->deactivate();
 }
 
@@ -326,20 +361,29 @@ TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
   emu.hold(falcon::kWorkspaceCentre + Vec3d{0, -40, 0}, 0.4, 0.02);
   ASSERT_TRUE(wait_until([&] { return norm(tap.force()) > 1.0; }, kWait));
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // settle against the hand
+  // Sampled 50 times, 20 ms apart: the loop's force through the limits (device frame = the
+  // Falcon's axes) and the force the emulated motors put on the handle.
   double worst = 0.0, pressed = 0.0;
-  for (int i = 0; i < 20; ++i) {
-    const Vec3d commanded = tap.force();  // device frame = Falcon frame axes
+  Vec3d sum_commanded{}, sum_handle{};
+  for (int i = 0; i < 50; ++i) {
+    const Vec3d commanded = tap.force();
     const Vec3d at_handle = emu.snapshot().motor_force;
     worst = std::max(worst, norm(at_handle - commanded) / std::max(norm(commanded), 1e-9));
     pressed = std::max(pressed, norm(commanded));
+    sum_commanded += commanded;
+    sum_handle += at_handle;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  std::printf("torso press: %.2f N commanded through the falcon limits, worst mismatch at the "
-              "handle %.2f %%\n",
-              pressed, 100 * worst);
+  const double mean_error = norm(sum_handle - sum_commanded) / norm(sum_commanded);
+  std::printf(
+      "torso press: up to %.2f N commanded through the falcon limits; at the handle: "
+      "mean %.2f %% off, worst single sample %.2f %% (the two are read at different "
+      "instants)\n",
+      pressed, 100 * mean_error, 100 * worst);
   EXPECT_GT(pressed, 1.0);
   EXPECT_LE(pressed, 8.0 + 1e-9);  // the falcon profile's limit
-  EXPECT_LT(worst, 0.05);          // the end-effector force is the commanded one (see docs)
+  EXPECT_LT(mean_error, 0.01);     // the efforts' rounding (kinematics test: < 1 %)
+  EXPECT_LT(worst, 0.05);
   EXPECT_GT(emu.snapshot().motor_force.y, 0.5);  // pushed back up, toward anterior
 
   // unplug mid-press: the first tick that sees it writes zero

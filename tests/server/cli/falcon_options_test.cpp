@@ -1,0 +1,81 @@
+// palpd's Falcon options end to end (server/cli/falcon_options.cpp): --device falcon without
+// --falcon-firmware, with a missing or empty file (also from the config file), and the options
+// given to another device are refused at start, before the scene loads or a device is awaited.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "support/cli_test_util.hpp"
+
+namespace palp {
+namespace {
+
+namespace fs = std::filesystem;
+
+testing::CliOutcome run_palpd(const std::string& args) {
+  const std::string command = std::string(PALPD_PATH) + " " + args + " 2>&1 </dev/null";
+  testing::CliOutcome outcome;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return outcome;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
+  const int status = pclose(pipe);
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return outcome;
+}
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(FalconOptions, FirmwareIsRequiredAndCheckedBeforeTheSceneLoads) {
+  // The scene does not exist: had palpd looked at it first, the error would name it.
+  const std::string scene = "--scene /nonexistent/ct.nii.gz --no-realtime";
+  auto r = run_palpd(scene + " --device falcon");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--falcon-firmware FILE")) << r.output;
+  EXPECT_TRUE(has(r.output, "does not ship")) << r.output;
+
+  r = run_palpd(scene + " --device falcon --falcon-firmware /nonexistent/novint.bin");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(has(r.output, "/nonexistent/novint.bin: cannot open")) << r.output;
+  EXPECT_FALSE(has(r.output, "ct.nii.gz")) << r.output;
+
+  const fs::path dir = fs::temp_directory_path() / ("palp-falcon-opt-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string empty = (dir / "empty.bin").string();
+  std::ofstream(empty).close();
+  r = run_palpd(scene + " --device falcon:1 --falcon-firmware " + empty);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(has(r.output, "the file is empty")) << r.output;
+
+  // the config file's key, as every palpd option
+  const std::string config = (dir / "palpd.toml").string();
+  std::ofstream(config) << "device = \"falcon\"\nfalcon-firmware = \"/nonexistent/fw.bin\"\n";
+  r = run_palpd(scene + " --config " + config);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(has(r.output, "/nonexistent/fw.bin: cannot open")) << r.output;
+  fs::remove_all(dir);
+
+  r = run_palpd(scene + " --device falcon:x --falcon-firmware " + config);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "falcon:INDEX")) << r.output;
+}
+
+TEST(FalconOptions, OtherDevicesRefuseTheFalconOptions) {
+  auto r = run_palpd("--scene phantom:sphere --no-realtime --device sim --falcon-firmware x.bin");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "apply to --device falcon only")) << r.output;
+  r = run_palpd("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_TRUE(has(r.output, "--falcon-firmware FILE")) << r.output;
+  EXPECT_TRUE(has(r.output, "falcon[:INDEX]")) << r.output;
+}
+
+}  // namespace
+}  // namespace palp
