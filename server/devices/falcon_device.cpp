@@ -347,12 +347,15 @@ DeviceStatus FalconDevice::read(std::int64_t /*now_ns*/, DeviceSample& sample) n
     homed_.store(false, std::memory_order_relaxed);
     clutch_ = false;
     clutch_offset_ = {};
+    held_off_ = true;  // after a replug: absent until a frame says homed
     return DeviceStatus::Absent;
   }
   Incoming in;
-  if (!incoming_.read(in)) return DeviceStatus::NoData;
+  // between frames, a held-off device stays absent (one absent period, not one per frame)
+  if (!incoming_.read(in)) return held_off_ ? DeviceStatus::Absent : DeviceStatus::NoData;
   const bool homed = (in.homed & 7) == 7;
   homed_.store(homed, std::memory_order_relaxed);
+  held_off_ = true;
   if (!homed) return DeviceStatus::Absent;  // no force until homed
   const Vec3d angles{falcon::joint_angle(in.encoders[0]), falcon::joint_angle(in.encoders[1]),
                      falcon::joint_angle(in.encoders[2])};
@@ -373,6 +376,7 @@ DeviceStatus FalconDevice::read(std::int64_t /*now_ns*/, DeviceSample& sample) n
     return DeviceStatus::Absent;
   }
   clutch_ = false;
+  held_off_ = false;
   last_device_pos_ = device_pos - clutch_offset_;
   sample.pose.position = last_device_pos_;
   sample.pose.orientation = options_.tool_orientation;

@@ -125,6 +125,7 @@ class FalconDevice final : public Device {
   // Loop thread.
   Vec3d falcon_pos_ = falcon::kWorkspaceCentre;
   bool clutch_ = false;
+  bool held_off_ = false;  // the last frame said not homed, or clutch held, or the link went
   Vec3d clutch_offset_{}, frozen_{};
   Vec3d last_device_pos_{};
 

@@ -18,13 +18,16 @@
 #include "loop/haptic_loop.hpp"
 #include "model/falcon_kinematics.hpp"
 #include "model/registration.hpp"
+#include "net/server.hpp"
 #include "safety/engagement.hpp"
 #include "safety/safety.hpp"
 #include "scene/home_site.hpp"
 #include "scene/scene.hpp"
 #include "support/falcon_emulator.hpp"
+#include "support/net_test_client.hpp"
 #include "support/palpd_test_util.hpp"
 #include "support/usb_emulator.hpp"
+#include "wire/messages.hpp"
 
 namespace palp::rt {
 namespace {
@@ -272,6 +275,7 @@ TEST_F(FalconTest, StreamsAndSurvivesCorruptAndShortFrames) {
   EXPECT_EQ(c2.corrupt, 5u);
   EXPECT_EQ(c2.short_frames, 3u);
   EXPECT_EQ(loop.stats().faults, 0u);
+  EXPECT_EQ(loop.stats().absent_events, 0u);
   EXPECT_EQ(device->state(), DeviceState::Present);
   loop.stop();
   // the loop stopped: zero-effort frames keep the exchange going
@@ -279,6 +283,45 @@ TEST_F(FalconTest, StreamsAndSurvivesCorruptAndShortFrames) {
       wait_until([&] { return device->counters().zero_frames > c2.zero_frames + 5; }, kWait));
   const auto e = emu.snapshot().efforts;
   EXPECT_EQ(e[0] | e[1] | e[2], 0);
+  device->deactivate();
+}
+
+// Clients (palp probe, palpview) are told about homing through Stats: absent with what to do,
+// then present and homed.
+TEST_F(FalconTest, HomingIsReportedToClients) {
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.power_on();
+  auto device = falcon();
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  auto model = testing::ball_model();
+  HapticLoop loop(model, *device, loop_config());
+  net::SceneDescription scene;
+  scene.source = "ball";
+  scene.grid = model->fields().grid();
+  scene.device = "falcon";
+  net::ServerConfig config;
+  config.port = 0;
+  config.stats_interval_s = 0.2;
+  net::Server server(config, scene, loop, nullptr);
+  loop.start();
+  server.start();
+  testing::TestClient client(server.port());
+  client.hello(v1::OBSERVER, "", net::kProtocolVersion, 0, 200.0);
+  v1::ServerMessage m;
+  auto stats_saying = [&](v1::DeviceState state, const std::string& text) {
+    return client.wait_for(
+        [&](const v1::ServerMessage& msg) {
+          return msg.has_stats() && msg.stats().device_state() == state &&
+                 msg.stats().device_message().find(text) != std::string::npos;
+        },
+        m, kWait);
+  };
+  ASSERT_TRUE(stats_saying(v1::DEVICE_ABSENT, "pull the handle all the way out"))
+      << m.stats().device_message();
+  home(emu, *device);
+  ASSERT_TRUE(stats_saying(v1::DEVICE_PRESENT, "homed (green LED)")) << m.stats().device_message();
+  server.stop();
+  loop.stop();
   device->deactivate();
 }
 
@@ -383,13 +426,18 @@ TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
   EXPECT_GT(pressed, 1.0);
   EXPECT_LE(pressed, 8.0 + 1e-9);  // the falcon profile's limit
   EXPECT_LT(mean_error, 0.01);     // the efforts' rounding (kinematics test: < 1 %)
-  EXPECT_LT(worst, 0.05);
+  EXPECT_LT(worst, 0.10);  // one sample each, read at different instants while the force moves
   EXPECT_GT(emu.snapshot().motor_force.y, 0.5);  // pushed back up, toward anterior
 
   // unplug mid-press: the first tick that sees it writes zero
   const std::uint64_t absent0 = loop.stats().absent_events;
+  const auto unplugged = std::chrono::steady_clock::now();
   emu.unplug();
   ASSERT_TRUE(wait_until([&] { return loop.stats().absent_events > absent0; }, kWait));
+  std::printf(
+      "unplug seen by the loop within %.1f ms (polled every 1 ms)\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - unplugged)
+          .count());
   EXPECT_EQ(tap.force_after_absent(), 0u);
   EXPECT_EQ(norm(tap.force()), 0.0);
   EXPECT_EQ(loop.stats().engage_gain, 0.0);
@@ -414,6 +462,9 @@ TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
       kWait));
   EXPECT_TRUE(ramping);
   EXPECT_EQ(emu.snapshot().nonzero_while_unhomed, 0u);
+  // unplug, power-up, load and homing were one absent period for the loop, not one per frame
+  EXPECT_EQ(loop.stats().absent_events, absent0 + 1);
+  EXPECT_EQ(loop.stats().faults, 0u);
   loop.stop();
   device->deactivate();
 }
