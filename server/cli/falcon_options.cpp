@@ -21,6 +21,7 @@ void prepare_falcon(const Args& args, rt::Device& device) {
         "--device falcon needs --falcon-firmware FILE: the Falcon's firmware from Novint's driver "
         "(e.g. novint.bin; palp does not ship it, docs/devices.md)");
   falcon->set_firmware(rt::FalconDevice::read_firmware(*path), *path);
+  falcon->set_report_at_stop(!args.has("quiet"));
 }
 
 void orient_falcon(const Args& args, rt::Device& device, const Scene& scene,

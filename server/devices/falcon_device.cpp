@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -154,14 +155,29 @@ DeviceStatus FalconDevice::activate() {
     return fail(e.what());
   }
   active_ = true;
+  activated_ns_ = clock_ns();
   return DeviceStatus::Ok;
 }
 
 DeviceStatus FalconDevice::deactivate() {
+  const bool was_active = active_;
   active_ = false;
   if (link_) {
     context_->run_sync([this] { send_frame({0, 0, 0}, clock_ns()); });  // the force off, then close
     link_->stop();
+  }
+  if (was_active && report_at_stop_) {
+    const Counters c = counters();
+    const double s = double(clock_ns() - activated_ns_) * 1e-9;
+    std::fprintf(
+        stderr,
+        "palpd: falcon: %llu exchanges in %.1f s (%.0f/s), %llu lost replies, %llu "
+        "corrupt and %llu short frames, %llu firmware loads (%llu failed), %llu opens\n",
+        static_cast<unsigned long long>(c.frames), s, s > 0 ? double(c.frames) / s : 0.0,
+        static_cast<unsigned long long>(c.lost_replies), static_cast<unsigned long long>(c.corrupt),
+        static_cast<unsigned long long>(c.short_frames), static_cast<unsigned long long>(c.uploads),
+        static_cast<unsigned long long>(c.upload_failures),
+        static_cast<unsigned long long>(c.opens));
   }
   return DeviceStatus::Ok;
 }

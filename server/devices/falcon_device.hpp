@@ -57,6 +57,9 @@ class FalconDevice final : public Device {
   static std::vector<std::uint8_t> read_firmware(const std::string& path);
   void set_firmware(std::vector<std::uint8_t> image, std::string path);
   void set_tool_orientation(const Quat& q) { options_.tool_orientation = q; }
+  // deactivate() prints one line to stderr: exchanges per second and the error counters (palpd
+  // sets it unless --quiet; the exchange rate on real hardware is otherwise unmeasured).
+  void set_report_at_stop(bool report) { report_at_stop_ = report; }
 
   std::string_view kind() const noexcept override { return "falcon"; }
   DeviceStatus configure(const DeviceConfig& config) override;  // Error without firmware
@@ -114,6 +117,8 @@ class FalconDevice final : public Device {
   LatestBox<Incoming> incoming_;
   LatestBox<Outgoing> commands_;
   bool active_ = false;
+  bool report_at_stop_ = false;
+  std::int64_t activated_ns_ = 0;
 
   // Event thread.
   usb::falcon::FrameParser parser_;

@@ -247,6 +247,7 @@ TEST_F(FalconTest, StreamsAndSurvivesCorruptAndShortFrames) {
   ASSERT_EQ(device->activate(), DeviceStatus::Ok);
   ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait));
   home(emu, *device);
+  device->set_report_at_stop(true);  // the line palpd prints at exit
   HapticLoop loop(testing::ball_model(), *device, loop_config());
   loop.start();
   const auto c0 = device->counters();
