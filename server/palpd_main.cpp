@@ -522,7 +522,7 @@ int run_configured(cli::Arguments argv) {
                      profile->max_stiffness_N_per_mm);
     }
   } else if (args.has("no-force-limits")) {
-    throw UsageError("--no-force-limits applies to usb-haptic and falcon only");
+    throw UsageError("--no-force-limits applies to falcon and usb-haptic only");
   }
   loop_config.profile = profile;
   if (profile) {
