@@ -91,6 +91,10 @@ class FalconDevice final : public Device {
     std::array<std::int16_t, 3> last_efforts{};
   };
   Counters counters() const noexcept;
+  DeviceLinkCounters link_counters() const noexcept override {
+    return {frames_.load(std::memory_order_relaxed), corrupt_.load(std::memory_order_relaxed),
+            short_frames_.load(std::memory_order_relaxed), lost_.load(std::memory_order_relaxed)};
+  }
   usb::LinkState link_state() const noexcept;
   // All three motors homed, as the firmware last said (false while absent).
   bool homed() const noexcept { return (homed_bits_.load(std::memory_order_relaxed) & 7) == 7; }

@@ -161,6 +161,11 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_engage_gain(ls.engage_gain);
   st->set_passivity_ticks(ls.passivity_ticks);
   st->set_passivity_dissipated_mj(ls.passivity_dissipated_mJ);
+  const rt::DeviceLinkCounters link = loop.device().link_counters();
+  st->set_device_exchanges(link.exchanges);
+  st->set_device_corrupt_frames(link.corrupt);
+  st->set_device_short_frames(link.short_frames);
+  st->set_device_lost_replies(link.lost_replies);
 }
 
 }  // namespace palp::net

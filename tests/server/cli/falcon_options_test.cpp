@@ -1,6 +1,8 @@
 // palpd's Falcon options end to end (server/cli/falcon_options.cpp): --device falcon without
 // --falcon-firmware, with a missing or empty file (also from the config file), and the options
 // given to another device are refused at start, before the scene loads or a device is awaited.
+// And `palp probe` shows the device's state and message from Stats (where a Falcon's homing
+// instructions appear; the device side is tested in falcon_device_test).
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -11,6 +13,7 @@
 #include <fstream>
 
 #include "support/cli_test_util.hpp"
+#include "support/palpd_process.hpp"
 
 namespace palp {
 namespace {
@@ -75,6 +78,24 @@ TEST(FalconOptions, OtherDevicesRefuseTheFalconOptions) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_TRUE(has(r.output, "--falcon-firmware FILE")) << r.output;
   EXPECT_TRUE(has(r.output, "falcon[:INDEX]")) << r.output;
+}
+
+TEST(FalconOptions, ProbeShowsTheDeviceStateFromStats) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("palp-falcon-probe-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const fs::path log = dir / "palpd.log";
+  const int port = testing::start_palpd(
+      "--scene phantom:sphere --device sim --port 0 --duration 4 --no-realtime", log);
+  ASSERT_GT(port, 0) << testing::read_text(log);
+  // Stats come every second: 2.5 s of probing sees at least one
+  const auto probe = testing::run_palp_cli(
+      "probe 127.0.0.1:" + std::to_string(port) + " --duration 2.5", dir / "cache");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  EXPECT_TRUE(has(probe.output, "  status    device present")) << probe.output;
+  EXPECT_FALSE(has(probe.output, "exchanges")) << probe.output;  // sim has no framed link
+  EXPECT_TRUE(testing::wait_palpd_exit(log));
+  fs::remove_all(dir);
 }
 
 }  // namespace

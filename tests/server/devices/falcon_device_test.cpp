@@ -321,6 +321,16 @@ TEST_F(FalconTest, HomingIsReportedToClients) {
       << m.stats().device_message();
   home(emu, *device);
   ASSERT_TRUE(stats_saying(v1::DEVICE_PRESENT, "homed (green LED)")) << m.stats().device_message();
+  EXPECT_GT(m.stats().device_exchanges(), 0u);
+  // corrupt and short frames are counted in Stats
+  emu.corrupt_replies(2);
+  emu.cut_replies(1);
+  ASSERT_TRUE(client.wait_for(
+      [&](const v1::ServerMessage& msg) {
+        return msg.has_stats() && msg.stats().device_corrupt_frames() == 2 &&
+               msg.stats().device_short_frames() == 1;
+      },
+      m, kWait));
   server.stop();
   loop.stop();
   device->deactivate();
