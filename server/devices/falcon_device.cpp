@@ -300,7 +300,8 @@ void FalconDevice::send_frame(const std::array<std::int16_t, 3>& efforts, std::i
   // never any effort before the firmware says homed
   if (homed) frame.efforts = efforts;
   frame.control = homed ? fp::kLedGreen : std::uint8_t(fp::kLedRed | fp::kHomingMode);
-  if (homed && (device_buttons_ & fp::kButtonCentre)) frame.control |= fp::kLedBlue;
+  if (homed && (device_buttons_ & (fp::kButtonCentre | fp::kButtonForward)))
+    frame.control |= fp::kLedBlue;
   std::uint8_t bytes[fp::kFrameSize];
   fp::encode_host_frame(frame, bytes);
   if (link_->send(bytes, sizeof bytes)) {
@@ -361,7 +362,7 @@ DeviceStatus FalconDevice::read(std::int64_t /*now_ns*/, DeviceSample& sample) n
     Incoming stale;
     incoming_.read(stale);  // frames from before the loss are not used after a replug
     homed_.store(false, std::memory_order_relaxed);
-    clutch_ = false;
+    clutch_ = recentre_ = false;
     clutch_offset_ = {};
     held_off_ = true;  // after a replug: absent until a frame says homed
     return DeviceStatus::Absent;
@@ -390,6 +391,16 @@ DeviceStatus FalconDevice::read(std::int64_t /*now_ns*/, DeviceSample& sample) n
     clutch_ = true;
     clutch_offset_ = device_pos - frozen_;
     return DeviceStatus::Absent;
+  }
+  if (in.buttons & fp::kButtonForward) {  // re-centre: released, the tool is at the home point
+    clutch_ = true;                       // (no force while held; the loop ramps in after)
+    recentre_ = true;
+    return DeviceStatus::Absent;
+  }
+  if (recentre_) {
+    clutch_offset_ = device_pos;
+    recentre_ = false;
+    recentres_.fetch_add(1, std::memory_order_relaxed);
   }
   clutch_ = false;
   held_off_ = false;
@@ -452,8 +463,9 @@ std::string FalconDevice::status_message() const {
     text += ")";
   } else {
     text += "; homed (green LED)";
-    if (buttons_.load(std::memory_order_relaxed) & fp::kButtonCentre)
-      text += "; clutch held (no force)";
+    const std::uint8_t buttons = buttons_.load(std::memory_order_relaxed);
+    if (buttons & fp::kButtonCentre) text += "; clutch held (no force)";
+    if (buttons & fp::kButtonForward) text += "; re-centre held (no force until released)";
   }
   return text;
 }
@@ -473,6 +485,7 @@ FalconDevice::Counters FalconDevice::counters() const noexcept {
   c.upload_failures = upload_failures_.load(std::memory_order_relaxed);
   c.already_running = already_running_.load(std::memory_order_relaxed);
   c.opens = opens_.load(std::memory_order_relaxed);
+  c.recentres = recentres_.load(std::memory_order_relaxed);
   c.buttons = buttons_.load(std::memory_order_relaxed);
   c.homed = homed_bits_.load(std::memory_order_relaxed);
   for (int i = 0; i < 3; ++i)

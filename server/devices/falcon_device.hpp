@@ -19,7 +19,9 @@
 // the user to pull the handle all the way out and push it straight in; once homed the LED turns
 // green and the loop engages with its ramp. The centre grip button is a clutch: held, read()
 // answers Absent (no force) and the handle moves without moving the tool; released, the tool goes
-// on from where it was (the loop ramps the force back in).
+// on from where it was (the loop ramps the force back in). The forward button re-centres: held,
+// no force; released, the handle's position becomes the workspace centre (the tool goes to the
+// home point) and the loop ramps the force in.
 // read() and write() touch only atomics, LatestBoxes and pure kinematics: no allocation, lock,
 // log or throw.
 #pragma once
@@ -86,6 +88,7 @@ class FalconDevice final : public Device {
     std::uint64_t upload_failures = 0;  // load attempts that failed (handshake, echo, silence)
     std::uint64_t already_running = 0;  // opens that found the firmware running
     std::uint64_t opens = 0;            // setups completed (1 + replugs)
+    std::uint64_t recentres = 0;        // forward-button re-centres
     std::uint8_t buttons = 0;
     std::uint8_t homed = 0;  // bit per motor, from the last frame
     std::array<std::int16_t, 3> last_efforts{};
@@ -133,7 +136,7 @@ class FalconDevice final : public Device {
 
   // Loop thread.
   Vec3d falcon_pos_ = falcon::kWorkspaceCentre;
-  bool clutch_ = false;
+  bool clutch_ = false, recentre_ = false;
   bool held_off_ = false;  // the last frame said not homed, or clutch held, or the link went
   Vec3d clutch_offset_{}, frozen_{};
   Vec3d last_device_pos_{};
@@ -141,7 +144,7 @@ class FalconDevice final : public Device {
   std::atomic<bool> homed_{false};
   std::atomic<std::uint64_t> frames_{0}, corrupt_{0}, short_frames_{0}, short_packets_{0},
       host_frames_{0}, zero_frames_{0}, lost_{0}, clamped_{0}, fk_failures_{0}, uploads_{0},
-      upload_failures_{0}, already_running_{0}, opens_{0};
+      upload_failures_{0}, already_running_{0}, opens_{0}, recentres_{0};
   std::atomic<std::uint8_t> buttons_{0}, homed_bits_{0};
   std::atomic<std::uint32_t> last_efforts_packed_[3] = {};
   std::atomic<double> pos_[3] = {};
