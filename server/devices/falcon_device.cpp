@@ -262,15 +262,15 @@ std::string FalconDevice::setup(libusb_device_handle* handle) {
   std::string why;
   if (running) {
     already_running_.fetch_add(1, std::memory_order_relaxed);
-    setup_note_ = "firmware already running";
+    set_note("firmware already running");
   } else {
     for (int attempt = 1; attempt <= std::max(options_.upload_attempts, 1); ++attempt) {
       why = upload(handle);
       if (why.empty()) {
         uploads_.fetch_add(1, std::memory_order_relaxed);
-        setup_note_ = "firmware " + options_.firmware_path + " loaded (" +
-                      std::to_string(options_.firmware.size()) + " bytes, attempt " +
-                      std::to_string(attempt) + ")";
+        set_note("firmware " + options_.firmware_path + " loaded (" +
+                 std::to_string(options_.firmware.size()) + " bytes, attempt " +
+                 std::to_string(attempt) + ")");
         running = true;
         break;
       }
@@ -450,10 +450,19 @@ Vec3d FalconDevice::falcon_position() const noexcept {
           pos_[2].load(std::memory_order_relaxed)};
 }
 
+void FalconDevice::set_note(std::string note) {
+  const std::lock_guard lock(note_mutex_);
+  setup_note_ = std::move(note);
+}
+
 std::string FalconDevice::status_message() const {
   if (!link_) return "falcon not active";
   std::string text = link_->message();
   if (link_->state() != usb::LinkState::Present) return text;
+  {
+    const std::lock_guard lock(note_mutex_);
+    if (!setup_note_.empty()) text += "; " + setup_note_;
+  }
   const std::uint8_t bits = homed_bits_.load(std::memory_order_relaxed);
   if ((bits & 7) != 7) {
     text +=

@@ -29,6 +29,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -132,6 +133,8 @@ class FalconDevice final : public Device {
   bool awaiting_ = false;
   std::int64_t sent_ns_ = 0, last_command_ns_ = 0;
   std::uint8_t device_homed_ = 0, device_buttons_ = 0;
+  void set_note(std::string note);
+  mutable std::mutex note_mutex_;  // setup_note_ (not real time: setup and status_message)
   std::string setup_note_;
 
   // Loop thread.

@@ -60,6 +60,7 @@ void EmulatedFalcon::reset_power() {
   // relative encoders: an unknown count at power-on until the index is crossed
   offsets_ = {137.0, -211.0, 389.0};
   last_tick_ns_ = -1;
+  last_in_ns_ = 0;  // the new stream's device time starts at 0 again
 }
 
 void EmulatedFalcon::power_on() {
@@ -69,7 +70,10 @@ void EmulatedFalcon::power_on() {
   }
   usb_.plug();
   usb_.start_in_stream(
-      fp::kEndpointIn, 1000.0, [this](std::uint64_t, std::int64_t t_ns) { return tick(t_ns); }, 16);
+      // a bridge keeps what its serial side received until the host reads it: nothing is
+      // dropped (a busy host, e.g. a loaded CI machine, reads late but loses no frame)
+      fp::kEndpointIn, 1000.0, [this](std::uint64_t, std::int64_t t_ns) { return tick(t_ns); },
+      4096);
 }
 
 void EmulatedFalcon::unplug() {

@@ -167,6 +167,9 @@ TEST_F(FalconTest, EnumeratesUploadsVerifiesAndWaitsForHoming) {
   EXPECT_EQ(device->state(), DeviceState::Absent);
   EXPECT_NE(device->status_message().find("pull the handle all the way out"), std::string::npos)
       << device->status_message();
+  EXPECT_NE(device->status_message().find("firmware test.bin loaded (3000 bytes, attempt 1)"),
+            std::string::npos)
+      << device->status_message();
   s = emu.snapshot();
   EXPECT_EQ(s.control, fp::kLedRed | fp::kHomingMode);
   // a force asked before homing never reaches the motors
@@ -238,6 +241,7 @@ TEST_F(FalconTest, RunningFirmwareIsDetectedAndNotReloaded) {
   ASSERT_EQ(device->activate(), DeviceStatus::Ok);
   ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait));
   EXPECT_EQ(device->counters().already_running, 1u);
+  EXPECT_NE(device->status_message().find("firmware already running"), std::string::npos);
   EXPECT_EQ(device->counters().uploads, 0u);
   EXPECT_EQ(emu.snapshot().echoed, 0u);
   EXPECT_EQ(emu.snapshot().dtr_resets, 0u);  // not even reset
