@@ -60,6 +60,7 @@ class FalconDevice final : public Device {
   static std::vector<std::uint8_t> read_firmware(const std::string& path);
   void set_firmware(std::vector<std::uint8_t> image, std::string path);
   void set_tool_orientation(const Quat& q) { options_.tool_orientation = q; }
+  const Quat& tool_orientation() const { return options_.tool_orientation; }
   // deactivate() prints one line to stderr: exchanges per second and the error counters (palpd
   // sets it unless --quiet; the exchange rate on real hardware is otherwise unmeasured).
   void set_report_at_stop(bool report) { report_at_stop_ = report; }

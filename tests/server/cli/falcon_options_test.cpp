@@ -12,6 +12,11 @@
 #include <filesystem>
 #include <fstream>
 
+#include "base/errors.hpp"
+#include "base/patient_frame.hpp"
+#include "cli/falcon_options.hpp"
+#include "devices/falcon_device.hpp"
+#include "model/registration.hpp"
 #include "support/cli_test_util.hpp"
 #include "support/palpd_process.hpp"
 
@@ -78,6 +83,34 @@ TEST(FalconOptions, OtherDevicesRefuseTheFalconOptions) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_TRUE(has(r.output, "--falcon-firmware FILE")) << r.output;
   EXPECT_TRUE(has(r.output, "falcon[:INDEX]")) << r.output;
+}
+
+// The fixed 3-DOF tool, placed on the patient, points into the skin from the side asked for:
+// tool +z (the outward normal the pad presses against) along that patient direction in the scene.
+TEST(FalconOptions, ToolOrientationPointsIntoTheSkinFromTheSideAsked) {
+  Scene scene;  // the default grid: LPS, so the patient frame is the scene frame
+  const PatientFrame frame = patient_frame(scene.grid);
+  net::SceneDescription::Placement placement;
+  placement.registration.rotation = rotation_from_axes(frame, "IAR");
+  for (const char* side : {"anterior", "left", "superior"}) {
+    SCOPED_TRACE(side);
+    rt::FalconDevice device(rt::FalconDevice::Options{});
+    const cli::Args args({"--falcon-tool-from", side}, {}, {"falcon-tool-from"});
+    cli::orient_falcon(args, device, scene, placement);
+    Pose in_device;
+    in_device.orientation = device.tool_orientation();
+    const Quat q = to_scene(placement.registration, in_device).orientation;
+    Anatomy direction{};
+    ASSERT_TRUE(parse_anatomy(side, &direction));
+    const Vec3d z = rotate(q, {0, 0, 1}), expected = frame.toward(direction);
+    EXPECT_NEAR(z.x, expected.x, 1e-9);
+    EXPECT_NEAR(z.y, expected.y, 1e-9);
+    EXPECT_NEAR(z.z, expected.z, 1e-9);
+  }
+  rt::FalconDevice device(rt::FalconDevice::Options{});
+  EXPECT_THROW(cli::orient_falcon(cli::Args({"--falcon-tool-from", "up"}, {}, {"falcon-tool-from"}),
+                                  device, scene, placement),
+               UsageError);
 }
 
 TEST(FalconOptions, ProbeShowsTheDeviceStateFromStats) {
