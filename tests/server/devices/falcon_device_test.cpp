@@ -444,7 +444,23 @@ TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
   loop.start();
   // the hand pushes the handle toward the patient (device -y = posterior), into the skin
   emu.hold(falcon::kWorkspaceCentre + Vec3d{0, -40, 0}, 0.4, 0.02);
-  ASSERT_TRUE(wait_until([&] { return norm(tap.force()) > 1.0; }, kWait));
+  const auto diag = [&] {
+    const auto st = loop.stats();
+    const auto c = device->counters();
+    const auto e = emu.snapshot();
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "loop: ticks %llu faults %llu last_fault 0x%x absent %llu gain %.2f; device: "
+                  "frames %llu fk_failures %llu homed %u; handle (%.1f, %.1f, %.1f) motor force "
+                  "(%.2f, %.2f, %.2f); written (%.2f, %.2f, %.2f)",
+                  (unsigned long long)st.ticks, (unsigned long long)st.faults, st.last_fault,
+                  (unsigned long long)st.absent_events, st.engage_gain,
+                  (unsigned long long)c.frames, (unsigned long long)c.fk_failures, c.homed,
+                  e.position.x, e.position.y, e.position.z, e.motor_force.x, e.motor_force.y,
+                  e.motor_force.z, tap.force().x, tap.force().y, tap.force().z);
+    return std::string(text) + "; " + device->status_message();
+  };
+  ASSERT_TRUE(wait_until([&] { return norm(tap.force()) > 1.0; }, kWait)) << diag();
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // settle against the hand
   // Sampled 50 times, 20 ms apart: the loop's force through the limits (device frame = the
   // Falcon's axes) and the force the emulated motors put on the handle. The two are read at
