@@ -26,6 +26,7 @@
 #include "cli/cli.hpp"
 #include "cli/config_file.hpp"
 #include "cli/device_placement.hpp"
+#include "cli/falcon_options.hpp"
 #include "cli/model_setup.hpp"
 #include "cli/palpd_stats.hpp"
 #include "cli/rt_options.hpp"
@@ -65,6 +66,8 @@ Devices:
                           (docs/usb-protocol.md; VID:PID in hex, default 1209:0001); hot-plug:
                           it may come after palpd starts and go at any time (zero force while
                           absent); a permission error names the udev rule to install
+  falcon[:INDEX]          a Novint Falcon on libusb (INDEX: which one, default 0), with
+                          --falcon-firmware FILE; homed by the user, hot-plug (docs/devices.md)
   spacemouse[:position|:rate][:VID:PID]
                           a 3Dconnexion SpaceMouse as a pose source (no force output: clients
                           show the force it cannot render); rate (default) moves the finger
@@ -87,6 +90,8 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
   --NO-FORCE-LIMITS       (spelled --no-force-limits) send the model's raw force to a usb-haptic
                           device: no clamp, no step bound, no engagement. Command line only,
                           never in a config file; for bench tests with no hand on the device
+  --falcon-firmware FILE  Novint's Falcon firmware (from its driver; palp does not ship it)
+  --falcon-tool-from DIR  the Falcon's fixed tool points into the skin from DIR (anterior)
   --rate HZ               loop rate, 1..100000 (default 1000; tested 500..10000)
 Placing a force device on the patient (usb-haptic; spacemouse takes --home and
 --home-clearance; sim, replay and remote move in the scene frame and take none):
@@ -146,7 +151,8 @@ const std::vector<std::string> kValued = {
     "record",        "record-dir",     "watchdog-ms",    "device-timeout-ms",
     "priority",      "duration",       "config",         "poll-us",
     "stats-json",    "device-axes",    "device-scale",   "home",
-    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"};
+    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes",
+    "falcon-firmware", "falcon-tool-from"};
 
 // Now, as 2026-11-24T12:00:00Z.
 std::string utc_now_text() {
@@ -428,9 +434,10 @@ int run_configured(cli::Arguments argv) {
   std::unique_ptr<rt::Device> device =
       replay ? std::make_unique<rt::ReplayDevice>(std::move(replay->records))
              : rt::make_device(*device_spec);
+  cli::prepare_falcon(args, *device);  // the firmware file, before anything is awaited
   // Limits: a device that pushes on a hand always gets them (the profile, or the most
   // conservative class), lowered in the loop to what the device declares; engagement with them.
-  const bool drives_a_hand = device->kind() == "usb-haptic";
+  const bool drives_a_hand = device->kind() == "usb-haptic" || device->kind() == "falcon";
   if (drives_a_hand && !profile) {
     if (args.has("no-force-limits")) {
       std::fprintf(stderr,
@@ -438,7 +445,7 @@ int run_configured(cli::Arguments argv) {
                    "unclamped and unramped (the skin law alone reaches 144 N at 20 mm). Keep "
                    "hands off the device.\n");
     } else {
-      profile = &default_device_profile();
+      profile = device->kind() == "falcon" ? &device_profile("falcon") : &default_device_profile();
       if (!quiet)
         std::fprintf(stderr,
                      "palpd: no --device-profile: limiting the force to the %s class (%.1f N, "
@@ -447,7 +454,7 @@ int run_configured(cli::Arguments argv) {
                      profile->max_stiffness_N_per_mm);
     }
   } else if (args.has("no-force-limits")) {
-    throw UsageError("--no-force-limits applies to usb-haptic only");
+    throw UsageError("--no-force-limits applies to falcon and usb-haptic only");
   }
   loop_config.profile = profile;
   if (profile) {
@@ -471,6 +478,7 @@ int run_configured(cli::Arguments argv) {
   const std::optional<net::SceneDescription::Placement> placement =
       cli::place_device(args, device->kind(), scene, quiet);
   if (placement) loop_config.registration = placement->registration;
+  cli::orient_falcon(args, *device, scene, placement);
   if (device->kind() == "spacemouse" && (args.get("home") || args.get("home-clearance"))) {
     const HomeSite site = find_home_site(*scene.fields, args.get("home").value_or("auto"),
                                          positive(args, "home-clearance", 20.0));

@@ -439,6 +439,18 @@ int cmd_probe(const Arguments& argv) {
           static_cast<unsigned long long>(s.overruns()),
           static_cast<unsigned long long>(s.faults()), s.jitter_max_us(), s.tick_mean_us(),
           s.clients(), s.realtime() ? "real time" : "not real time");
+      // the device as palpd sees it (e.g. a Falcon: homing, what to do), and its link
+      static const char* const kStates[] = {"unspecified", "present", "absent", "fault"};
+      const int st = static_cast<int>(s.device_state());
+      std::printf("  status    device %s%s%s", st >= 0 && st <= 3 ? kStates[st] : "?",
+                  s.device_message().empty() ? "" : ": ", s.device_message().c_str());
+      if (s.device_exchanges() > 0)
+        std::printf("; link %llu exchanges, %llu corrupt and %llu short frames, %llu lost replies",
+                    static_cast<unsigned long long>(s.device_exchanges()),
+                    static_cast<unsigned long long>(s.device_corrupt_frames()),
+                    static_cast<unsigned long long>(s.device_short_frames()),
+                    static_cast<unsigned long long>(s.device_lost_replies()));
+      std::printf("\n");
       std::printf("  jitter   ");
       for (int b = 0; b < s.jitter_counts_size(); ++b) {
         if (b < s.jitter_bucket_upper_us_size())

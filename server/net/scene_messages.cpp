@@ -170,6 +170,11 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_loop_cpu_fraction(ls.loop_cpu_wall_ns > 0 ? static_cast<double>(ls.loop_cpu_ns) /
                                                           static_cast<double>(ls.loop_cpu_wall_ns)
                                                     : 0.0);
+  const rt::DeviceLinkCounters link = loop.device().link_counters();
+  st->set_device_exchanges(link.exchanges);
+  st->set_device_corrupt_frames(link.corrupt);
+  st->set_device_short_frames(link.short_frames);
+  st->set_device_lost_replies(link.lost_replies);
 }
 
 }  // namespace palp::net

@@ -252,7 +252,8 @@ TEST(Deploy, UdevRulesAreWellFormedAndCoverEveryDevice) {
   }
   EXPECT_EQ(gotos, labels);
   EXPECT_TRUE(access_line) << "no MODE=0660 GROUP=palp TAG+=uaccess rule for the devices";
-  std::map<std::string, std::string> expected = {{"1209:0001", "usb-haptic"}};
+  std::map<std::string, std::string> expected = {{"1209:0001", "usb-haptic"},
+                                                  {"0403:cb48", "falcon"}};
   for (const char* pid :
        {"c603", "c605", "c606", "c621", "c623", "c625", "c626", "c627", "c628", "c629", "c62b"})
     expected[std::string("046d:") + pid] = "spacemouse";
