@@ -25,9 +25,9 @@
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/config_file.hpp"
-#include "cli/tls_options.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/model_setup.hpp"
+#include "cli/tls_options.hpp"
 #include "devices/device.hpp"
 #include "io/gzip.hpp"
 #include "loop/haptic_loop.hpp"
@@ -607,7 +607,8 @@ int run_configured(cli::Arguments argv) {
                 device_spec->c_str(), tool.name.c_str(), loop_config.rate_hz,
                 profile ? (std::string(", profile ") + std::string(profile->name)).c_str() : "");
     const PatientFrame frame = patient_frame(scene.grid);
-    for (const std::string& line : cli::server_tls_report(server_config.tls.get(), server_config.bind))
+    for (const std::string& line :
+         cli::server_tls_report(server_config.tls.get(), server_config.bind))
       std::fprintf(line.rfind("warning", 0) == 0 ? stderr : stdout, "palpd: %s\n", line.c_str());
     if (server_config.token.empty() && !net::is_loopback_address(server_config.bind))
       std::printf(

@@ -138,20 +138,19 @@ void StreamClient::Impl::start_connect() {
           drop(c, "cannot resolve " + opts.host + ": " + ec.message());
           return;
         }
-        palp::tls::async_connect(
-            c->stream, results, opts.host, std::to_string(opts.port), tls.get(),
-            [this, c](const std::string& failure) {
-              if (c != conn) return;
-              if (!failure.empty()) {
-                drop(c, failure);
-                return;
-              }
-              c->connected = true;
-              c->last_rx_ns = now_ns();
-              send_hello(*c);
-              flush(c);
-              read(c);
-            });
+        palp::tls::async_connect(c->stream, results, opts.host, std::to_string(opts.port),
+                                 tls.get(), [this, c](const std::string& failure) {
+                                   if (c != conn) return;
+                                   if (!failure.empty()) {
+                                     drop(c, failure);
+                                     return;
+                                   }
+                                   c->connected = true;
+                                   c->last_rx_ns = now_ns();
+                                   send_hello(*c);
+                                   flush(c);
+                                   read(c);
+                                 });
       });
 }
 
@@ -288,15 +287,15 @@ void StreamClient::Impl::flush(const ConnectionPtr& c) {
   c->out_pending.clear();
   c->writing = true;
   c->stream.async_write(asio::buffer(c->out_inflight),
-                    [this, c](const asio::error_code& ec, std::size_t) {
-                      c->writing = false;
-                      if (c != conn) return;
-                      if (ec) {
-                        drop(c, "cannot send to the server: " + ec.message());
-                        return;
-                      }
-                      flush(c);
-                    });
+                        [this, c](const asio::error_code& ec, std::size_t) {
+                          c->writing = false;
+                          if (c != conn) return;
+                          if (ec) {
+                            drop(c, "cannot send to the server: " + ec.message());
+                            return;
+                          }
+                          flush(c);
+                        });
 }
 
 void StreamClient::Impl::wake() {

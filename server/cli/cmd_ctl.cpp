@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <deque>
 #include <ctime>
+#include <deque>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -17,8 +17,8 @@
 #include "base/errors.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
-#include "cli/tls_options.hpp"
 #include "cli/config_file.hpp"
+#include "cli/tls_options.hpp"
 #include "net/protocol.hpp"
 #include "scene/trajectory.hpp"
 #include "wire/framing.hpp"
@@ -164,14 +164,13 @@ class Session {
     asio::error_code ec;
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
-    tls::async_connect(
-        stream_, endpoints, host_, port_, tls_, [this](const std::string& failure) {
-          if (!failure.empty()) return fail(failure);
-          v1::ClientMessage m;
-          *m.mutable_hello() = hello_;
-          send(m);
-          read();
-        });
+    tls::async_connect(stream_, endpoints, host_, port_, tls_, [this](const std::string& failure) {
+      if (!failure.empty()) return fail(failure);
+      v1::ClientMessage m;
+      *m.mutable_hello() = hello_;
+      send(m);
+      read();
+    });
     io_.run_for(timeout_);
     if (!done_) {
       fail(welcomed_ ? "no answer from palpd within the timeout (--timeout)"
@@ -198,12 +197,12 @@ class Session {
     if (outbox_.size() == 1) write_next();
   }
   void write_next() {
-    stream_.async_write(asio::buffer(outbox_.front()), [this](const asio::error_code& ec,
-                                                               std::size_t) {
-      if (ec || done_) return;
-      outbox_.pop_front();
-      if (!outbox_.empty()) write_next();
-    });
+    stream_.async_write(asio::buffer(outbox_.front()),
+                        [this](const asio::error_code& ec, std::size_t) {
+                          if (ec || done_) return;
+                          outbox_.pop_front();
+                          if (!outbox_.empty()) write_next();
+                        });
   }
   void next_command() {
     if (next_ < action_.commands.size()) {
@@ -388,8 +387,9 @@ class Session {
 }  // namespace
 
 int cmd_ctl(const Arguments& argv) {
-  const Args args(argv, {"help"},
-                  {"token", "config", "name", "timeout", "tls-ca", "tls-pin", "tls-cert", "tls-key"});
+  const Args args(
+      argv, {"help"},
+      {"token", "config", "name", "timeout", "tls-ca", "tls-pin", "tls-cert", "tls-key"});
   if (args.has("help")) {
     std::cout << kCtlUsage;
     return 0;

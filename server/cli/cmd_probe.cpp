@@ -108,17 +108,16 @@ class Probe {
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
     start_ns_ = rt::monotonic_ns();
-    tls::async_connect(stream_, endpoints, host_, port_, tls_,
-                       [this](const std::string& failure) {
-                         if (!failure.empty()) return fail(failure);
-                         asio::error_code e;
-                         const tcp::endpoint endpoint = stream_.socket().remote_endpoint(e);
-                         loopback_ = !e && endpoint.address().is_loopback();
-                         v1::ClientMessage m;
-                          *m.mutable_hello() = hello_;
-                          send(m);
-                          read();
-                        });
+    tls::async_connect(stream_, endpoints, host_, port_, tls_, [this](const std::string& failure) {
+      if (!failure.empty()) return fail(failure);
+      asio::error_code e;
+      const tcp::endpoint endpoint = stream_.socket().remote_endpoint(e);
+      loopback_ = !e && endpoint.address().is_loopback();
+      v1::ClientMessage m;
+      *m.mutable_hello() = hello_;
+      send(m);
+      read();
+    });
     tick();
     io_.run();
     return std::move(report_);
@@ -142,12 +141,12 @@ class Probe {
     if (outbox_.size() == 1) write_next();
   }
   void write_next() {
-    stream_.async_write(asio::buffer(outbox_.front()), [this](const asio::error_code& ec,
-                                                               std::size_t) {
-      if (ec || done_) return;
-      outbox_.pop_front();
-      if (!outbox_.empty()) write_next();
-    });
+    stream_.async_write(asio::buffer(outbox_.front()),
+                        [this](const asio::error_code& ec, std::size_t) {
+                          if (ec || done_) return;
+                          outbox_.pop_front();
+                          if (!outbox_.empty()) write_next();
+                        });
   }
 
   void read() {

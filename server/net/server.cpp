@@ -28,19 +28,6 @@ using asio::ip::tcp;
 
 namespace {
 
-Bytes frame_of(const v1::ServerMessage& message) {
-  return std::make_shared<const std::string>(wire::encode_frame(message));
-}
-
-Bytes error_frame(v1::Error::Code code, const std::string& reason, bool fatal) {
-  v1::ServerMessage m;
-  v1::Error* e = m.mutable_error();
-  e->set_code(code);
-  e->set_reason(reason);
-  e->set_fatal(fatal);
-  return frame_of(m);
-}
-
 std::int64_t seconds_to_ns(double s) {
   return static_cast<std::int64_t>(s * 1e9);
 }
@@ -118,7 +105,7 @@ class Server::Impl {
         : stream(io),
           decoder(config.max_frame_bytes),
           queue(config.queue_frames, config.max_queue_bytes) {}
-    tls::Stream stream;    // plain, or TLS once the handshake began
+    tls::Stream stream;         // plain, or TLS once the handshake began
     tls::PeerCertificate cert;  // the client's certificate (TLS with --tls-client-ca)
     std::uint64_t id = 0;
     std::string name;
@@ -166,7 +153,8 @@ class Server::Impl {
     asio::error_code ec;
     s->stream.socket().set_option(tcp::no_delay(true), ec);
     if (config_.send_buffer_bytes > 0)
-      s->stream.socket().set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes), ec);
+      s->stream.socket().set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes),
+                                    ec);
     s->id = ++next_id_;
     s->connected_ns = s->last_rx_ns = rt::monotonic_ns();
     const tcp::endpoint remote = s->stream.socket().remote_endpoint(ec);
@@ -439,17 +427,17 @@ class Server::Impl {
     s->writing = true;
     s->write_started_ns = rt::monotonic_ns();
     s->stream.async_write(s->buffers,
-                      [this, s, frames_now](const asio::error_code& ec, std::size_t) {
-                        s->writing = false;
-                        if (s->closed) return;
-                        if (ec) {
-                          close(*s);
-                          return;
-                        }
-                        s->frames_sent += frames_now;
-                        frames_sent_.fetch_add(frames_now);
-                        pump(s);
-                      });
+                          [this, s, frames_now](const asio::error_code& ec, std::size_t) {
+                            s->writing = false;
+                            if (s->closed) return;
+                            if (ec) {
+                              close(*s);
+                              return;
+                            }
+                            s->frames_sent += frames_now;
+                            frames_sent_.fetch_add(frames_now);
+                            pump(s);
+                          });
   }
 
   // Queue a message / replace the queued SceneInfo for `s`; false (and the client dropped) when
@@ -579,8 +567,10 @@ class Server::Impl {
       if (s->closing) continue;
       if (!s->welcomed && now - s->connected_ns > seconds_to_ns(config_.hello_timeout_s)) {
         timeouts_.fetch_add(1);
-        if (s->handshaking) close(*s, "refused: no TLS handshake in time");
-        else fatal(s, v1::Error::TIMEOUT, "no Hello received in time");
+        if (s->handshaking)
+          close(*s, "refused: no TLS handshake in time");
+        else
+          fatal(s, v1::Error::TIMEOUT, "no Hello received in time");
         continue;
       }
       if (config_.idle_timeout_s > 0 &&

@@ -37,8 +37,14 @@ using testing::CliOutcome;
 using testing::read_text;
 using testing::shared_cli_dir;
 
-const fs::path kSourceDir = fs::path(__FILE__).parent_path().parent_path().parent_path();
 const fs::path kBuildDir = fs::path(PALP_CLI_PATH).parent_path().parent_path();
+// __FILE__ is relative to the build directory when ccache rewrites paths (base_dir).
+const fs::path kSourceDir =
+    (fs::path(__FILE__).is_relative() ? kBuildDir / __FILE__ : fs::path(__FILE__))
+        .lexically_normal()
+        .parent_path()
+        .parent_path()
+        .parent_path();
 const fs::path kPalpd = kBuildDir / "server" / "palpd";
 
 std::string quoted(const fs::path& path) {
@@ -484,8 +490,55 @@ TEST(Deploy, InstallIntoAStagingDirectoryIsIdempotent) {
 TEST(Deploy, ScriptsAreShellcheckClean) {
   if (!have_program("shellcheck")) GTEST_SKIP() << "shellcheck not installed";
   const CliOutcome run = run_shell("shellcheck " + quoted(kSourceDir / "deploy/lab.sh") + " " +
-                                   quoted(kSourceDir / "deploy/install-lab.sh"));
+                                   quoted(kSourceDir / "deploy/install-lab.sh") + " " +
+                                   quoted(kSourceDir / "deploy/make-certs.sh"));
   EXPECT_EQ(run.exit_code, 0) << run.output;
+}
+
+// ------------------------------------------------------------------------------ make-certs.sh
+// A lab CA, palpd's certificate and a station's from the script; palpd with them in its config
+// (the keys of palpd.toml's TLS section); palp probe and palp ctl over TLS, refused without it.
+TEST(Deploy, MakeCertsGivesPalpdProbeAndCtlATlsSession) {
+  if (!fs::exists(kPalpd)) GTEST_SKIP() << kPalpd << " not built (ninja palpd)";
+  if (!have_program("openssl")) GTEST_SKIP() << "the openssl command is not installed";
+  const fs::path dir = test_dir("tls");
+  const std::string certs = quoted(kSourceDir / "deploy/make-certs.sh") + " " + quoted(dir / "pki");
+  const CliOutcome made = run_shell(certs + " ca && " + certs + " server localhost 127.0.0.1 && " +
+                                    certs + " client station-1");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_EQ(fs::status(dir / "pki/server.key").permissions() & fs::perms::group_read,
+            fs::perms::none);
+  EXPECT_NE(run_shell(certs + " client station-1").exit_code, 0);  // never overwritten
+  write_file(dir / "palpd.toml", read_text(kSourceDir / "deploy/palpd.toml") + "tls-cert = \"" +
+                                     (dir / "pki/server.crt").string() + "\"\ntls-key = \"" +
+                                     (dir / "pki/server.key").string() + "\"\ntls-client-ca = \"" +
+                                     (dir / "pki/ca.crt").string() + "\"\n");
+  const std::string palp = quoted(PALP_CLI_PATH);
+  const std::string at = " 127.0.0.1:$port ";
+  const std::string ca = " --tls-ca " + quoted(dir / "pki/ca.crt");
+  const std::string station = " --tls-cert " + quoted(dir / "pki/clients/station-1.crt") +
+                              " --tls-key " + quoted(dir / "pki/clients/station-1.key");
+  const CliOutcome run = run_shell(
+      quoted(kPalpd) + " --config " + quoted(dir / "palpd.toml") +
+      " --scene phantom:sphere --device sim --port 0 --bind 127.0.0.1 --duration 6 --no-realtime"
+      " --cache-dir " +
+      quoted(dir / "cache") + " >" + quoted(dir / "palpd.log") + " 2>&1 &\n" +
+      "for i in $(seq 300); do grep -q 'listening on' " + quoted(dir / "palpd.log") +
+      " && break; sleep 0.1; done\n"
+      "port=$(sed -n 's/.*listening on [^ ]*:\\([0-9]*\\),.*/\\1/p' " +
+      quoted(dir / "palpd.log") + " | head -1)\n" + palp + " probe" + at + "--duration 1 -q" + ca +
+      "; echo \"probe=$?\"\n" + palp + " probe" + at + "--duration 1 -q; echo \"plain=$?\"\n" +
+      palp + " ctl" + at + "status" + ca + station + "; echo \"ctl=$?\"\n" + palp + " ctl" + at +
+      "status" + ca + "; echo \"nocert=$?\"\n" + "wait; cat " + quoted(dir / "palpd.log"));
+  EXPECT_NE(run.output.find("probe=0"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("plain=1"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("over TLS only"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("ctl=0"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("nocert=1"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("none was presented"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("TLS 1.3 on: certificate CN=localhost"), std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("[CN=station-1,O=palp lab]"), std::string::npos) << run.output;
 }
 
 }  // namespace

@@ -24,8 +24,14 @@ namespace fs = std::filesystem;
 using testing::CliOutcome;
 using testing::read_text;
 
-const fs::path kSourceDir = fs::path(__FILE__).parent_path().parent_path().parent_path();
 const fs::path kBuildDir = fs::path(PALP_CLI_PATH).parent_path().parent_path();
+// __FILE__ is relative to the build directory when ccache rewrites paths (base_dir).
+const fs::path kSourceDir =
+    (fs::path(__FILE__).is_relative() ? kBuildDir / __FILE__ : fs::path(__FILE__))
+        .lexically_normal()
+        .parent_path()
+        .parent_path()
+        .parent_path();
 
 // The commands checked: "palp SUB" or a program, and the binary that runs it.
 const std::map<std::string, fs::path>& commands() {
