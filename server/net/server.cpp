@@ -110,6 +110,8 @@ class Server::Impl {
     std::uint64_t id = 0;
     std::string name;
     std::string address;  // the remote address, for the per-address Hello budget
+    std::string refusal;  // over the Hello budget: said after the TLS handshake (it could not
+                          // be read before), a plain server says it at once
     v1::Role role = v1::ROLE_UNSPECIFIED;
     bool welcomed = false;  // Hello accepted
     bool ready = false;     // scene and volume sent: frames flow
@@ -171,13 +173,13 @@ class Server::Impl {
     sessions_.push_back(s);
     client_count_.store(sessions_.size());
     if (pending_here >= config_.max_pending_per_address || pending >= config_.max_pending) {
-      fatal(s, v1::Error::TOO_MANY_CLIENTS,
-            pending_here >= config_.max_pending_per_address
-                ? "too many connections from " + s->address + " waiting to say Hello (at most " +
-                      std::to_string(config_.max_pending_per_address) + ")"
-                : "too many connections waiting to say Hello (at most " +
-                      std::to_string(config_.max_pending) + ")");
-      return;
+      s->refusal = pending_here >= config_.max_pending_per_address
+                       ? "too many connections from " + s->address +
+                             " waiting to say Hello (at most " +
+                             std::to_string(config_.max_pending_per_address) + ")"
+                       : "too many connections waiting to say Hello (at most " +
+                             std::to_string(config_.max_pending) + ")";
+      if (!config_.tls) return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
     }
     if (!config_.tls) return read(s);
     s->handshaking = true;
@@ -193,6 +195,7 @@ class Server::Impl {
         return close(*s);
       }
       s->cert = r.client;
+      if (!s->refusal.empty()) return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
       read(s);
     });
   }

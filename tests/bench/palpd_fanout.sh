@@ -115,6 +115,9 @@ for rate in $rates; do
       "$palp" probe "127.0.0.1:$port" --duration "$seconds" --stall 5 --name "obs$i" \
         "${client_tls[@]}" >"$dir/probe$i.log" 2>&1 &
       probes+=($!)
+      # palpd admits 4 connections per address before their Hello: a TLS handshake on a busy
+      # machine takes long enough for 16 simultaneous probes to exceed it, so start them apart
+      sleep 0.05
     done
     pids+=("${probes[@]}")
     for pid in "${probes[@]}"; do wait "$pid" || true; done
