@@ -3,9 +3,13 @@
 // client, a client trusting another CA, a controller without a certificate, an expired client
 // certificate, a host name mismatch and a wrong pin are each refused with their own message while
 // the connected clients keep receiving; a relay's capture of a TLS session holds neither the token
-// nor a frame's plain encoding (and the same capture of a plain session does: the check can fail).
+// nor a frame's plain encoding (and the same capture of a plain session does: the check can fail);
+// a plain-text token from this machine's outside address is refused.
 #include "net/tls_accept.hpp"
 
+#include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <net/if.h>
 #include <poll.h>
 #include <unistd.h>
 
@@ -187,7 +191,7 @@ class TlsTest : public ::testing::Test {
     if (loop) loop->stop();
     std::filesystem::remove_all(pki_->dir());
   }
-  void start(bool with_tls, const std::string& token = "") {
+  void start(bool with_tls, const std::string& token = "", const std::string& bind = "127.0.0.1") {
     model_ = testing::ball_model("finger:7");
     rt::DeviceConfig dc;
     dc.timeout_s = 10.0;
@@ -201,6 +205,7 @@ class TlsTest : public ::testing::Test {
     ServerConfig config;
     config.port = 0;
     config.token = token;
+    config.bind = bind;
     config.stats_interval_s = 0.2;
     if (with_tls)
       config.tls = std::make_shared<tls::ServerContext>(
@@ -366,6 +371,42 @@ TEST_F(TlsTest, CaptureOfATlsSessionHoldsNoTokenAndNoFrame) {
   EXPECT_EQ(tapped.find("token-0f-the-lab-7731"), std::string::npos);
   EXPECT_EQ(tapped.find(frame), std::string::npos);
   EXPECT_EQ(tapped.find("palpd"), std::string::npos);  // the server's name in Welcome
+}
+
+// This machine's first non-loopback IPv4 address ("" when it has none).
+std::string outside_address() {
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return "";
+  std::string found;
+  for (ifaddrs* a = list; a && found.empty(); a = a->ifa_next) {
+    if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET || (a->ifa_flags & IFF_LOOPBACK) ||
+        !(a->ifa_flags & IFF_UP))
+      continue;
+    char text[INET_ADDRSTRLEN];
+    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
+    if (::inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) found = text;
+  }
+  ::freeifaddrs(list);
+  return found;
+}
+
+// A token in plain text from beyond loopback is refused without being compared; the same
+// palpd takes a token-less observer from there, and the token over TLS.
+TEST_F(TlsTest, PlainTextTokenFromBeyondLoopbackIsRefused) {
+  const std::string address = outside_address();
+  if (address.empty()) GTEST_SKIP() << "this machine has no non-loopback IPv4 address";
+  start(false, "token-0f-the-lab-7731", "0.0.0.0");
+  SecureClient controller(port(), nullptr, address);
+  ASSERT_EQ(controller.failure(), "");
+  controller.hello(v1::CONTROLLER, "token-0f-the-lab-7731");
+  v1::ServerMessage m;
+  ASSERT_TRUE(controller.wait_case(v1::ServerMessage::kError, m));
+  EXPECT_EQ(m.error().code(), v1::Error::UNAUTHORIZED);
+  EXPECT_NE(m.error().reason().find("never accepted in plain text"), std::string::npos)
+      << m.error().reason();
+  SecureClient observer(port(), nullptr, address);
+  observer.hello(v1::OBSERVER);
+  ASSERT_TRUE(observer.next(m) && m.has_welcome());
 }
 
 TEST_F(TlsTest, TheSameCaptureOfAPlainSessionHoldsBoth) {
