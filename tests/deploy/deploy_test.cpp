@@ -48,7 +48,10 @@ const fs::path kSourceDir =
 const fs::path kPalpd = kBuildDir / "server" / "palpd";
 
 std::string quoted(const fs::path& path) {
-  return "'" + path.string() + "'";
+  std::string text(1, '\'');  // (not "'" + ...: g++ 12 then warns -Wrestrict, falsely)
+  text += path.string();
+  text += '\'';
+  return text;
 }
 
 // Runs a shell command line, stderr with stdout.
@@ -489,9 +492,12 @@ TEST(Deploy, InstallIntoAStagingDirectoryIsIdempotent) {
 
 TEST(Deploy, ScriptsAreShellcheckClean) {
   if (!have_program("shellcheck")) GTEST_SKIP() << "shellcheck not installed";
-  const CliOutcome run = run_shell("shellcheck " + quoted(kSourceDir / "deploy/lab.sh") + " " +
-                                   quoted(kSourceDir / "deploy/install-lab.sh") + " " +
-                                   quoted(kSourceDir / "deploy/make-certs.sh"));
+  std::string command = "shellcheck";
+  for (const char* script : {"deploy/lab.sh", "deploy/install-lab.sh", "deploy/make-certs.sh"}) {
+    command += ' ';
+    command += quoted(kSourceDir / script);
+  }
+  const CliOutcome run = run_shell(command);
   EXPECT_EQ(run.exit_code, 0) << run.output;
 }
 
@@ -509,27 +515,28 @@ TEST(Deploy, MakeCertsGivesPalpdProbeAndCtlATlsSession) {
   EXPECT_EQ(fs::status(dir / "pki/server.key").permissions() & fs::perms::group_read,
             fs::perms::none);
   EXPECT_NE(run_shell(certs + " client station-1").exit_code, 0);  // never overwritten
-  write_file(dir / "palpd.toml", read_text(kSourceDir / "deploy/palpd.toml") + "tls-cert = \"" +
-                                     (dir / "pki/server.crt").string() + "\"\ntls-key = \"" +
-                                     (dir / "pki/server.key").string() + "\"\ntls-client-ca = \"" +
-                                     (dir / "pki/ca.crt").string() + "\"\n");
+  std::string config = read_text(kSourceDir / "deploy/palpd.toml");
+  config += "tls-cert = '" + (dir / "pki/server.crt").string() + "'\n";
+  config += "tls-key = '" + (dir / "pki/server.key").string() + "'\n";
+  config += "tls-client-ca = '" + (dir / "pki/ca.crt").string() + "'\n";
+  write_file(dir / "palpd.toml", config);
   const std::string palp = quoted(PALP_CLI_PATH);
-  const std::string at = " 127.0.0.1:$port ";
+  const std::string log = quoted(dir / "palpd.log");
   const std::string ca = " --tls-ca " + quoted(dir / "pki/ca.crt");
-  const std::string station = " --tls-cert " + quoted(dir / "pki/clients/station-1.crt") +
-                              " --tls-key " + quoted(dir / "pki/clients/station-1.key");
-  const CliOutcome run = run_shell(
-      quoted(kPalpd) + " --config " + quoted(dir / "palpd.toml") +
-      " --scene phantom:sphere --device sim --port 0 --bind 127.0.0.1 --duration 6 --no-realtime"
-      " --cache-dir " +
-      quoted(dir / "cache") + " >" + quoted(dir / "palpd.log") + " 2>&1 &\n" +
-      "for i in $(seq 300); do grep -q 'listening on' " + quoted(dir / "palpd.log") +
-      " && break; sleep 0.1; done\n"
-      "port=$(sed -n 's/.*listening on [^ ]*:\\([0-9]*\\),.*/\\1/p' " +
-      quoted(dir / "palpd.log") + " | head -1)\n" + palp + " probe" + at + "--duration 1 -q" + ca +
-      "; echo \"probe=$?\"\n" + palp + " probe" + at + "--duration 1 -q; echo \"plain=$?\"\n" +
-      palp + " ctl" + at + "status" + ca + station + "; echo \"ctl=$?\"\n" + palp + " ctl" + at +
-      "status" + ca + "; echo \"nocert=$?\"\n" + "wait; cat " + quoted(dir / "palpd.log"));
+  std::string station = " --tls-cert " + quoted(dir / "pki/clients/station-1.crt");
+  station += " --tls-key " + quoted(dir / "pki/clients/station-1.key");
+  std::string script = quoted(kPalpd) + " --config " + quoted(dir / "palpd.toml");
+  script += " --scene phantom:sphere --device sim --port 0 --bind 127.0.0.1 --duration 6";
+  script += " --no-realtime --cache-dir " + quoted(dir / "cache") + " >" + log + " 2>&1 &\n";
+  script +=
+      "for i in $(seq 300); do grep -q 'listening on' " + log + " && break; sleep 0.1; done\n";
+  script += "port=$(sed -n 's/.*listening on [^ ]*:\\([0-9]*\\),.*/\\1/p' " + log + " | head -1)\n";
+  script += palp + " probe 127.0.0.1:$port --duration 1 -q" + ca + "; echo \"probe=$?\"\n";
+  script += palp + " probe 127.0.0.1:$port --duration 1 -q; echo \"plain=$?\"\n";
+  script += palp + " ctl 127.0.0.1:$port status" + ca + station + "; echo \"ctl=$?\"\n";
+  script += palp + " ctl 127.0.0.1:$port status" + ca + "; echo \"nocert=$?\"\n";
+  script += "wait; cat " + log;
+  const CliOutcome run = run_shell(script);
   EXPECT_NE(run.output.find("probe=0"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("plain=1"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("over TLS only"), std::string::npos) << run.output;
