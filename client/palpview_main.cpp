@@ -50,7 +50,12 @@ and deforms the skin where the tool presses.
   --observer              only watch (default); the mouse moves this view's camera
   --controller            drive palpd's `remote` device (palpd --device remote) with mouse
                           and keyboard
-  --token T               the server's controller token
+  --token T               the server's controller token (sent only over TLS or loopback)
+  --tls-ca FILE           palp.v1 over TLS: check palpd's certificate against this CA and the
+                          host name of --connect
+  --tls-pin SHA256        or: trust exactly the palpd certificate with this SHA-256 fingerprint
+  --tls-cert FILE         this station's certificate (palpd --tls-client-ca asks controllers)
+  --tls-key FILE          its key (mode 600)
   --name NAME             client name shown by the server (default palpview)
   --rate HZ               frames/s asked of the server (default 120)
   --volume-max-dim N      render volume: at most N voxels per axis (default 256)
@@ -90,6 +95,7 @@ struct Options {
   std::uint16_t port = 0;
   bool controller = false;
   std::string token;
+  std::string tls_ca, tls_pin, tls_cert, tls_key;
   std::string name = "palpview";
   double rate_hz = 120.0;
   std::uint32_t volume_max_dim = 256;
@@ -148,6 +154,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.controller = true;
     } else if (arg == "--token") {
       o.token = value();
+    } else if (arg == "--tls-ca") {
+      o.tls_ca = value();
+    } else if (arg == "--tls-pin") {
+      o.tls_pin = value();
+    } else if (arg == "--tls-cert") {
+      o.tls_cert = value();
+    } else if (arg == "--tls-key") {
+      o.tls_key = value();
     } else if (arg == "--name") {
       o.name = value();
     } else if (arg == "--rate") {
@@ -252,6 +266,10 @@ int run(const Options& o) {
   stream.port = o.port;
   stream.controller = o.controller;
   stream.token = o.token;
+  stream.tls_ca = o.tls_ca;
+  stream.tls_pin = o.tls_pin;
+  stream.tls_cert = o.tls_cert;
+  stream.tls_key = o.tls_key;
   stream.client_name = o.name;
   stream.frame_rate_hz = o.rate_hz;
   stream.volume_max_dim = o.volume_max_dim;

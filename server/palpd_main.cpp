@@ -30,6 +30,7 @@
 #include "cli/model_setup.hpp"
 #include "cli/palpd_stats.hpp"
 #include "cli/rt_options.hpp"
+#include "cli/tls_options.hpp"
 #include "devices/device.hpp"
 #include "io/gzip.hpp"
 #include "loop/haptic_loop.hpp"
@@ -108,7 +109,12 @@ Placing a force device on the patient (usb-haptic; spacemouse takes --home and
 palpd refuses to start when the device, so placed, cannot reach 10 mm below the skin.
   --port P                TCP port (default 7400; 0 = any free port, printed at start)
   --bind ADDR             address to listen on (default 127.0.0.1; 0.0.0.0 for a lab network)
-  --token TOKEN           CONTROLLER clients must present it (prefer the config file)
+  --token TOKEN           CONTROLLER clients must present it (prefer the config file); never
+                          accepted in plain text from beyond loopback
+  --tls-cert FILE         palp.v1 over TLS 1.3 only, with this PEM certificate (and chain) ...
+  --tls-key FILE          ... and its key (mode 600); plain-text clients are refused
+  --tls-client-ca FILE    controllers must present a client certificate signed by this CA (its
+                          subject names them in Stats, logs and recordings; observers may)
   --max-clients N         default 16 (1..1024)
   --queue N               haptic frames queued per client before the oldest is dropped
                           (256; 1..65536)
@@ -152,7 +158,8 @@ const std::vector<std::string> kValued = {
     "priority",      "duration",       "config",         "poll-us",
     "stats-json",    "device-axes",    "device-scale",   "home",
     "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes",
-    "falcon-firmware", "falcon-tool-from"};
+    "falcon-firmware", "falcon-tool-from",
+    "tls-cert", "tls-key", "tls-client-ca"};
 
 // Now, as 2026-11-24T12:00:00Z.
 std::string utc_now_text() {
@@ -408,6 +415,7 @@ int run_configured(cli::Arguments argv) {
     throw UsageError("--port must be an integer in 0..65535");
   server_config.port = static_cast<std::uint16_t>(port);
   server_config.token = args.get("token").value_or("");
+  server_config.tls = cli::server_tls(args);
   server_config.max_clients = static_cast<std::size_t>(within(args, "max-clients", 16, 1, 1024));
   server_config.queue_frames =
       std::max<std::size_t>(1, static_cast<std::size_t>(within(args, "queue", 256, 1, 65536)));
@@ -539,6 +547,9 @@ int run_configured(cli::Arguments argv) {
                 device_spec->c_str(), tool.name.c_str(), loop_config.rate_hz,
                 profile ? (std::string(", profile ") + std::string(profile->name)).c_str() : "");
     const PatientFrame frame = patient_frame(scene.grid);
+    for (const std::string& line :
+         cli::server_tls_report(server_config.tls.get(), server_config.bind))
+      std::fprintf(line.rfind("warning", 0) == 0 ? stderr : stdout, "palpd: %s\n", line.c_str());
     if (server_config.token.empty() && !net::is_loopback_address(server_config.bind))
       std::printf(
           "palpd: WARNING: listening beyond this machine without --token: anyone who can "

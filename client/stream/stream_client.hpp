@@ -55,6 +55,10 @@ struct StreamOptions {
   std::uint16_t port = 7400;  // palpd's default
   bool controller = false;    // CONTROLLER role (sends poses and commands)
   std::string token;          // the server's controller token, when it has one
+  // palp.v1 over TLS (palpd --tls-cert): the CA to check the server with (and its host name), or
+  // the server certificate's SHA-256 fingerprint; this client's certificate for a palpd that
+  // asks controllers for one. Neither tls_ca nor tls_pin: plain text.
+  std::string tls_ca, tls_pin, tls_cert, tls_key;
   std::string client_name = "palpview";
   double frame_rate_hz = 120.0;  // HapticFrames per second to ask for (0: every tick)
   // Render volume: at most this many voxels per axis (0: ask for no render volume).

@@ -18,6 +18,7 @@
 #include "net/listen_check.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
+#include "net/tls_accept.hpp"
 #include "net/token_guard.hpp"
 #include "wire/framing.hpp"
 
@@ -26,19 +27,6 @@ namespace palp::net {
 using asio::ip::tcp;
 
 namespace {
-
-Bytes frame_of(const v1::ServerMessage& message) {
-  return std::make_shared<const std::string>(wire::encode_frame(message));
-}
-
-Bytes error_frame(v1::Error::Code code, const std::string& reason, bool fatal) {
-  v1::ServerMessage m;
-  v1::Error* e = m.mutable_error();
-  e->set_code(code);
-  e->set_reason(reason);
-  e->set_fatal(fatal);
-  return frame_of(m);
-}
 
 std::int64_t seconds_to_ns(double s) {
   return static_cast<std::int64_t>(s * 1e9);
@@ -119,19 +107,22 @@ class Server::Impl {
 
   struct Session {
     Session(asio::io_context& io, const ServerConfig& config)
-        : socket(io),
+        : stream(io),
           decoder(config.max_frame_bytes),
           queue(config.queue_frames, config.max_queue_bytes) {}
-    tcp::socket socket;
+    tls::Stream stream;         // plain, or TLS once the handshake began
+    tls::PeerCertificate cert;  // the client's certificate (TLS with --tls-client-ca)
     std::uint64_t id = 0;
     std::string name;
     std::string address;  // the remote address, for the per-address Hello budget
+    std::string refusal;  // over the Hello budget: said after the TLS handshake (it could not
+                          // be read before), a plain server says it at once
     v1::Role role = v1::ROLE_UNSPECIFIED;
     bool welcomed = false;  // Hello accepted
     bool ready = false;     // scene and volume sent: frames flow
     bool closing = false;   // a fatal error is queued: close once written
     bool closed = false;
-    bool reading = false;
+    bool reading = false, handshaking = false;
     bool writing = false;
     bool want_contacts = false;
     bool end_logged = false;  // its leaving (or refusal) is in the log
@@ -155,7 +146,7 @@ class Server::Impl {
   // ------------------------------------------------------------------ accept
   void accept() {
     auto session = std::make_shared<Session>(io_, config_);
-    acceptor_.async_accept(session->socket, [this, session](const asio::error_code& ec) {
+    acceptor_.async_accept(session->stream.socket(), [this, session](const asio::error_code& ec) {
       if (ec) {
         if (ec != asio::error::operation_aborted && acceptor_.is_open()) accept();
         return;
@@ -167,12 +158,13 @@ class Server::Impl {
 
   void on_accept(const SessionPtr& s) {
     asio::error_code ec;
-    s->socket.set_option(tcp::no_delay(true), ec);
+    s->stream.socket().set_option(tcp::no_delay(true), ec);
     if (config_.send_buffer_bytes > 0)
-      s->socket.set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes), ec);
+      s->stream.socket().set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes),
+                                    ec);
     s->id = ++next_id_;
     s->connected_ns = s->last_rx_ns = rt::monotonic_ns();
-    const tcp::endpoint remote = s->socket.remote_endpoint(ec);
+    const tcp::endpoint remote = s->stream.socket().remote_endpoint(ec);
     s->address = ec ? std::string("?") : remote.address().to_string();
     accepted_.fetch_add(1);
     std::erase_if(sessions_, [](const SessionPtr& other) { return other->closed; });
@@ -186,22 +178,38 @@ class Server::Impl {
     sessions_.push_back(s);
     client_count_.store(sessions_.size());
     if (pending_here >= config_.max_pending_per_address || pending >= config_.max_pending) {
-      fatal(s, v1::Error::TOO_MANY_CLIENTS,
-            pending_here >= config_.max_pending_per_address
-                ? "too many connections from " + s->address + " waiting to say Hello (at most " +
-                      std::to_string(config_.max_pending_per_address) + ")"
-                : "too many connections waiting to say Hello (at most " +
-                      std::to_string(config_.max_pending) + ")");
-      return;
+      s->refusal = pending_here >= config_.max_pending_per_address
+                       ? "too many connections from " + s->address +
+                             " waiting to say Hello (at most " +
+                             std::to_string(config_.max_pending_per_address) + ")"
+                       : "too many connections waiting to say Hello (at most " +
+                             std::to_string(config_.max_pending) + ")";
+      if (!config_.tls) return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
     }
-    read(s);
+    if (!config_.tls) return read(s);
+    s->handshaking = true;
+    tls_accept(s->stream, *config_.tls, [this, s](const TlsAccepted& r) {
+      s->handshaking = false;
+      if (!r.notice.empty()) log_client(r.notice);
+      if (s->closed) return;
+      if (r.kind == TlsAccepted::Kind::PlainText)
+        return fatal(s, v1::Error::UNAUTHORIZED, plain_text_refusal());
+      if (r.kind == TlsAccepted::Kind::Failed) {
+        log_client(who(*s) + " refused: " + r.message);
+        s->end_logged = true;
+        return close(*s);
+      }
+      s->cert = r.client;
+      if (!s->refusal.empty()) return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
+      read(s);
+    });
   }
 
   // ------------------------------------------------------------------ read
   void read(const SessionPtr& s) {
     if (s->closing || s->closed || s->reading) return;
     s->reading = true;
-    s->socket.async_read_some(
+    s->stream.async_read_some(
         asio::buffer(s->rbuf), [this, s](const asio::error_code& ec, std::size_t n) {
           s->reading = false;
           if (s->closed) return;
@@ -291,6 +299,11 @@ class Server::Impl {
                 " is not supported (this server speaks " + std::to_string(kProtocolVersion) + ")");
       return;
     }
+    if (auto no = certificate_refusal(config_.tls.get(), s->cert, h.role() == v1::CONTROLLER);
+        !no.empty())
+      return fatal(s, v1::Error::UNAUTHORIZED, no);
+    if (!h.token().empty() && !s->stream.secure() && !is_loopback_address(s->address))
+      return fatal(s, v1::Error::UNAUTHORIZED, clear_text_token_refusal(s->address));
     if (h.role() == v1::CONTROLLER) {
       const std::int64_t now = rt::monotonic_ns();
       if (const std::int64_t wait_ns = token_guard_.wait_ns(s->address, now); wait_ns > 0) {
@@ -312,10 +325,6 @@ class Server::Impl {
                       : "CONTROLLER needs the server's token: the one given is wrong");
         return;
       }
-      if (!h.token().empty() && !is_loopback_address(s->address))
-        log_client("warning: " + s->address +
-                   " sent the controller token in clear text over the network; anyone on the "
-                   "path can read it (keep palpd on a trusted network, or tunnel it)");
       token_guard_.succeeded(s->address);
       for (const auto& other : sessions_)
         if (other != s && other->role == v1::CONTROLLER && !other->closed) {
@@ -361,7 +370,8 @@ class Server::Impl {
     if (config_.log_clients) client_log_.say(line);
   }
   static std::string who(const Session& s) {
-    return describe_client(s.id, s.address, s.welcomed, s.role == v1::CONTROLLER, s.name);
+    return describe_client(s.id, s.address, s.welcomed, s.role == v1::CONTROLLER,
+                           s.cert.verified ? s.name + " [" + s.cert.subject + "]" : s.name);
   }
 
   void command(const SessionPtr& s, const v1::Command& c) {
@@ -424,18 +434,18 @@ class Server::Impl {
     for (const Bytes& b : s->inflight) s->buffers.push_back(asio::buffer(*b));
     s->writing = true;
     s->write_started_ns = rt::monotonic_ns();
-    asio::async_write(s->socket, s->buffers,
-                      [this, s, frames_now](const asio::error_code& ec, std::size_t) {
-                        s->writing = false;
-                        if (s->closed) return;
-                        if (ec) {
-                          close(*s);
-                          return;
-                        }
-                        s->frames_sent += frames_now;
-                        frames_sent_.fetch_add(frames_now);
-                        pump(s);
-                      });
+    s->stream.async_write(s->buffers,
+                          [this, s, frames_now](const asio::error_code& ec, std::size_t) {
+                            s->writing = false;
+                            if (s->closed) return;
+                            if (ec) {
+                              close(*s);
+                              return;
+                            }
+                            s->frames_sent += frames_now;
+                            frames_sent_.fetch_add(frames_now);
+                            pump(s);
+                          });
   }
 
   // Queue a message / replace the queued SceneInfo for `s`; false (and the client dropped) when
@@ -489,9 +499,7 @@ class Server::Impl {
     s.closed = true;
     if (!s.end_logged && s.welcomed) log_client(who(s) + " " + why);
     s.end_logged = true;
-    asio::error_code ec;
-    s.socket.shutdown(tcp::socket::shutdown_both, ec);
-    s.socket.close(ec);
+    s.stream.close();
     s.queue.bury(graveyard_);
   }
 
@@ -562,7 +570,10 @@ class Server::Impl {
       if (s->closing) continue;
       if (!s->welcomed && now - s->connected_ns > seconds_to_ns(config_.hello_timeout_s)) {
         timeouts_.fetch_add(1);
-        fatal(s, v1::Error::TIMEOUT, "no Hello received in time");
+        if (s->handshaking)
+          close(*s, "refused: no TLS handshake in time");
+        else
+          fatal(s, v1::Error::TIMEOUT, "no Hello received in time");
         continue;
       }
       if (config_.idle_timeout_s > 0 &&
@@ -587,6 +598,8 @@ class Server::Impl {
     v1::Stats* st = m.mutable_stats();
     fill_stats(ls, loop_, scene_, control_, rate, now, static_cast<std::uint32_t>(sessions_.size()),
                st);
+    for (const SessionPtr& s : sessions_)
+      if (s->role == v1::CONTROLLER && s->welcomed && !s->closed) st->set_controller(who(*s));
     for (const SessionPtr& s : sessions_) {
       if (!s->welcomed || s->closing || s->closed) continue;
       st->set_client_frames_sent(s->frames_sent);

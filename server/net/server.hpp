@@ -35,6 +35,10 @@
 #include "net/control_target.hpp"
 #include "net/frame_pump.hpp"
 
+namespace palp::tls {
+class ServerContext;
+}
+
 namespace palp::net {
 
 struct ServerConfig {
@@ -60,6 +64,9 @@ struct ServerConfig {
   int send_buffer_bytes = 0;                 // SO_SNDBUF of client sockets (0: system default)
   std::string server_name = "palpd";
   bool log_clients = true;  // clients joining, leaving and refused, on stderr (rate-bounded)
+  // Set: palp.v1 over TLS only (plain text refused); with a client CA, controllers need a
+  // certificate (net/tls_accept.hpp). Unset: plain text, the token only from loopback.
+  std::shared_ptr<tls::ServerContext> tls;
 };
 
 // Whether palpd could listen on bind:port (port 0 always can), checked before the scene is
