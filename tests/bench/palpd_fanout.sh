@@ -100,8 +100,7 @@ for rate in $rates; do
     fi
     start_palpd "$dir/palpd.log" --scene phantom:torso --device sim --tool finger:37 \
       --rate "$rate" --port 0 --duration $((seconds + 4)) --stats-json "$dir/stats.json" \
-      "${palpd_args[@]}"
-      "${server_tls[@]}"
+      "${palpd_args[@]}" "${server_tls[@]}"
     palpd_pid=${pids[-1]}
     extra=()
     case $scenario in
