@@ -67,6 +67,8 @@ and deforms the skin where the tool presses.
   --follow MM             look at the tool obliquely, between that view and the tool's
                           axis, MM of anatomy across the view's height, and follow it
                           smoothly (default 150 without --camera; 0 = off)
+  --chart-seconds S       the force chart's span: the last S seconds of this session
+                          (default 30, 1 .. 600)
   --no-orientation-marker hide the patient-axes cube (bottom left)
   --no-overlays           hide the HUD, the chart and the orientation marker
   --no-tool               hide the tool, contacts, proxies, springs, arrow and shadow
@@ -101,6 +103,7 @@ struct Options {
   PresetId preset = PresetId::Skin;
   bool deformation = true;
   bool show_outside = false, ct = true;
+  double chart_s = 30.0;
   double follow_mm = -1;  // -1: 150 unless --camera
   bool have_camera = false;
   int width = 1280, height = 800;
@@ -167,14 +170,16 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.preset = parse_preset(value());
     } else if (arg == "--no-deformation") {
       o.deformation = false;
+    } else if (arg == "--chart-seconds") {
+      o.chart_s = parse_number(arg, value());
+      if (!(o.chart_s >= 1 && o.chart_s <= 600)) throw UsageError("--chart-seconds: 1 .. 600");
     } else if (arg == "--show-outside") {
       o.show_outside = true;
     } else if (arg == "--no-ct") {
       o.ct = false;
     } else if (arg == "--follow") {
       o.follow_mm = parse_number(arg, value());
-      if (!(o.follow_mm >= 0 && o.follow_mm <= 10000))
-        throw UsageError("--follow: 0 .. 10000 mm");
+      if (!(o.follow_mm >= 0 && o.follow_mm <= 10000)) throw UsageError("--follow: 0 .. 10000 mm");
     } else if (arg == "--width") {
       o.width = parse_int(arg, value(), 64, 8192);
     } else if (arg == "--height") {
@@ -274,6 +279,8 @@ int run(const Options& o) {
   stream.frame_rate_hz = o.rate_hz;
   stream.volume_max_dim = o.volume_max_dim;
   stream.volume_hu = o.ct;
+  stream.volume_bone = !o.ct;  // the CT's presets never read d_bone
+  stream.force_history_s = o.chart_s;
 
   ViewWindow window(
       {o.width, o.height, !screenshot, "palpview " + o.host + ":" + std::to_string(o.port)});
@@ -288,6 +295,7 @@ int run(const Options& o) {
   settings.camera_elevation_deg = o.el;
   settings.camera_distance_mm = o.dist;
   settings.follow_mm = o.follow_mm;
+  settings.chart_seconds = o.chart_s;
   settings.keep_outside = o.show_outside;
   RenderScene scene(window.render_window(), settings);
   ControllerInput controller;
@@ -387,6 +395,7 @@ int run(const Options& o) {
     return std::chrono::duration<double>(Clock::now() - t).count();
   };
   std::optional<Clock::time_point> live_since;
+  double volume_s = -1;  // seconds from start until the whole render volume was here
 
   // Controller poses leave at a steady kPosePumpHz from their own thread, whatever the render
   // rate: palpd's remote device faults after 100 ms without a pose, and a software renderer
@@ -443,6 +452,7 @@ int run(const Options& o) {
     // a frame counts as live while the link is (a lost stream keeps its last frame on screen)
     const bool live = state.volume && state.frame.valid && state.link.state == LinkState::Live;
     if (live && !live_since) live_since = Clock::now();
+    if (state.volume && volume_s < 0) volume_s = seconds_since(start);  // connect -> volume
 
     if (o.controller && state.volume) {
       if (!controller_ready || controller_connection != state.connection) {
@@ -560,8 +570,8 @@ int run(const Options& o) {
       "(%zu), without %.3f ms (%zu)\n",
       static_cast<long long>(frames), live_frames, mean_of(times.receive),
       mean_of(times.deformation), mean_of(times.upload), mean_of(times.upload_bytes),
-      mean_of(times.render), mean_of(times.render_modified),
-      times.render_modified.size(), mean_of(times.render_unchanged), times.render_unchanged.size());
+      mean_of(times.render), mean_of(times.render_modified), times.render_modified.size(),
+      mean_of(times.render_unchanged), times.render_unchanged.size());
   if (!o.stats_json.empty()) {
     nlohmann::json j;
     j["frames"] = frames;
@@ -574,6 +584,7 @@ int run(const Options& o) {
     j["height"] = size[1];
     j["receive_ms"] = summary(times.receive);
     j["deformation_ms"] = summary(times.deformation);
+    j["volume_received_s"] = volume_s;  // from palpview's start: connect, handshake, chunks
     j["upload_ms"] = summary(times.upload);
     j["upload_bytes"] = summary(times.upload_bytes);  // the first live frame: the whole volume
     j["render_ms"] = summary(times.render);
