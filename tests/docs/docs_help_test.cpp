@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 using testing::CliOutcome;
 using testing::read_text;
 
-const fs::path kSourceDir = fs::path(__FILE__).parent_path().parent_path().parent_path();
+const fs::path kSourceDir = fs::path(PALP_SOURCE_DIR);
 const fs::path kBuildDir = fs::path(PALP_CLI_PATH).parent_path().parent_path();
 
 // The commands checked: "palp SUB" or a program, and the binary that runs it.
