@@ -54,9 +54,9 @@ Draws the columns of CSV files (header row) as a line or scatter chart and write
   --legend POS          tr | tl | br | bl | none (default tr)
 Without an X display palpchart runs itself under xvfb-run -a (package xvfb) when it can.
 
-  palpchart --sheet OUT.png [--columns N] IN.png...
-                        a contact sheet: the PNGs in a grid, N a row (default 3); no display
-                        needed
+usage: palpchart --sheet OUT.png [--columns N] IN.png...
+  --sheet OUT.png       a contact sheet: the IN.png images in a grid, one PNG (no display needed)
+  --columns N           images a row (default 3)
 )";
 
 std::vector<std::string> split(std::string_view s, char sep) {
