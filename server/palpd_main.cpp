@@ -529,6 +529,8 @@ int run_configured(cli::Arguments argv) {
   description.device = *device_spec;
   description.device_profile = profile ? std::string(profile->name) : "";
   description.fields = scene.fields;
+  description.ct = scene.ct;
+  description.body = scene.body;
   description.placement = placement;
   net::Server server(server_config, description, loop, &app);
 

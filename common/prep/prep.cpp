@@ -163,7 +163,8 @@ bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::j
   const nlohmann::json json = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
   if (json.is_discarded() || json.value("cache_key", "") != key) return false;
   if (!json.contains("file_bytes") || !json["file_bytes"].is_object()) return false;
-  for (const char* name : {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile}) {
+  for (const char* name :
+       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
     std::error_code ec;
     const auto size = fs::file_size(out_dir / name, ec);
     if (ec || !json["file_bytes"].contains(name) || json["file_bytes"][name] != size) return false;
@@ -207,7 +208,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   // A failed or interrupted run leaves no temporary file, and no output at all in a directory
   // it created (which is removed).
   PrepOutputGuard guard(
-      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kPrepJsonFile});
+      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile, kPrepJsonFile});
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
@@ -291,7 +292,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
                       {"bone", {bone_points.points.size(), bone_points.interpolated}}};
     });
   }
-  ct = CtVolume{};  // the HU are not needed past segmentation and the surface points
+  stage("write CT", [&] { write_atomically(dir / kCtFile, ct); });
+  ct = CtVolume{};  // the HU are not needed past segmentation, the surface points and the copy
   result.stats.body_voxels = count_nonzero(body);
   result.stats.bone_voxels = count_nonzero(bone);
   stage("write masks", [&] {
@@ -373,7 +375,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   json["peak_memory_bytes_after_stage"] = stage_peaks;
   json["threads"] = params.distance.threads;
   nlohmann::json sizes = nlohmann::json::object();
-  for (const char* name : {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile}) {
+  for (const char* name :
+       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
     sizes[name] = fs::file_size(dir / name);
   }
   json["file_bytes"] = sizes;

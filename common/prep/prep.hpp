@@ -88,5 +88,7 @@ inline constexpr const char* kBoneFile = "bone.nii.gz";
 inline constexpr const char* kSurfaceDistanceFile = "d_surf.nii.gz";
 inline constexpr const char* kBoneDistanceFile = "d_bone.nii.gz";
 inline constexpr const char* kPrepJsonFile = "prep.json";
+// The CT itself (int16 HU, after reorientation: on the maps' grid), for palpd's render volume.
+inline constexpr const char* kCtFile = "ct.nii.gz";
 
 }  // namespace palp

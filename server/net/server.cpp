@@ -359,7 +359,7 @@ class Server::Impl {
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
-    plan_volume(*s, h.volume_step(), h.volume_max_dim());
+    plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(), h.volume_deflate()});
     if (s->volume.chunks == 0) s->ready = true;
     log_client(who(*s) + " joined");
     pump(s);
@@ -401,17 +401,17 @@ class Server::Impl {
     return frame_of(m);
   }
 
-  void plan_volume(Session& s, std::uint32_t step, std::uint32_t max_dim) {
-    if (!scene_.fields || (step == 0 && max_dim == 0)) return;
-    s.volume = net::plan_volume(scene_.grid, step, max_dim, config_.volume_chunk_bytes);
+  void plan_volume(Session& s, const VolumeRequest& r) {
+    if (!scene_.fields || (r.step == 0 && r.max_dim == 0)) return;
+    s.volume = net::plan_volume(scene_, r, config_.volume_chunk_bytes);
     s.volume_k = 0;
     s.volume_chunk = 0;
   }
 
   Bytes next_volume_chunk(Session& s) {
     v1::ServerMessage m;
-    s.volume_k += fill_volume_chunk(*scene_.fields, scene_.grid, s.volume, s.volume_k,
-                                    s.volume_chunk, m.mutable_volume());
+    s.volume_k +=
+        fill_volume_chunk(scene_, s.volume, s.volume_k, s.volume_chunk, m.mutable_volume());
     ++s.volume_chunk;
     if (s.volume_chunk == s.volume.chunks) s.ready = true;
     return frame_of(m);

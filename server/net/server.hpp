@@ -82,6 +82,8 @@ struct SceneDescription {
   std::string device;
   std::string device_profile;
   std::shared_ptr<const FieldSampler> fields;  // sampled for the render volume
+  std::shared_ptr<const CtVolume> ct;          // the CT's HU on the grid (may be null)
+  std::shared_ptr<const Mask> body;            // the body mask on the grid (with ct)
   // The device's registration, for devices placed on the patient (unset: scene-frame devices).
   struct Placement {
     Registration registration;

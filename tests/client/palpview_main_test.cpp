@@ -179,7 +179,7 @@ TEST(Palpview, DefaultViewIsThePatientsAnteriorHoweverStored) {
     const auto r = run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) +
                                 " --screenshot " + png.string() +
                                 " --frames 2 --width 240 --height 160 --timeout 120 --no-tool"
-                                " --no-deformation --no-overlays" +
+                                " --no-deformation --no-overlays --follow 0" +
                                 (code.size() > 3 ? " --view posterior" : ""));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     shots[code] = read_rgb(png);

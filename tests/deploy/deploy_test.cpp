@@ -5,9 +5,9 @@
 // a stand-in ssh), and install-lab.sh lists its files in --dry-run and installs idempotently
 // into a staging directory.
 //
-// Data flow: the files are read from the source tree (PALP_SOURCE_DIR); palp comes from
-// PALP_CLI_PATH and palpd from the same build directory (BUILD/server/palpd); the scripts run
-// through /bin/sh with their output captured.
+// Data flow: the files are read from the source tree (PALP_SOURCE_DIR, set by
+// tests/CMakeLists.txt); palp comes from PALP_CLI_PATH and palpd from the same build directory
+// (BUILD/server/palpd); the scripts run through /bin/sh with their output captured.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -37,8 +37,7 @@ using testing::CliOutcome;
 using testing::read_text;
 using testing::shared_cli_dir;
 
-// (not from __FILE__: a compiler cache may make that path relative)
-const fs::path kSourceDir = PALP_SOURCE_DIR;
+const fs::path kSourceDir = fs::path(PALP_SOURCE_DIR);
 const fs::path kBuildDir = fs::path(PALP_CLI_PATH).parent_path().parent_path();
 const fs::path kPalpd = kBuildDir / "server" / "palpd";
 
