@@ -38,7 +38,7 @@ using Clock = std::chrono::steady_clock;
 // Bump when the algorithms change what prep writes, so old caches are not reused.
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
 // bone too thin for an interior voxel
-constexpr int kPrepAlgorithmVersion = 5;
+constexpr int kPrepAlgorithmVersion = 6;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
