@@ -25,6 +25,7 @@
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/config_file.hpp"
+#include "interop/igtl_options.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/model_setup.hpp"
 #include "devices/device.hpp"
@@ -137,14 +138,14 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
 
 const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits",
                                          "allow-truncated"};
-const std::vector<std::string> kValued = {
+const std::vector<std::string> kValued = interop::with_igtl_options({
     "device",        "tool",           "device-profile", "rate",
     "port",          "bind",           "token",          "max-clients",
     "queue",         "idle-timeout",   "hello-timeout",  "write-timeout",
     "record",        "record-dir",     "watchdog-ms",    "device-timeout-ms",
     "priority",      "duration",       "config",         "poll-us",
     "stats-json",    "device-axes",    "device-scale",   "home",
-    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"};
+    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"});
 
 // Now, as 2026-11-24T12:00:00Z.
 std::string utc_now_text() {
@@ -382,7 +383,7 @@ int run(const cli::Arguments& argv_in) {
   // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
-      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions;
+      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << interop::kIgtlOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
@@ -404,7 +405,7 @@ int run_configured(cli::Arguments argv) {
   valued.insert(valued.end(), kValued.begin(), kValued.end());
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
-    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions;
+    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << interop::kIgtlOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -583,6 +584,7 @@ int run_configured(cli::Arguments argv) {
   description.fields = scene.fields;
   description.placement = placement;
   net::Server server(server_config, description, loop, &app);
+  const auto igtl = interop::igtl_beside(args, scene.grid, loop_config.rate_hz, server, quiet);
 
   if (const auto record = args.get("record")) {
     const std::string failure = app.start(*record, "palpd --record");
