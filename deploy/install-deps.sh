@@ -10,7 +10,7 @@ packages=(
   libprotobuf-dev protobuf-compiler libasio-dev libtomlplusplus-dev
   libvtk9-dev libglfw3-dev xvfb xauth libgl1-mesa-dri
   libusb-1.0-0-dev libumockdev-dev umockdev
-  libopenigtlink-dev openigtlink-examples cyclonedds-dev cyclonedds-tools
+  libopenigtlink-dev openigtlink-examples cyclonedds-dev cyclonedds-tools python3
 )
 
 missing=()
