@@ -25,10 +25,10 @@
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/config_file.hpp"
-#include "interop/igtl_options.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/model_setup.hpp"
 #include "devices/device.hpp"
+#include "interop/igtl_options.hpp"
 #include "io/gzip.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
@@ -138,14 +138,15 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
 
 const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits",
                                          "allow-truncated"};
-const std::vector<std::string> kValued = interop::with_igtl_options({
+const std::vector<std::string> kValued = {
     "device",        "tool",           "device-profile", "rate",
     "port",          "bind",           "token",          "max-clients",
     "queue",         "idle-timeout",   "hello-timeout",  "write-timeout",
     "record",        "record-dir",     "watchdog-ms",    "device-timeout-ms",
     "priority",      "duration",       "config",         "poll-us",
     "stats-json",    "device-axes",    "device-scale",   "home",
-    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"});
+    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"};
+const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
 
 // Now, as 2026-11-24T12:00:00Z.
 std::string utc_now_text() {
@@ -389,7 +390,7 @@ int run(const cli::Arguments& argv_in) {
   const auto config = cli::config_path(argv_in);
   std::map<std::string, int> lines;
   cli::Arguments from_config;
-  if (config) from_config = cli::config_arguments(*config, kFlags, kValued, &lines);
+  if (config) from_config = cli::config_arguments(*config, kFlags, kValuedAll, &lines);
   try {
     from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
     return run_configured(std::move(from_config));
@@ -402,7 +403,7 @@ int run(const cli::Arguments& argv_in) {
 int run_configured(cli::Arguments argv) {
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;
-  valued.insert(valued.end(), kValued.begin(), kValued.end());
+  valued.insert(valued.end(), kValuedAll.begin(), kValuedAll.end());
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
     std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << interop::kIgtlOptionsHelp;

@@ -97,6 +97,7 @@ class IgtlServer::Impl {
   void stop() {
     if (!thread_.joinable()) return;
     asio::post(io_, [this] {
+      stopping_ = true;  // a poll already due runs after the cancel: it must not re-arm
       asio::error_code ec;
       acceptor_.close(ec);
       poll_timer_.cancel();
@@ -141,7 +142,7 @@ class IgtlServer::Impl {
 
   void accept() {
     acceptor_.async_accept([this](const asio::error_code& ec, tcp::socket socket) {
-      if (ec == asio::error::operation_aborted || !acceptor_.is_open()) return;
+      if (ec == asio::error::operation_aborted || stopping_ || !acceptor_.is_open()) return;
       if (!ec) {
         if (clients_.size() >= config_.max_clients) {
           refused_.fetch_add(1);
@@ -195,7 +196,7 @@ class IgtlServer::Impl {
     const auto wait = std::chrono::nanoseconds(std::max<std::int64_t>(interval_ns_ / 4, 1'000'000));
     poll_timer_.expires_after(wait);
     poll_timer_.async_wait([this](const asio::error_code& ec) {
-      if (ec) return;
+      if (ec || stopping_) return;
       poll();
       schedule_poll();
     });
@@ -263,6 +264,7 @@ class IgtlServer::Impl {
   asio::steady_timer poll_timer_{io_};
   std::thread thread_;
   std::vector<ClientPtr> clients_;
+  bool stopping_ = false;  // io thread only
   // offer()'s side (the palp.v1 io thread).
   std::int64_t next_ns_ = 0;
   rt::LatestBox<Sample> box_;

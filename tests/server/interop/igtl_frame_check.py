@@ -9,7 +9,7 @@ translation = A (p / spacing), rotation = A3 diag(1/spacing) R(q). Pure Python (
 
 usage: igtl_frame_check.py PALP PALPD WORKDIR [--ct FILE.nii.gz ...]
 """
-import csv, gzip, math, os, re, socket, struct, subprocess, sys, time
+import csv, gzip, math, os, re, shutil, socket, struct, subprocess, sys, time
 
 
 def nifti_affine(path):
@@ -115,7 +115,8 @@ def main():
     if len(sys.argv) < 4:
         raise SystemExit(__doc__)
     palp, palpd, work = sys.argv[1:4]
-    os.makedirs(work, exist_ok=True)
+    shutil.rmtree(work, ignore_errors=True)  # palp never writes over a CT or a recording
+    os.makedirs(work)
     cache = os.path.join(work, "cache")
     cts = sys.argv[sys.argv.index("--ct") + 1:] if "--ct" in sys.argv else []
     if not cts:

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <regex>
 #include <sstream>
@@ -88,7 +89,7 @@ void check_storage(const std::string& orientation) {
       std::regex_search(started, match, std::regex("OpenIGTLink on 127\\.0\\.0\\.1:([0-9]+)")))
       << started;
   const fs::path out = dir / "receiver.out";
-  const std::string command = std::string("timeout 2 ") + IGTL_RECEIVE_CLIENT_PATH + " 127.0.0.1 " +
+  const std::string command = std::string("timeout 3 ") + IGTL_RECEIVE_CLIENT_PATH + " 127.0.0.1 " +
                               match[1].str() + " >'" + out.string() + "' 2>/dev/null";
   const int status = std::system(command.c_str());
   EXPECT_EQ(WEXITSTATUS(status), 124);  // it receives until killed
@@ -97,7 +98,7 @@ void check_storage(const std::string& orientation) {
   const std::vector<Printed> printed = printed_matrices(testing::read_text(out));
   const rt::Recording recording = rt::read_recording(rec.string());
   const Matrix4 frame = ras_from_scene(read_ct(ct.string()).grid);
-  ASSERT_GE(printed.size(), 30u) << "fewer than 10 samples in 2 s";
+  ASSERT_GE(printed.size(), 15u) << "fewer than 5 samples in 3 s";
   std::size_t missing = 0;  // ticks absent from the recording (its ring dropped them)
   for (std::size_t i = 1; i < recording.records.size(); ++i)
     missing += recording.records[i].seq - recording.records[i - 1].seq - 1;
@@ -135,6 +136,38 @@ TEST(IgtlReceiveClient, TransformsMatchPalpdsTicksStoredLps) {
 }
 TEST(IgtlReceiveClient, TransformsMatchPalpdsTicksStoredRas) {
   check_storage("RAS");
+}
+
+TEST(IgtlReceiveClient, ConfigFileKeysAndMistakes) {
+  const fs::path dir = testing::shared_cli_dir() / "igtl-config";
+  fs::create_directories(dir);
+  const fs::path config = dir / "palpd.toml", log = dir / "palpd.log";
+  {
+    std::ofstream out(config);
+    out << "igtl-port = 0\nigtl-rate = 30\nigtl-device = \"Finger,F,U\"\n";
+  }
+  ASSERT_GT(testing::start_palpd("--config '" + config.string() +
+                                     "' --scene phantom:cube --device sim --port 0 --no-realtime "
+                                     "--duration 1",
+                                 log),
+            0)
+      << testing::read_text(log);
+  ASSERT_TRUE(testing::wait_palpd_exit(log));
+  EXPECT_TRUE(std::regex_search(testing::read_text(log),
+                                std::regex("OpenIGTLink on 127\\.0\\.0\\.1:[0-9]+: Finger, F, U at "
+                                           "30 Hz")))
+      << testing::read_text(log);
+  const auto refused = [&](const std::string& args, const std::string& says) {
+    const std::string command = std::string(PALPD_PATH) + " --scene phantom:cube --device sim " +
+                                args + " >'" + log.string() + "' 2>&1";
+    EXPECT_EQ(WEXITSTATUS(std::system(command.c_str())), 2) << args;
+    EXPECT_NE(testing::read_text(log).find(says), std::string::npos) << testing::read_text(log);
+  };
+  refused("--igtl-rate 30", "--igtl-rate needs --igtl-port");
+  refused("--igtl-port 70000", "--igtl-port must be an integer in 0..65535");
+  refused("--igtl-port 0 --igtl-device A,B", "--igtl-device needs TOOL or TOOL,FORCE,U");
+  refused("--igtl-port 0 --igtl-device A,A,B", "must differ");
+  refused("--igtl-port 0 --igtl-max-clients 65", "--igtl-max-clients must be an integer in 1..64");
 }
 
 }  // namespace
