@@ -50,18 +50,30 @@ and deforms the skin where the tool presses.
   --observer              only watch (default); the mouse moves this view's camera
   --controller            drive palpd's `remote` device (palpd --device remote) with mouse
                           and keyboard
-  --token T               the server's controller token
+  --token T               the server's controller token (sent only over TLS or loopback)
+  --tls-ca FILE           palp.v1 over TLS: check palpd's certificate against this CA and the
+                          host name of --connect
+  --tls-pin SHA256        or: trust exactly the palpd certificate with this SHA-256 fingerprint
+  --tls-cert FILE         this station's certificate (palpd --tls-client-ca asks controllers)
+  --tls-key FILE          its key (mode 600)
   --name NAME             client name shown by the server (default palpview)
   --rate HZ               frames/s asked of the server (default 120)
   --volume-max-dim N      render volume: at most N voxels per axis (default 256)
-  --preset skin|bone|soft transfer-function preset (default skin)
+  --preset skin|bone|soft transfer-function preset (default skin), on the CT's HU
+  --show-outside          show the CT outside the body mask (table, cables; default hidden)
+  --no-ct                 render the distance maps' pseudo-density, not the CT's HU
   --no-deformation        do not deform the skin
   --width W --height H    window size (default 1280x800)
   --view SIDE             the camera's starting view: the patient's anterior (default),
                           posterior, left, right, superior or inferior, taken from the CT's
                           direction matrix (not the voxel order)
   --camera AZ,EL,DIST     camera azimuth and elevation (degrees) from that view and
-                          distance (mm, 0 = fit)
+                          distance (mm, 0 = fit), about the volume's centre (no --follow)
+  --follow MM             look at the tool obliquely, between that view and the tool's
+                          axis, MM of anatomy across the view's height, and follow it
+                          smoothly (default 150 without --camera; 0 = off)
+  --chart-seconds S       the force chart's span: the last S seconds of this session
+                          (default 30, 1 .. 600)
   --no-orientation-marker hide the patient-axes cube (bottom left)
   --no-overlays           hide the HUD, the chart and the orientation marker
   --no-tool               hide the tool, contacts, proxies, springs, arrow and shadow
@@ -90,11 +102,16 @@ struct Options {
   std::uint16_t port = 0;
   bool controller = false;
   std::string token;
+  std::string tls_ca, tls_pin, tls_cert, tls_key;
   std::string name = "palpview";
   double rate_hz = 120.0;
   std::uint32_t volume_max_dim = 256;
   PresetId preset = PresetId::Skin;
   bool deformation = true;
+  bool show_outside = false, ct = true;
+  double chart_s = 30.0;
+  double follow_mm = -1;  // -1: 150 unless --camera
+  bool have_camera = false;
   int width = 1280, height = 800;
   double az = 0, el = 0, dist = 0;
   Anatomy view = Anatomy::Anterior;
@@ -148,6 +165,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.controller = true;
     } else if (arg == "--token") {
       o.token = value();
+    } else if (arg == "--tls-ca") {
+      o.tls_ca = value();
+    } else if (arg == "--tls-pin") {
+      o.tls_pin = value();
+    } else if (arg == "--tls-cert") {
+      o.tls_cert = value();
+    } else if (arg == "--tls-key") {
+      o.tls_key = value();
     } else if (arg == "--name") {
       o.name = value();
     } else if (arg == "--rate") {
@@ -159,6 +184,16 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.preset = parse_preset(value());
     } else if (arg == "--no-deformation") {
       o.deformation = false;
+    } else if (arg == "--chart-seconds") {
+      o.chart_s = parse_number(arg, value());
+      if (!(o.chart_s >= 1 && o.chart_s <= 600)) throw UsageError("--chart-seconds: 1 .. 600");
+    } else if (arg == "--show-outside") {
+      o.show_outside = true;
+    } else if (arg == "--no-ct") {
+      o.ct = false;
+    } else if (arg == "--follow") {
+      o.follow_mm = parse_number(arg, value());
+      if (!(o.follow_mm >= 0 && o.follow_mm <= 10000)) throw UsageError("--follow: 0 .. 10000 mm");
     } else if (arg == "--width") {
       o.width = parse_int(arg, value(), 64, 8192);
     } else if (arg == "--height") {
@@ -183,6 +218,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.el = parse_number(arg, text.substr(c1 + 1, c2 - c1 - 1));
       o.dist = parse_number(arg, text.substr(c2 + 1));
       if (o.dist < 0) throw UsageError("--camera: the distance must be >= 0");
+      o.have_camera = true;
     } else if (arg == "--screenshot") {
       o.screenshot = value();
     } else if (arg == "--frames") {
@@ -204,13 +240,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
   }
   if (!have_connect) throw UsageError("--connect HOST:PORT is required");
   if (have_frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");
+  if (o.follow_mm < 0) o.follow_mm = o.have_camera ? 0.0 : 150.0;
   if (!o.script.empty() && !o.controller) throw UsageError("--script needs --controller");
   return o;
 }
 
 // Per-phase frame times (ms).
 struct PhaseTimes {
-  std::vector<double> receive, deformation, render;
+  std::vector<double> receive, deformation, upload, upload_bytes, render;
   std::vector<double> render_modified, render_unchanged;  // render ms with / without re-upload
   std::int64_t deform_active = 0;
   std::int64_t roi_voxels_sum = 0;
@@ -252,9 +289,16 @@ int run(const Options& o) {
   stream.port = o.port;
   stream.controller = o.controller;
   stream.token = o.token;
+  stream.tls_ca = o.tls_ca;
+  stream.tls_pin = o.tls_pin;
+  stream.tls_cert = o.tls_cert;
+  stream.tls_key = o.tls_key;
   stream.client_name = o.name;
   stream.frame_rate_hz = o.rate_hz;
   stream.volume_max_dim = o.volume_max_dim;
+  stream.volume_hu = o.ct;
+  stream.volume_bone = !o.ct;  // the CT's presets never read d_bone
+  stream.force_history_s = o.chart_s;
 
   ViewWindow window(
       {o.width, o.height, !screenshot, "palpview " + o.host + ":" + std::to_string(o.port)});
@@ -268,6 +312,9 @@ int run(const Options& o) {
   settings.camera_azimuth_deg = o.az;
   settings.camera_elevation_deg = o.el;
   settings.camera_distance_mm = o.dist;
+  settings.follow_mm = o.follow_mm;
+  settings.chart_seconds = o.chart_s;
+  settings.keep_outside = o.show_outside;
   RenderScene scene(window.render_window(), settings);
   ControllerInput controller;
   bool controller_ready = false;
@@ -366,6 +413,7 @@ int run(const Options& o) {
     return std::chrono::duration<double>(Clock::now() - t).count();
   };
   std::optional<Clock::time_point> live_since;
+  double volume_s = -1;  // seconds from start until the whole render volume was here
 
   // Controller poses leave at a steady kPosePumpHz from their own thread, whatever the render
   // rate: palpd's remote device faults after 100 ms without a pose, and a software renderer
@@ -422,6 +470,7 @@ int run(const Options& o) {
     // a frame counts as live while the link is (a lost stream keeps its last frame on screen)
     const bool live = state.volume && state.frame.valid && state.link.state == LinkState::Live;
     if (live && !live_since) live_since = Clock::now();
+    if (state.volume && volume_s < 0) volume_s = seconds_since(start);  // connect -> volume
 
     if (o.controller && state.volume) {
       if (!controller_ready || controller_connection != state.connection) {
@@ -460,6 +509,8 @@ int run(const Options& o) {
     const auto t1 = Clock::now();
     const DeformResult deform = scene.update_deformation();
     const auto t2 = Clock::now();
+    const std::int64_t uploaded = scene.upload_deformation();
+    const auto t2u = Clock::now();
     scene.render();
     const auto t3 = Clock::now();
 
@@ -469,8 +520,10 @@ int run(const Options& o) {
     if (live) {
       times.receive.push_back(ms(t0, t1));
       times.deformation.push_back(ms(t1, t2));
-      times.render.push_back(ms(t2, t3));
-      (deform.active ? times.render_modified : times.render_unchanged).push_back(ms(t2, t3));
+      times.upload.push_back(ms(t2, t2u));
+      times.upload_bytes.push_back(static_cast<double>(uploaded));
+      times.render.push_back(ms(t2u, t3));
+      (deform.active ? times.render_modified : times.render_unchanged).push_back(ms(t2u, t3));
       if (deform.active) {
         ++times.deform_active;
         times.roi_voxels_sum += (deform.hi[0] - deform.lo[0]) * (deform.hi[1] - deform.lo[1]) *
@@ -530,12 +583,13 @@ int run(const Options& o) {
 
   // The frame-time split.
   std::printf(
-      "palpview: %lld frames (%d live), receive %.3f ms, deformation %.3f ms, render "
-      "%.3f ms per live frame (mean); render with volume re-upload %.3f ms (%zu), "
-      "without %.3f ms (%zu)\n",
+      "palpview: %lld frames (%d live), receive %.3f ms, deformation %.3f ms, upload %.3f ms "
+      "(%.0f bytes), render %.3f ms per live frame (mean); render with deformation %.3f ms "
+      "(%zu), without %.3f ms (%zu)\n",
       static_cast<long long>(frames), live_frames, mean_of(times.receive),
-      mean_of(times.deformation), mean_of(times.render), mean_of(times.render_modified),
-      times.render_modified.size(), mean_of(times.render_unchanged), times.render_unchanged.size());
+      mean_of(times.deformation), mean_of(times.upload), mean_of(times.upload_bytes),
+      mean_of(times.render), mean_of(times.render_modified), times.render_modified.size(),
+      mean_of(times.render_unchanged), times.render_unchanged.size());
   if (!o.stats_json.empty()) {
     nlohmann::json j;
     j["frames"] = frames;
@@ -548,6 +602,9 @@ int run(const Options& o) {
     j["height"] = size[1];
     j["receive_ms"] = summary(times.receive);
     j["deformation_ms"] = summary(times.deformation);
+    j["volume_received_s"] = volume_s;  // from palpview's start: connect, handshake, chunks
+    j["upload_ms"] = summary(times.upload);
+    j["upload_bytes"] = summary(times.upload_bytes);  // the first live frame: the whole volume
     j["render_ms"] = summary(times.render);
     j["render_ms_volume_reuploaded"] = summary(times.render_modified);
     j["render_ms_volume_unchanged"] = summary(times.render_unchanged);

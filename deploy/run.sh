@@ -57,3 +57,13 @@ else
 fi
 wait "$server"
 trap - EXIT
+if [[ -x "$viewer" && -z "${DISPLAY:-}" ]]; then
+  # The palpation sequence (approach, press over a rib, across the intercostal spaces) as PNGs
+  # and one contact sheet: on the torso and, when the shared data is there, on the real CT.
+  echo
+  echo "palpation sequence: out/palpview/sequence/"
+  deploy/view_sequence.sh out/torso torso out/palpview/sequence
+  if [[ -f ../shared/data/ct_abdomen_3mm.nii.gz ]]; then
+    deploy/view_sequence.sh ../shared/data/ct_abdomen_3mm.nii.gz ct out/palpview/sequence
+  fi
+fi

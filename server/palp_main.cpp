@@ -37,6 +37,8 @@ Commands:
   probe HOST:PORT           observe a running palpd: frames/s, delivery, latency, stats
   ctl HOST:PORT ACTION      a lab's console for palpd: record start|stop, set, tool, pause,
                             resume, recentre, status
+  tune --scene S --tool T --rate HZ
+                            the cheapest configuration that feels the same, as a config file
   version                   print the version
 
 Run `palp <command> --help` for the options of a command.
@@ -60,7 +62,7 @@ int dispatch(int argc, char** argv) {
   const std::map<std::string, std::function<int(const cli::Arguments&)>> commands = {
       {"phantom", cli::cmd_phantom}, {"prep", cli::cmd_prep},   {"run", cli::cmd_run},
       {"traj", cli::cmd_traj},       {"bench", cli::cmd_bench}, {"probe", cli::cmd_probe},
-      {"ctl", cli::cmd_ctl},
+      {"ctl", cli::cmd_ctl},         {"tune", cli::cmd_tune},
   };
   const auto it = commands.find(command);
   if (it == commands.end()) throw UsageError("unknown command '" + command + "' (try palp --help)");

@@ -26,7 +26,11 @@
 #include "cli/cli.hpp"
 #include "cli/config_file.hpp"
 #include "cli/device_placement.hpp"
+#include "cli/falcon_options.hpp"
 #include "cli/model_setup.hpp"
+#include "cli/palpd_stats.hpp"
+#include "cli/rt_options.hpp"
+#include "cli/tls_options.hpp"
 #include "devices/device.hpp"
 #include "interop/igtl_options.hpp"
 #include "io/gzip.hpp"
@@ -64,6 +68,8 @@ Devices:
                           (docs/usb-protocol.md; VID:PID in hex, default 1209:0001); hot-plug:
                           it may come after palpd starts and go at any time (zero force while
                           absent); a permission error names the udev rule to install
+  falcon[:INDEX]          a Novint Falcon on libusb (INDEX: which one, default 0), with
+                          --falcon-firmware FILE; homed by the user, hot-plug (docs/devices.md)
   spacemouse[:position|:rate][:VID:PID]
                           a 3Dconnexion SpaceMouse as a pose source (no force output: clients
                           show the force it cannot render); rate (default) moves the finger
@@ -86,6 +92,8 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
   --NO-FORCE-LIMITS       (spelled --no-force-limits) send the model's raw force to a usb-haptic
                           device: no clamp, no step bound, no engagement. Command line only,
                           never in a config file; for bench tests with no hand on the device
+  --falcon-firmware FILE  Novint's Falcon firmware (from its driver; palp does not ship it)
+  --falcon-tool-from DIR  the Falcon's fixed tool points into the skin from DIR (anterior)
   --rate HZ               loop rate, 1..100000 (default 1000; tested 500..10000)
 Placing a force device on the patient (usb-haptic; spacemouse takes --home and
 --home-clearance; sim, replay and remote move in the scene frame and take none):
@@ -102,7 +110,12 @@ Placing a force device on the patient (usb-haptic; spacemouse takes --home and
 palpd refuses to start when the device, so placed, cannot reach 10 mm below the skin.
   --port P                TCP port (default 7400; 0 = any free port, printed at start)
   --bind ADDR             address to listen on (default 127.0.0.1; 0.0.0.0 for a lab network)
-  --token TOKEN           CONTROLLER clients must present it (prefer the config file)
+  --token TOKEN           CONTROLLER clients must present it (prefer the config file); never
+                          accepted in plain text from beyond loopback
+  --tls-cert FILE         palp.v1 over TLS 1.3 only, with this PEM certificate (and chain) ...
+  --tls-key FILE          ... and its key (mode 600); plain-text clients are refused
+  --tls-client-ca FILE    controllers must present a client certificate signed by this CA (its
+                          subject names them in Stats, logs and recordings; observers may)
   --max-clients N         default 16 (1..1024)
   --queue N               haptic frames queued per client before the oldest is dropped
                           (256; 1..65536)
@@ -114,7 +127,7 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   --hello-timeout S       close clients that send no Hello within S s (5; 0.1..600)
   --write-timeout S       close clients whose socket accepts nothing for S s (5; 0 = never;
                           at most 600)
-  --poll-us US            how often the network thread takes new frames from the loop
+  --poll-us US            --net-wake poll: how often the network thread takes new frames
                           (500; 50..100000)
   --record FILE           record every tick into FILE (binary, see server/rt/recording.hpp) and a
                           CSV beside it: FILE with its extension replaced by .csv (rec/s1.palprec
@@ -145,7 +158,9 @@ const std::vector<std::string> kValued = {
     "record",        "record-dir",     "watchdog-ms",    "device-timeout-ms",
     "priority",      "duration",       "config",         "poll-us",
     "stats-json",    "device-axes",    "device-scale",   "home",
-    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes"};
+    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes",
+    "falcon-firmware", "falcon-tool-from",
+    "tls-cert", "tls-key", "tls-client-ca"};
 const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
 
 // Now, as 2026-11-24T12:00:00Z.
@@ -285,79 +300,6 @@ class App final : public net::ControlTarget {
   std::unique_ptr<rt::Recorder> recorder_;
 };
 
-// The smallest histogram bucket bound (us) at or below which a fraction q of the ticks woke up;
-// NaN when the quantile falls in the open last bucket or there are no ticks.
-double lateness_bound_us(const rt::LoopStats& s, double q) {
-  std::uint64_t total = 0;
-  for (const std::uint64_t n : s.jitter) total += n;
-  if (total == 0) return NAN;
-  const double wanted = q * static_cast<double>(total);
-  std::uint64_t seen = 0;
-  for (std::size_t b = 0; b < rt::kJitterBucketUpperUs.size(); ++b) {
-    seen += s.jitter[b];
-    if (static_cast<double>(seen) >= wanted) return rt::kJitterBucketUpperUs[b];
-  }
-  return NAN;
-}
-
-std::string json_number(double v) {
-  return std::isfinite(v) ? number_text(v) : "null";
-}
-
-// --stats-json: one object with the loop's and the server's final counters.
-void write_stats_json(const std::string& path, const rt::LoopStats& s, const net::ServerCounters& c,
-                      double rate_hz, double elapsed_s) {
-  const auto u = [](std::uint64_t v) { return std::to_string(v); };
-  const std::uint64_t deadlines = s.ticks + s.overruns;
-  // Appended piece by piece: one long operator+ chain trips GCC 12's -Wrestrict false positive.
-  std::string out;
-  const auto field = [&out](const char* key, const std::string& value, const char* sep = ",") {
-    out.append(sep).append("\"").append(key).append("\":").append(value);
-  };
-  field("rate_hz", json_number(rate_hz), "{");
-  field("elapsed_s", json_number(elapsed_s));
-  field("ticks", u(s.ticks));
-  field("overruns", u(s.overruns));
-  field("deadline_miss_fraction",
-        json_number(deadlines ? static_cast<double>(s.overruns) / static_cast<double>(deadlines)
-                              : 0.0));
-  field("faults", u(s.faults));
-  field("device_absent_events", u(s.absent_events));
-  field("realtime", s.realtime ? "true" : "false");
-  field("lateness_us", "");
-  field("p50_at_most", json_number(lateness_bound_us(s, 0.5)), "{");
-  field("p99_at_most", json_number(lateness_bound_us(s, 0.99)));
-  field("p999_at_most", json_number(lateness_bound_us(s, 0.999)));
-  field("max", json_number(static_cast<double>(s.max_late_ns) * 1e-3));
-  field("bucket_upper_us", "[");
-  for (std::size_t b = 0; b < rt::kJitterBucketUpperUs.size(); ++b)
-    out.append(b ? "," : "").append(json_number(rt::kJitterBucketUpperUs[b]));
-  out.append("]");
-  field("counts", "[");
-  for (std::size_t b = 0; b < s.jitter.size(); ++b) out.append(b ? "," : "").append(u(s.jitter[b]));
-  out.append("]}");
-  field("tick_us", "");
-  field(
-      "mean",
-      json_number(s.ticks ? static_cast<double>(s.tick_ns_sum) * 1e-3 / static_cast<double>(s.ticks)
-                          : 0.0),
-      "{");
-  field("max", json_number(static_cast<double>(s.tick_ns_max) * 1e-3));
-  out.append("}");
-  field("net_published", u(s.net_published));
-  field("net_dropped", u(s.net_dropped));
-  field("clients_accepted", u(c.accepted));
-  field("clients_rejected", u(c.rejected));
-  field("protocol_errors", u(c.protocol_errors));
-  field("timeouts", u(c.timeouts));
-  field("frames_sent", u(c.frames_sent));
-  field("frames_dropped", u(c.frames_dropped));
-  out.append("}\n");
-  std::ofstream file(path);
-  file << out;
-  if (!file) throw Error("cannot write " + path);
-}
-
 double positive(const cli::Args& args, const std::string& key, double fallback) {
   const double v = args.number(key, fallback);
   if (v < 0) throw UsageError("--" + key + " must not be negative");
@@ -384,13 +326,15 @@ int run(const cli::Arguments& argv_in) {
   // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
-      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << interop::kIgtlOptionsHelp;
+      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
+                << interop::kIgtlOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
   std::map<std::string, int> lines;
   cli::Arguments from_config;
-  if (config) from_config = cli::config_arguments(*config, kFlags, kValuedAll, &lines);
+  if (config)
+    from_config = cli::config_arguments(*config, kFlags, cli::with_rt_options(kValuedAll), &lines);
   try {
     from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
     return run_configured(std::move(from_config));
@@ -403,10 +347,12 @@ int run(const cli::Arguments& argv_in) {
 int run_configured(cli::Arguments argv) {
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;
+  valued = cli::with_rt_options(std::move(valued));
   valued.insert(valued.end(), kValuedAll.begin(), kValuedAll.end());
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
-    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << interop::kIgtlOptionsHelp;
+    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
+              << interop::kIgtlOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -473,6 +419,7 @@ int run_configured(cli::Arguments argv) {
     throw UsageError("--port must be an integer in 0..65535");
   server_config.port = static_cast<std::uint16_t>(port);
   server_config.token = args.get("token").value_or("");
+  server_config.tls = cli::server_tls(args);
   server_config.max_clients = static_cast<std::size_t>(within(args, "max-clients", 16, 1, 1024));
   server_config.queue_frames =
       std::max<std::size_t>(1, static_cast<std::size_t>(within(args, "queue", 256, 1, 65536)));
@@ -482,6 +429,7 @@ int run_configured(cli::Arguments argv) {
   server_config.hello_timeout_s = within(args, "hello-timeout", 5, 0.1, 600);
   server_config.write_timeout_s = within(args, "write-timeout", 5, 0, 600);
   server_config.poll_interval_s = within(args, "poll-us", 500, 50, 100000) * 1e-6;
+  cli::apply_rt_options(args, loop_config, server_config);
   const double duration = within(args, "duration", 0, 0, 1e7);
   const std::string record_dir = args.get("record-dir").value_or(".");
   {
@@ -498,9 +446,10 @@ int run_configured(cli::Arguments argv) {
   std::unique_ptr<rt::Device> device =
       replay ? std::make_unique<rt::ReplayDevice>(std::move(replay->records))
              : rt::make_device(*device_spec);
+  cli::prepare_falcon(args, *device);  // the firmware file, before anything is awaited
   // Limits: a device that pushes on a hand always gets them (the profile, or the most
   // conservative class), lowered in the loop to what the device declares; engagement with them.
-  const bool drives_a_hand = device->kind() == "usb-haptic";
+  const bool drives_a_hand = device->kind() == "usb-haptic" || device->kind() == "falcon";
   if (drives_a_hand && !profile) {
     if (args.has("no-force-limits")) {
       std::fprintf(stderr,
@@ -508,7 +457,7 @@ int run_configured(cli::Arguments argv) {
                    "unclamped and unramped (the skin law alone reaches 144 N at 20 mm). Keep "
                    "hands off the device.\n");
     } else {
-      profile = &default_device_profile();
+      profile = device->kind() == "falcon" ? &device_profile("falcon") : &default_device_profile();
       if (!quiet)
         std::fprintf(stderr,
                      "palpd: no --device-profile: limiting the force to the %s class (%.1f N, "
@@ -517,7 +466,7 @@ int run_configured(cli::Arguments argv) {
                      profile->max_stiffness_N_per_mm);
     }
   } else if (args.has("no-force-limits")) {
-    throw UsageError("--no-force-limits applies to usb-haptic only");
+    throw UsageError("--no-force-limits applies to falcon and usb-haptic only");
   }
   loop_config.profile = profile;
   if (profile) {
@@ -541,6 +490,7 @@ int run_configured(cli::Arguments argv) {
   const std::optional<net::SceneDescription::Placement> placement =
       cli::place_device(args, device->kind(), scene, quiet);
   if (placement) loop_config.registration = placement->registration;
+  cli::orient_falcon(args, *device, scene, placement);
   if (device->kind() == "spacemouse" && (args.get("home") || args.get("home-clearance"))) {
     const HomeSite site = find_home_site(*scene.fields, args.get("home").value_or("auto"),
                                          positive(args, "home-clearance", 20.0));
@@ -583,6 +533,8 @@ int run_configured(cli::Arguments argv) {
   description.device = *device_spec;
   description.device_profile = profile ? std::string(profile->name) : "";
   description.fields = scene.fields;
+  description.ct = scene.ct;
+  description.body = scene.body;
   description.placement = placement;
   net::Server server(server_config, description, loop, &app);
   const auto igtl = interop::igtl_beside(args, scene.grid, loop_config.rate_hz, server, quiet);
@@ -602,6 +554,9 @@ int run_configured(cli::Arguments argv) {
                 device_spec->c_str(), tool.name.c_str(), loop_config.rate_hz,
                 profile ? (std::string(", profile ") + std::string(profile->name)).c_str() : "");
     const PatientFrame frame = patient_frame(scene.grid);
+    for (const std::string& line :
+         cli::server_tls_report(server_config.tls.get(), server_config.bind))
+      std::fprintf(line.rfind("warning", 0) == 0 ? stderr : stdout, "palpd: %s\n", line.c_str());
     if (server_config.token.empty() && !net::is_loopback_address(server_config.bind))
       std::printf(
           "palpd: WARNING: listening beyond this machine without --token: anyone who can "
@@ -648,8 +603,8 @@ int run_configured(cli::Arguments argv) {
   const rt::LoopStats s = loop.stats();
   const net::ServerCounters c = server.counters();
   if (!stats_json.empty())
-    write_stats_json(stats_json, s, c, loop_config.rate_hz,
-                     static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9);
+    cli::write_stats_json(stats_json, s, c, loop_config.rate_hz,
+                          static_cast<double>(rt::monotonic_ns() - start_ns) * 1e-9);
   if (!quiet) {
     std::printf(
         "palpd: %llu ticks, %llu overruns, %llu faults, max lateness %.1f us, "

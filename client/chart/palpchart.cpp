@@ -24,6 +24,7 @@
 
 #include "base/errors.hpp"
 #include "chart/chart.hpp"
+#include "chart/contact_sheet.hpp"
 
 namespace {
 
@@ -52,6 +53,10 @@ Draws the columns of CSV files (header row) as a line or scatter chart and write
   --size WxH            image size in pixels (default 900x600)
   --legend POS          tr | tl | br | bl | none (default tr)
 Without an X display palpchart runs itself under xvfb-run -a (package xvfb) when it can.
+
+usage: palpchart --sheet OUT.png [--columns N] IN.png...
+  --sheet OUT.png       a contact sheet: the IN.png images in a grid, one PNG (no display needed)
+  --columns N           images a row (default 3)
 )";
 
 std::vector<std::string> split(std::string_view s, char sep) {
@@ -290,6 +295,7 @@ chart::ChartSpec build(const Options& o, const chart::Table& table, const std::s
       }
       sort_by_x(m);
     }
+    if (m.x.size() == 1) m.style = chart::Style::Points;  // a line needs two points
     if (!m.x.empty()) spec.series.push_back(std::move(m));
   }
   return spec;
@@ -297,8 +303,41 @@ chart::ChartSpec build(const Options& o, const chart::Table& table, const std::s
 
 }  // namespace
 
+// palpchart --sheet OUT.png [--columns N] IN.png...
+int contact_sheet(int argc, char** argv) {
+  std::string out;
+  int columns = 3;
+  std::vector<std::string> inputs;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      return 0;
+    }
+    if (a == "--sheet" || a == "--columns") {
+      if (i + 1 >= argc) throw UsageError(a + " needs a value");
+      const std::string v = argv[++i];
+      if (a == "--sheet") {
+        out = v;
+      } else {
+        try {
+          columns = std::stoi(v);
+        } catch (const std::exception&) {
+          throw UsageError("--columns must be a whole number, got '" + v + "'");
+        }
+      }
+    } else {
+      inputs.push_back(a);
+    }
+  }
+  chart::write_contact_sheet(inputs, columns, out);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   try {
+    for (int i = 1; i < argc; ++i)
+      if (std::string_view(argv[i]) == "--sheet") return contact_sheet(argc, argv);
     const Options o = parse_args(argc, argv);
     if (!chart::display_available()) {
       // once: under xvfb-run, when installed (the variable stops a loop if it gave no display)

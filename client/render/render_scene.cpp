@@ -53,6 +53,10 @@ struct RenderScene::Impl {
   std::string orientation = "LPS";
   const SceneDescription* framed_scene = nullptr;
   bool camera_placed = false;
+  bool tool_known = false;  // follow: the smoothed device point below is valid
+  Vec3d tool_focus{};       // follow: the smoothed device point the camera looks at
+  Vec3d tool_axis{};        // follow: the tool's +z when it was first seen (scene frame)
+  std::uint64_t followed_connection = 0;
   bool tool_glyphs = true;
   bool overlays = true;
 
@@ -69,12 +73,14 @@ struct RenderScene::Impl {
         overlays(s.overlays) {}
 
   void place_camera();
+  void follow_tool(const FrameState& latest);
   void apply_visibility();
 };
 
 RenderScene::RenderScene(vtkRenderWindow* window, SceneSettings settings)
     : impl_(std::make_unique<Impl>(window, settings)) {
   Impl& s = *impl_;
+  s.volume.set_keep_outside(settings.keep_outside);
   s.renderer->SetBackground(0.08, 0.09, 0.12);
   s.renderer->SetLayer(0);
   window->SetNumberOfLayers(2);
@@ -100,18 +106,30 @@ void RenderScene::Impl::place_camera() {
       bounds[2 * a + 1] = static_cast<double>(source->dims[a] - 1) * source->spacing[a];
     }
   }
-  const Vec3d centre{0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
-                     0.5 * (bounds[4] + bounds[5])};
+  const bool follow = settings.follow_mm > 0 && tool_known;
+  const Vec3d centre = follow ? tool_focus
+                              : Vec3d{0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+                                      0.5 * (bounds[4] + bounds[5])};
   const double radius =
       0.5 * std::sqrt(std::pow(bounds[1] - bounds[0], 2) + std::pow(bounds[3] - bounds[2], 2) +
                       std::pow(bounds[5] - bounds[4], 2));
   vtkCamera* camera = renderer->GetActiveCamera();
   camera->SetViewAngle(30.0);
-  const double distance = settings.camera_distance_mm > 0
-                              ? settings.camera_distance_mm
-                              : std::max(radius, 1.0) / std::sin(std::numbers::pi / 12.0);
+  // Following: follow_mm across the view's height (view angle 30 degrees).
+  const double distance = settings.camera_distance_mm > 0 ? settings.camera_distance_mm
+                          : follow ? 0.5 * settings.follow_mm / std::tan(std::numbers::pi / 12.0)
+                                   : std::max(radius, 1.0) / std::sin(std::numbers::pi / 12.0);
   // From the patient's side (anterior by default), head up; then azimuth and elevation.
-  const CameraPlacement c = patient_view(frame, settings.view, centre, distance);
+  CameraPlacement c = patient_view(frame, settings.view, centre, distance);
+  if (follow) {
+    // Oblique on the contact: between the view's side and the tool's axis (its +z leaves the
+    // skin), a little from above the patient's head; the view's up kept.
+    const Vec3d side = (c.position - centre) * (1.0 / distance);
+    Vec3d dir = side + tool_axis + 0.4 * c.up;
+    const double n = norm(dir);
+    dir = n > 1e-6 ? dir * (1.0 / n) : side;
+    c.position = centre + dir * distance;
+  }
   camera->SetFocalPoint(c.focal.x, c.focal.y, c.focal.z);
   camera->SetPosition(c.position.x, c.position.y, c.position.z);
   camera->SetViewUp(c.up.x, c.up.y, c.up.z);
@@ -119,6 +137,31 @@ void RenderScene::Impl::place_camera() {
   camera->Elevation(settings.camera_elevation_deg);
   camera->OrthogonalizeViewUp();
   renderer->ResetCameraClippingRange(bounds);
+}
+
+// The camera's focal point eases towards the device point (a quarter of the way a frame; a jump
+// of more than 100 mm, a new tool or connection, is taken at once), the camera moving with it.
+void RenderScene::Impl::follow_tool(const FrameState& latest) {
+  if (settings.follow_mm <= 0 || !latest.valid) return;
+  const Vec3d target = latest.pose.position;
+  if (!std::isfinite(target.x) || !std::isfinite(target.y) || !std::isfinite(target.z)) return;
+  if (!tool_known) {
+    tool_known = true;
+    tool_focus = target;
+    tool_axis = rotate(latest.pose.orientation, Vec3d{0, 0, 1});
+    if (camera_placed) place_camera();
+    return;
+  }
+  const Vec3d gap = target - tool_focus;
+  const Vec3d move = norm(gap) > 100.0 ? gap : gap * 0.25;
+  tool_focus = tool_focus + move;
+  vtkCamera* camera = renderer->GetActiveCamera();
+  double f[3], p[3];
+  camera->GetFocalPoint(f);
+  camera->GetPosition(p);
+  camera->SetFocalPoint(f[0] + move.x, f[1] + move.y, f[2] + move.z);
+  camera->SetPosition(p[0] + move.x, p[1] + move.y, p[2] + move.z);
+  renderer->ResetCameraClippingRange();
 }
 
 void RenderScene::Impl::apply_visibility() {
@@ -142,6 +185,11 @@ void RenderScene::update_state(const LatestState& state, const HudInputs& inputs
     s.place_camera();
     s.camera_placed = true;
   }
+  if (state.connection != s.followed_connection) {  // a new connection: find the tool anew
+    s.followed_connection = state.connection;
+    s.tool_known = false;
+  }
+  s.follow_tool(state.frame);
   s.tools.update(state, s.tool_glyphs);
   s.workspace.update(state.scene.get(), state.link.registration_home, s.tool_glyphs);
   s.shadow.update(state.frame, s.tools.tool_name(), s.volume.source(), s.tool_glyphs);
@@ -166,7 +214,16 @@ DeformResult RenderScene::update_deformation() {
   return impl_->volume.deform();
 }
 
+std::int64_t RenderScene::upload_deformation() {
+  last_upload_bytes_ = impl_->volume.upload(impl_->window);
+  upload_called_ = true;
+  return last_upload_bytes_;
+}
+
 void RenderScene::render() {
+  const std::int64_t bytes = impl_->volume.upload(impl_->window);  // 0 once uploaded
+  last_upload_bytes_ = upload_called_ ? last_upload_bytes_ + bytes : bytes;
+  upload_called_ = false;
   impl_->marker.follow(impl_->renderer->GetActiveCamera());
   impl_->window->Render();
 }

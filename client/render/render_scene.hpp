@@ -10,8 +10,8 @@
 //     buffer the mapper renders and make a SkinDeformer over it; tool pose, contacts, proxies,
 //     springs, arrow, shadow, HUD text and chart from the frame        ("receive" time)
 //   -> update_deformation(): SkinDeformer::update writes the ROI of the same buffer in place,
-//     the scalar array (which points at that buffer, no copy) is marked Modified, so the mapper
-//     re-uploads the volume texture at the next render                ("deformation" time)
+//     and notes the box it wrote                                      ("deformation" time)
+//   -> upload_deformation(): that box to the 3D texture (glTexSubImage3D) ("upload" time)
 //   -> render(): the window's Render()                                   ("render" time)
 // The HUD strings come from the pure functions hud_text / banner_text / force_text (hud_text.hpp,
 // included here) so they are testable without a display.
@@ -50,6 +50,12 @@ struct SceneSettings {
   // view's up) and elevation; distance in mm, 0 = fit the volume.
   Anatomy view = Anatomy::Anterior;
   double camera_azimuth_deg = 0, camera_elevation_deg = 0, camera_distance_mm = 0;
+  // Framing on the tool: with follow_mm > 0 the camera looks at the device point from `view`
+  // turned by azimuth and elevation, at the distance that shows follow_mm of anatomy across
+  // the view's height, and follows the tool smoothly (the user's orbit and zoom are kept);
+  // 0: the camera stays on the volume's centre (the whole volume fitted unless a distance).
+  double follow_mm = 0;
+  bool keep_outside = false;       // the CT outside the body mask shown (else transparent air)
   bool orientation_marker = true;  // the patient-axes cube in the bottom-left corner
   double arrow_mm_per_newton = 4.0;
   double chart_seconds = 5.0;  // force plot span
@@ -78,7 +84,12 @@ class RenderScene {
   // Runs the skin deformation for the contacts of the last state (no-op when disabled or no
   // volume). Returns what SkinDeformer reported.
   DeformResult update_deformation();
-  void render();
+  // Sends the box the deformation wrote to the volume texture (a sub-volume upload; the whole
+  // volume only for a new one): the bytes sent this frame ("upload" time).
+  std::int64_t upload_deformation();
+  void render();  // uploads first when upload_deformation() was not called
+  // Bytes the last upload_deformation() and render() sent to the volume texture.
+  std::int64_t last_upload_bytes() const { return last_upload_bytes_; }
 
   bool has_volume() const;
   // Camera control (observer mouse).
@@ -114,6 +125,8 @@ class RenderScene {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  std::int64_t last_upload_bytes_ = 0;
+  bool upload_called_ = false;
 };
 
 // Reads the window's last rendered frame back (RGB).

@@ -35,6 +35,64 @@ std::vector<float> compose_render_scalar(std::span<const float> d_surf,
   return out;
 }
 
+std::vector<float> compose_ct_scalar(std::span<const std::int16_t> hu,
+                                     std::span<const std::uint8_t> body, bool keep_outside) {
+  if (body.size() != hu.size())
+    throw UsageError("render volume: body has " + std::to_string(body.size()) + " values, hu " +
+                     std::to_string(hu.size()));
+  std::vector<float> out(hu.size());
+  for (std::size_t n = 0; n < hu.size(); ++n)
+    out[n] = (keep_outside || body[n]) ? static_cast<float>(hu[n]) : kOutsideValue;
+  return out;
+}
+
+namespace {
+
+// Presets on the CT's HU, in the spirit of 3D Slicer's CT presets. Opacity is per millimetre
+// of ray (VTK's unit distance), so tissue that fills the body stays at a few per cent.
+Preset make_ct_preset(PresetId id) {
+  Preset p;
+  p.id = id;
+  p.name = to_string(id);
+  const std::array<double, 3> skin{0.93, 0.74, 0.64}, bone{0.98, 0.95, 0.86};
+  switch (id) {
+    case PresetId::Skin:
+      // Window -600 .. -100 HU: the air -> skin step (t = 0.5 at -350 HU) opaque and shaded.
+      p.window = {-350.0, 500.0};
+      p.points = {{-1.0, skin, 0.0},
+                  {0.2, skin, 0.0},
+                  {0.5, {0.90, 0.68, 0.58}, 0.7},
+                  {1.0, skin, 0.95},
+                  {4.0, skin, 0.95}};
+      break;
+    case PresetId::Bone:
+      // Window 0 .. 600 HU: bone from 150 HU ivory and opaque by 600; the skin a translucent
+      // veil (the -550 .. -300 HU of the air -> skin step only: fat and muscle stay clear).
+      p.window = {300.0, 600.0};
+      p.points = {{-1.083, skin, 0.0}, {-0.917, skin, 0.10}, {-0.5, skin, 0.10},
+                  {-0.333, skin, 0.0}, {0.25, bone, 0.0},    {0.5, {0.9, 0.85, 0.75}, 0.6},
+                  {1.0, bone, 0.95},   {4.0, bone, 1.0}};
+      break;
+    case PresetId::Soft:
+      // Window -160 .. 240 HU (Slicer's soft tissue 40 / 400): fat clear, organs and muscle
+      // faintly red, contrast (150 .. 300 HU) bright, bone white, the skin a faint veil.
+      p.window = {40.0, 400.0};
+      p.points = {{-0.975, skin, 0.0},
+                  {-0.8, skin, 0.05},
+                  {-0.35, skin, 0.0},
+                  {0.4, {0.55, 0.25, 0.20}, 0.0},
+                  {0.5, {0.75, 0.35, 0.30}, 0.012},
+                  {0.7, {0.85, 0.45, 0.35}, 0.03},
+                  {1.0, {1.0, 0.85, 0.7}, 0.3},
+                  {2.15, {1.0, 1.0, 0.95}, 0.6}};
+      break;
+  }
+  p.shade = true;
+  return p;
+}
+
+}  // namespace
+
 PresetId parse_preset(std::string_view name) {
   if (name == "skin") return PresetId::Skin;
   if (name == "bone") return PresetId::Bone;
@@ -54,7 +112,8 @@ const char* to_string(PresetId id) {
   return "?";
 }
 
-Preset make_preset(PresetId id) {
+Preset make_preset(PresetId id, bool ct) {
+  if (ct) return make_ct_preset(id);
   Preset p;
   p.id = id;
   p.name = to_string(id);

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <string_view>
@@ -39,6 +40,12 @@ float render_scalar(float d_surf, float d_bone, bool has_bone);
 // otherwise it must have d_surf's size (UsageError).
 std::vector<float> compose_render_scalar(std::span<const float> d_surf,
                                          std::span<const float> d_bone);
+
+// The CT itself (RenderVolume::hu): its HU where the body mask is set, kOutsideValue outside
+// (air: transparent in every preset) unless `keep_outside`. UsageError when the sizes differ.
+inline constexpr float kOutsideValue = -1024.0f;
+std::vector<float> compose_ct_scalar(std::span<const std::int16_t> hu,
+                                     std::span<const std::uint8_t> body, bool keep_outside);
 
 enum class PresetId { Skin, Bone, Soft };
 
@@ -65,8 +72,9 @@ struct Preset {
   bool shade = true;                 // lighting on (surfaces) or off (translucent)
 };
 
-// The preset's definition (default window included).
-Preset make_preset(PresetId id);
+// The preset's definition (default window included): on the CT's HU when `ct`, else on the
+// pseudo-density composed from the distance maps.
+Preset make_preset(PresetId id, bool ct = false);
 
 // The render-scalar value of a control point under a window.
 inline double point_value(const ControlPoint& point, const Window& window) {

@@ -1,7 +1,14 @@
 // The volume layer: ray-cast volume, transfer functions, deformed texture (volume_layer.hpp).
 #include "render/volume_layer.hpp"
 
+#include <vtkOpenGLGPUVolumeRayCastMapper.h>
+#include <vtkOpenGLRenderWindow.h>
+#include <vtkOpenGLState.h>
 #include <vtkPointData.h>
+#include <vtkTextureObject.h>
+#include <vtkVolumeInputHelper.h>
+#include <vtkVolumeTexture.h>
+#include <vtk_glew.h>
 
 #include <algorithm>
 
@@ -42,10 +49,18 @@ bool VolumeLayer::load(const LatestState& state) {
   // A volume whose arrays do not match its dimensions is never kept: everything that samples
   // source() (the shadow, the deformer) indexes by the dimensions.
   if (n <= 0 || static_cast<std::int64_t>(source.d_surf.size()) != n ||
-      (!source.d_bone.empty() && static_cast<std::int64_t>(source.d_bone.size()) != n))
+      (!source.d_bone.empty() && static_cast<std::int64_t>(source.d_bone.size()) != n) ||
+      (!source.hu.empty() && (static_cast<std::int64_t>(source.hu.size()) != n ||
+                              static_cast<std::int64_t>(source.body.size()) != n)))
     return false;
   source_ = state.volume;
-  render_scalars_ = compose_render_scalar(source.d_surf, source.d_bone);
+  const bool ct = !source.hu.empty();
+  render_scalars_ = ct ? compose_ct_scalar(source.hu, source.body, keep_outside_)
+                       : compose_render_scalar(source.d_surf, source.d_bone);
+  if (ct != ct_) {  // the presets follow what the scalar is: HU or the pseudo-density
+    ct_ = ct;
+    set_preset(preset_.id);
+  }
   image_->SetDimensions(static_cast<int>(source.dims[0]), static_cast<int>(source.dims[1]),
                         static_cast<int>(source.dims[2]));
   image_->SetSpacing(source.spacing[0], source.spacing[1], source.spacing[2]);
@@ -61,6 +76,8 @@ bool VolumeLayer::load(const LatestState& state) {
   mapper_->SetSampleDistance(0.5 *
                              std::min({source.spacing[0], source.spacing[1], source.spacing[2]}));
   volume_->VisibilityOn();
+  loaded_ = true;
+  pending_lo_ = pending_hi_ = {};
   deformer_ = deformation_ ? std::make_unique<SkinDeformer>(source.dims, source.spacing,
                                                             render_scalars_, deformer_params_)
                            : nullptr;
@@ -77,13 +94,69 @@ void VolumeLayer::set_contacts(const FrameState& frame) {
 DeformResult VolumeLayer::deform() {
   if (!deformer_ || render_scalars_.empty()) return {};
   const DeformResult result = deformer_->update(deform_contacts_, render_scalars_);
-  // Anything written (a new ROI, or the last one restored): the texture must be re-uploaded.
-  if (result.active || deform_was_active_) {
-    scalar_array_->Modified();
-    image_->Modified();
+  // Anything written (a new ROI, or the last one restored): that box goes up at upload().
+  const bool wrote =
+      result.hi[0] > result.lo[0] && result.hi[1] > result.lo[1] && result.hi[2] > result.lo[2];
+  if (wrote) {
+    const bool had = pending_hi_[0] > pending_lo_[0];
+    for (int a = 0; a < 3; ++a) {
+      pending_lo_[a] = had ? std::min(pending_lo_[a], result.lo[a]) : result.lo[a];
+      pending_hi_[a] = had ? std::max(pending_hi_[a], result.hi[a]) : result.hi[a];
+    }
   }
   deform_was_active_ = result.active;
   return result;
+}
+
+std::int64_t VolumeLayer::upload(vtkRenderWindow* window) {
+  const RenderVolume* v = source_.get();
+  if (!v || render_scalars_.empty()) return 0;
+  const std::int64_t whole = static_cast<std::int64_t>(render_scalars_.size() * sizeof(float));
+  if (loaded_) {  // the next render loads the whole texture (with the ROI as written)
+    loaded_ = false;
+    pending_lo_ = pending_hi_ = {};
+    return whole;
+  }
+  if (!(pending_hi_[0] > pending_lo_[0])) return 0;
+  const std::array<std::int64_t, 3> lo = pending_lo_, hi = pending_hi_;
+  pending_lo_ = pending_hi_ = {};
+  // The mapper's one 3D texture (a single block: palpview never partitions the volume).
+  vtkTextureObject* texture = nullptr;
+  auto* gl_mapper = vtkOpenGLGPUVolumeRayCastMapper::SafeDownCast(mapper_.GetPointer());
+  auto* gl_window = vtkOpenGLRenderWindow::SafeDownCast(window);
+  if (gl_mapper && gl_window) {
+    const auto input = gl_mapper->AssembledInputs.find(0);
+    if (input != gl_mapper->AssembledInputs.end() && input->second.Texture) {
+      vtkVolumeTexture::VolumeBlock* block = input->second.Texture->GetCurrentBlock();
+      if (block && block->TextureObject && block->TextureObject->GetHandle() != 0 &&
+          block->TextureSize[0] == v->dims[0] && block->TextureSize[1] == v->dims[1] &&
+          block->TextureSize[2] == v->dims[2])
+        texture = block->TextureObject;
+    }
+  }
+  if (!texture) {  // fallback: the whole texture at the next render
+    scalar_array_->Modified();
+    image_->Modified();
+    ++full_uploads_;
+    return whole;
+  }
+  gl_window->MakeCurrent();
+  vtkOpenGLState* state = gl_window->GetState();
+  texture->Activate();
+  state->vtkglPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(v->dims[0]));
+  state->vtkglPixelStorei(GL_UNPACK_IMAGE_HEIGHT, static_cast<GLint>(v->dims[1]));
+  const std::size_t first =
+      static_cast<std::size_t>(lo[0] + v->dims[0] * (lo[1] + v->dims[1] * lo[2]));
+  glTexSubImage3D(GL_TEXTURE_3D, 0, static_cast<GLint>(lo[0]), static_cast<GLint>(lo[1]),
+                  static_cast<GLint>(lo[2]), static_cast<GLsizei>(hi[0] - lo[0]),
+                  static_cast<GLsizei>(hi[1] - lo[1]), static_cast<GLsizei>(hi[2] - lo[2]),
+                  texture->GetFormat(VTK_FLOAT, 1, false), texture->GetDataType(VTK_FLOAT),
+                  render_scalars_.data() + first);
+  state->vtkglPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+  state->vtkglPixelStorei(GL_UNPACK_IMAGE_HEIGHT, 0);
+  texture->Deactivate();
+  return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) *
+         static_cast<std::int64_t>(sizeof(float));
 }
 
 void VolumeLayer::apply_preset() {
@@ -98,7 +171,7 @@ void VolumeLayer::apply_preset() {
 }
 
 void VolumeLayer::set_preset(PresetId id) {
-  preset_ = make_preset(id);
+  preset_ = make_preset(id, ct_);
   window_level_ = preset_.window;
   apply_preset();
 }

@@ -14,10 +14,12 @@
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPiecewiseFunction.h>
+#include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkVolume.h>
 #include <vtkVolumeProperty.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -46,13 +48,23 @@ class VolumeLayer {
 
   // The in-contact contacts of `frame` (none when it is not valid), for the next deform().
   void set_contacts(const FrameState& frame);
-  // Runs SkinDeformer over the buffer (no-op when disabled or no volume) and marks the texture
-  // for re-upload when anything was written. Returns what SkinDeformer reported.
+  // Runs SkinDeformer over the buffer (no-op when disabled or no volume) and notes the box it
+  // wrote for upload(). Returns what SkinDeformer reported.
   DeformResult deform();
+  // Sends what changed to the GPU before the next render: the box deform() wrote, as a
+  // sub-volume of the existing 3D texture (glTexSubImage3D), so the bytes are bounded by the
+  // box, not the volume. Where the texture is not there yet (a new volume: the render uploads
+  // all of it) or cannot be reached, the whole volume is marked for re-upload instead. Needs
+  // the render window's context current. Returns the bytes sent (or marked) for this frame.
+  std::int64_t upload(vtkRenderWindow* window);
+  std::int64_t full_uploads() const { return full_uploads_; }  // whole-volume fallbacks so far
   // The render scalars in the mapper's buffer (deformed when pressing).
   const std::vector<float>& render_scalars() const { return render_scalars_; }
 
   void set_preset(PresetId id);  // resets the window to the preset's default
+  // Whether the CT's HU outside the body mask (table, cables, air) are shown; from the next load.
+  void set_keep_outside(bool keep) { keep_outside_ = keep; }
+  bool ct() const { return ct_; }
   const Preset& preset() const { return preset_; }
   void adjust_window(double dlevel, double width_factor);
   Window window() const { return window_level_; }
@@ -77,7 +89,13 @@ class VolumeLayer {
   Window window_level_;
   std::unique_ptr<SkinDeformer> deformer_;
   std::vector<DeformContact> deform_contacts_;
-  bool deform_was_active_ = false;  // the last update wrote a ROI (the next one restores it)
+  bool deform_was_active_ = false;
+  std::array<std::int64_t, 3> pending_lo_{}, pending_hi_{};  // box written, not yet uploaded
+  bool loaded_ = false;  // a new volume: the next render uploads it whole
+  std::int64_t full_uploads_ = 0;
+  bool ct_ = false;            // the scalar is the CT's HU (else the maps' pseudo-density)
+  bool keep_outside_ = false;  // HU outside the body mask kept (else made air)  // the last update
+                               // wrote a ROI (the next one restores it)
 };
 
 }  // namespace palp::view

@@ -16,6 +16,9 @@ std::string encode_hello(const StreamOptions& opts) {
   h->set_volume_step(0);
   h->set_volume_max_dim(opts.volume_max_dim);
   h->set_want_contacts(opts.want_contacts);
+  h->set_volume_hu(opts.volume_hu);
+  h->set_volume_skip_bone(!opts.volume_bone);
+  h->set_volume_deflate(opts.volume_deflate);
   return palp::wire::encode_frame(m);
 }
 

@@ -138,21 +138,19 @@ void StreamClient::Impl::start_connect() {
           drop(c, "cannot resolve " + opts.host + ": " + ec.message());
           return;
         }
-        asio::async_connect(
-            c->socket, results, [this, c](const asio::error_code& e, const tcp::endpoint&) {
-              if (c != conn) return;
-              if (e) {
-                drop(c, "cannot connect to " + endpoint_text() + ": " + e.message());
-                return;
-              }
-              asio::error_code ignored;
-              c->socket.set_option(tcp::no_delay(true), ignored);
-              c->connected = true;
-              c->last_rx_ns = now_ns();
-              send_hello(*c);
-              flush(c);
-              read(c);
-            });
+        palp::tls::async_connect(c->stream, results, opts.host, std::to_string(opts.port),
+                                 tls.get(), [this, c](const std::string& failure) {
+                                   if (c != conn) return;
+                                   if (!failure.empty()) {
+                                     drop(c, failure);
+                                     return;
+                                   }
+                                   c->connected = true;
+                                   c->last_rx_ns = now_ns();
+                                   send_hello(*c);
+                                   flush(c);
+                                   read(c);
+                                 });
       });
 }
 
@@ -166,10 +164,8 @@ void StreamClient::Impl::send_hello(Connection& c) {
 }
 
 void StreamClient::Impl::close(Connection& c) {
-  asio::error_code ec;
   c.resolver.cancel();
-  c.socket.shutdown(tcp::socket::shutdown_both, ec);
-  c.socket.close(ec);
+  c.stream.close();
 }
 
 void StreamClient::Impl::drop(const ConnectionPtr& c, const std::string& why) {
@@ -218,7 +214,7 @@ void StreamClient::Impl::reset_rates_locked() {
 // ------------------------------------------------------------------ reading
 
 void StreamClient::Impl::read(const ConnectionPtr& c) {
-  c->socket.async_read_some(
+  c->stream.async_read_some(
       asio::buffer(c->read_buffer), [this, c](const asio::error_code& ec, std::size_t n) {
         if (c != conn) return;
         if (ec) {
@@ -290,16 +286,16 @@ void StreamClient::Impl::flush(const ConnectionPtr& c) {
   c->out_inflight.swap(c->out_pending);
   c->out_pending.clear();
   c->writing = true;
-  asio::async_write(c->socket, asio::buffer(c->out_inflight),
-                    [this, c](const asio::error_code& ec, std::size_t) {
-                      c->writing = false;
-                      if (c != conn) return;
-                      if (ec) {
-                        drop(c, "cannot send to the server: " + ec.message());
-                        return;
-                      }
-                      flush(c);
-                    });
+  c->stream.async_write(asio::buffer(c->out_inflight),
+                        [this, c](const asio::error_code& ec, std::size_t) {
+                          c->writing = false;
+                          if (c != conn) return;
+                          if (ec) {
+                            drop(c, "cannot send to the server: " + ec.message());
+                            return;
+                          }
+                          flush(c);
+                        });
 }
 
 void StreamClient::Impl::wake() {

@@ -55,10 +55,17 @@ struct StreamOptions {
   std::uint16_t port = 7400;  // palpd's default
   bool controller = false;    // CONTROLLER role (sends poses and commands)
   std::string token;          // the server's controller token, when it has one
+  // palp.v1 over TLS (palpd --tls-cert): the CA to check the server with (and its host name), or
+  // the server certificate's SHA-256 fingerprint; this client's certificate for a palpd that
+  // asks controllers for one. Neither tls_ca nor tls_pin: plain text.
+  std::string tls_ca, tls_pin, tls_cert, tls_key;
   std::string client_name = "palpview";
   double frame_rate_hz = 120.0;  // HapticFrames per second to ask for (0: every tick)
   // Render volume: at most this many voxels per axis (0: ask for no render volume).
   std::uint32_t volume_max_dim = 256;
+  bool volume_hu = true;       // the CT's HU and body mask (Hello.volume_hu)
+  bool volume_bone = true;     // d_bone (false: Hello.volume_skip_bone)
+  bool volume_deflate = true;  // zlib on the wire (Hello.volume_deflate)
   bool want_contacts = true;
   double stall_s = 0.5;          // no frame for this long: Stalled
   double reconnect_min_s = 0.2;  // first retry delay; doubles up to reconnect_max_s
@@ -105,6 +112,8 @@ struct RenderVolume {
   std::uint32_t step = 1;
   std::vector<float> d_surf;  // mm, positive inside the body
   std::vector<float> d_bone;  // mm, positive inside bone; empty when the scene has none
+  std::vector<std::int16_t> hu;      // the CT's HU; empty unless asked for and the scene has it
+  std::vector<std::uint8_t> body;    // 0/1 body mask (with hu)
 };
 
 struct ContactState {

@@ -18,6 +18,7 @@
 #include "stream/clock_sync.hpp"
 #include "stream/stream_client.hpp"
 #include "stream/volume_assembly.hpp"
+#include "tls/tls_context.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::view {
@@ -30,8 +31,8 @@ struct StreamClient::Impl {
   // One TCP connection attempt and its session.
   struct Connection {
     explicit Connection(asio::io_context& io)
-        : socket(io), resolver(io), decoder(palp::wire::kDefaultMaxServerFrame) {}
-    tcp::socket socket;
+        : stream(io), resolver(io), decoder(palp::wire::kDefaultMaxServerFrame) {}
+    palp::tls::Stream stream;  // plain, or TLS once connected (opts.tls_*)
     tcp::resolver resolver;
     palp::wire::FrameDecoder decoder;
     std::array<std::uint8_t, 65536> read_buffer{};
@@ -63,7 +64,7 @@ struct StreamClient::Impl {
   };
 
   explicit Impl(const StreamOptions& o)
-      : opts(o), retry_timer(io), house_timer(io), tick_ns(house_period_ns(o)) {}
+      : opts(o), tls(make_tls(o)), retry_timer(io), house_timer(io), tick_ns(house_period_ns(o)) {}
 
   // The housekeeping timer's period: stall_s / 4, within 5..50 ms.
   static std::int64_t house_period_ns(const StreamOptions& o);
@@ -122,6 +123,13 @@ struct StreamClient::Impl {
 
   // ------------------------------------------------------------------ members
   const StreamOptions opts;
+  // The TLS context (null: plain text), built once; UsageError / ResourceError from the ctor.
+  static std::unique_ptr<palp::tls::ClientContext> make_tls(const StreamOptions& o) {
+    if (o.tls_ca.empty() && o.tls_pin.empty()) return nullptr;
+    return std::make_unique<palp::tls::ClientContext>(
+        palp::tls::ClientOptions{o.tls_ca, o.tls_pin, o.tls_cert, o.tls_key});
+  }
+  const std::unique_ptr<palp::tls::ClientContext> tls;
   asio::io_context io;
   std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work;
   asio::steady_timer retry_timer, house_timer;

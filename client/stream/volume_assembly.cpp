@@ -11,6 +11,7 @@
 
 #include "base/errors.hpp"
 #include "stream/protocol_checks.hpp"
+#include "wire/volume_codec.hpp"
 
 namespace palp::view::net {
 
@@ -30,6 +31,13 @@ void copy_floats(const std::string& bytes, float* out) {
       std::memcpy(out + i, &u, sizeof u);
     }
   }
+}
+
+template <class Bad>
+void check_size(const std::string& bytes, std::size_t expected, const char* name, const Bad& bad) {
+  if (bytes.size() != expected)
+    throw bad(std::string(name) + " has " + std::to_string(bytes.size()) + " bytes, expected " +
+              std::to_string(expected));
 }
 
 }  // namespace
@@ -80,20 +88,28 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     if (chunk.k_count() < 1 || chunk.k_count() > dims[2])
       throw bad("slices 0+" + std::to_string(chunk.k_count()) + " outside 0.." +
                 std::to_string(dims[2]));
-    const std::size_t bytes0 =
-        static_cast<std::size_t>(dims[0] * dims[1]) * chunk.k_count() * sizeof(float);
-    if (chunk.d_surf().size() != bytes0)
-      throw bad("d_surf has " + std::to_string(chunk.d_surf().size()) + " bytes, expected " +
-                std::to_string(bytes0));
-    if (!chunk.d_bone().empty() && chunk.d_bone().size() != bytes0)
-      throw bad("d_bone has " + std::to_string(chunk.d_bone().size()) + " bytes, expected " +
-                std::to_string(bytes0));
+    const std::size_t voxels0 = static_cast<std::size_t>(dims[0] * dims[1]) * chunk.k_count();
+    has_bone_ = !chunk.d_bone().empty();
+    has_hu_ = !chunk.hu().empty();
+    deflate_ = chunk.deflate();
+    if (has_hu_ != !chunk.body().empty()) throw bad("hu and body come together");
+    // Raw chunks: their sizes now; deflated ones are checked as they inflate (below), bounded
+    // by what the slices need.
+    if (!deflate_) {
+      check_size(chunk.d_surf(), voxels0 * sizeof(float), "d_surf", bad);
+      if (has_bone_) check_size(chunk.d_bone(), voxels0 * sizeof(float), "d_bone", bad);
+      if (has_hu_) check_size(chunk.hu(), voxels0 * sizeof(std::int16_t), "hu", bad);
+      if (has_hu_) check_size(chunk.body(), voxels0, "body", bad);
+    }
     const std::size_t voxels = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
+    const bool has_bone = has_bone_, has_hu = has_hu_, deflate = deflate_;
     *this = VolumeAssembly{};
     active_ = true;
     step_ = chunk.step();
     chunk_count_ = chunk.chunk_count();
-    has_bone_ = !chunk.d_bone().empty();
+    has_bone_ = has_bone;
+    has_hu_ = has_hu;
+    deflate_ = deflate;
     try {
       auto volume = std::make_shared<RenderVolume>();
       volume->dims = dims;
@@ -101,6 +117,10 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
       volume->step = chunk.step();
       volume->d_surf.resize(voxels);
       if (has_bone_) volume->d_bone.resize(voxels);
+      if (has_hu_) {
+        volume->hu.resize(voxels);
+        volume->body.resize(voxels);
+      }
       volume_ = std::move(volume);
     } catch (const std::bad_alloc&) {
       *this = VolumeAssembly{};
@@ -113,6 +133,7 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
       throw bad("expected chunk " + std::to_string(next_chunk_));
     if (chunk.step() != step_ || chunk.chunk_count() != chunk_count_)
       throw bad("step or chunk count differs from chunk 0");
+    if (chunk.deflate() != deflate_) throw bad("deflate differs from chunk 0");
     for (int i = 0; i < 3; ++i)
       if (chunk.dims(i) != volume_->dims[i] || chunk.spacing(i) != volume_->spacing[i])
         throw bad("dims or spacing differ from chunk 0");
@@ -125,16 +146,44 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     throw bad("slices " + std::to_string(chunk.k_begin()) + "+" + std::to_string(chunk.k_count()) +
               " outside 0.." + std::to_string(v.dims[2]));
   const std::size_t slice = static_cast<std::size_t>(v.dims[0] * v.dims[1]);
-  const std::size_t bytes = slice * chunk.k_count() * sizeof(float);
-  if (chunk.d_surf().size() != bytes)
-    throw bad("d_surf has " + std::to_string(chunk.d_surf().size()) + " bytes, expected " +
-              std::to_string(bytes));
-  if (chunk.d_bone().size() != (has_bone_ ? bytes : 0))
-    throw bad("d_bone has " + std::to_string(chunk.d_bone().size()) + " bytes, expected " +
-              std::to_string(has_bone_ ? bytes : 0));
+  const std::size_t voxels = slice * chunk.k_count();
   const std::size_t offset = slice * chunk.k_begin();
-  copy_floats(chunk.d_surf(), volume_->d_surf.data() + offset);
-  if (has_bone_) copy_floats(chunk.d_bone(), volume_->d_bone.data() + offset);
+  const auto present = [&](const std::string& bytes, bool expected, const char* name) {
+    if (bytes.empty() == expected)
+      throw bad(std::string(name) + (expected ? " missing" : " not in chunk 0"));
+  };
+  present(chunk.d_surf(), true, "d_surf");
+  present(chunk.d_bone(), has_bone_, "d_bone");
+  present(chunk.hu(), has_hu_, "hu");
+  present(chunk.body(), has_hu_, "body");
+  // Each field's raw bytes (inflated to exactly the slices' size, never more), then copied in.
+  std::string scratch;
+  const auto raw = [&](const std::string& bytes, std::size_t expected,
+                       const char* name) -> const std::string& {
+    if (!deflate_) {
+      check_size(bytes, expected, name, bad);
+      return bytes;
+    }
+    if (!wire::inflate_exact(bytes, expected, scratch))
+      throw bad(std::string(name) + ": not a zlib stream of " + std::to_string(expected) +
+                " bytes");
+    return scratch;
+  };
+  copy_floats(raw(chunk.d_surf(), voxels * sizeof(float), "d_surf"),
+              volume_->d_surf.data() + offset);
+  if (has_bone_)
+    copy_floats(raw(chunk.d_bone(), voxels * sizeof(float), "d_bone"),
+                volume_->d_bone.data() + offset);
+  if (has_hu_) {
+    const std::string& hu = raw(chunk.hu(), voxels * sizeof(std::int16_t), "hu");
+    std::memcpy(volume_->hu.data() + offset, hu.data(), hu.size());
+    if constexpr (std::endian::native == std::endian::big)
+      for (std::size_t i = 0; i < voxels; ++i)
+        volume_->hu[offset + i] = static_cast<std::int16_t>(
+            __builtin_bswap16(static_cast<std::uint16_t>(volume_->hu[offset + i])));
+    const std::string& body = raw(chunk.body(), voxels, "body");
+    for (std::size_t i = 0; i < voxels; ++i) volume_->body[offset + i] = body[i] != 0 ? 1 : 0;
+  }
   next_k_ += chunk.k_count();
   ++next_chunk_;
   const bool complete = next_chunk_ == chunk_count_;

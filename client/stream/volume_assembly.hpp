@@ -36,7 +36,7 @@ class VolumeAssembly {
   bool active_ = false, done_ = false;
   std::uint32_t step_ = 0, chunk_count_ = 0, next_chunk_ = 0;
   std::int64_t next_k_ = 0;
-  bool has_bone_ = false;
+  bool has_bone_ = false, has_hu_ = false, deflate_ = false;
   std::shared_ptr<RenderVolume> volume_;
 };
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "base/errors.hpp"
+#include "model/bone_beneath.hpp"
 
 namespace palp {
 namespace {
@@ -99,6 +100,15 @@ const char* to_string(Storage storage) {
 FieldSampler::FieldSampler(DistanceMap surf, DistanceMap bone, SamplerConfig config)
     : config_(config) {
   build(surf, &bone);
+}
+
+FieldSampler::FieldSampler(DistanceMap surf, DistanceMap bone, SamplerConfig config,
+                           const Vec3d& origin)
+    : config_(config) {
+  build(surf, &bone);
+  geometry_.origin[0] = origin.x;
+  geometry_.origin[1] = origin.y;
+  geometry_.origin[2] = origin.z;
 }
 
 FieldSampler::FieldSampler(DistanceMap surf, SamplerConfig config) : config_(config) {
@@ -211,6 +221,39 @@ FieldSample FieldSampler::sample_surf(const Vec3d& x) const {
 FieldSample FieldSampler::sample_bone(const Vec3d& x) const {
   if (!has_bone_) return FieldSample{};
   return dispatch([&](const auto& access) { return access.bone_at(x); });
+}
+
+double FieldSampler::bone_value(const Vec3d& x) const {
+  if (!has_bone_) return kOutsideValue;
+  return dispatch([&](const auto& access) { return access.bone_value_at(x); });
+}
+
+void FieldSampler::prepare_bone_beneath() const {
+  if (!has_bone_) return;
+  std::call_once(beneath_->once, [this] {
+    beneath_->map = bone_beneath_map(*this);
+    beneath_->ready.store(beneath_->map.data(), std::memory_order_release);
+  });
+}
+
+void FieldSampler::adopt_bone_beneath(std::vector<float> map) const {
+  if (map.size() != grid_.voxel_count())
+    throw UsageError("bone-beneath map: its size does not match the maps");
+  bool adopted = false;
+  std::call_once(beneath_->once, [&] {
+    beneath_->map = std::move(map);
+    beneath_->ready.store(beneath_->map.data(), std::memory_order_release);
+    adopted = true;
+  });
+  if (!adopted) throw UsageError("bone-beneath map: already prepared");
+}
+
+bool FieldSampler::has_bone_beneath() const {
+  return bone_beneath_data() != nullptr;
+}
+
+const float* FieldSampler::bone_beneath_data() const {
+  return beneath_ ? beneath_->ready.load(std::memory_order_acquire) : nullptr;
 }
 
 }  // namespace palp

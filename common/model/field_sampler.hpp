@@ -26,8 +26,11 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -66,6 +69,7 @@ namespace sampling {
 
 // Grid geometry precomputed for the hot path.
 struct Geometry {
+  double origin[3] = {0.0, 0.0, 0.0};  // scene position of voxel (0,0,0) (a cropped map's offset)
   double inv_spacing[3] = {1.0, 1.0, 1.0};
   double spacing[3] = {1.0, 1.0, 1.0};
   double max_u[3] = {0.0, 0.0, 0.0};   // n - 1 (index units)
@@ -144,14 +148,16 @@ inline double value_at_u(const Geometry& g, const MapView<T>& m, const double u[
 // Interpolated value at x (mm) alone, kOutsideValue outside the box.
 template <class T>
 inline double value(const Geometry& g, const MapView<T>& m, const Vec3d& x) {
-  const double u[3] = {x.x * g.inv_spacing[0], x.y * g.inv_spacing[1], x.z * g.inv_spacing[2]};
+  const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0], (x.y - g.origin[1]) * g.inv_spacing[1],
+                       (x.z - g.origin[2]) * g.inv_spacing[2]};
   return in_box(g, u) ? value_at_u(g, m, u) : kOutsideValue;
 }
 
 template <GradientScheme G, class T>
 inline FieldSample sample(const Geometry& g, const MapView<T>& m, const Vec3d& x) {
   FieldSample out;
-  const double u[3] = {x.x * g.inv_spacing[0], x.y * g.inv_spacing[1], x.z * g.inv_spacing[2]};
+  const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0], (x.y - g.origin[1]) * g.inv_spacing[1],
+                       (x.z - g.origin[2]) * g.inv_spacing[2]};
   if (!in_box(g, u)) return out;
   out.inside = true;
   const Cell cell = cell_at(g, u);
@@ -209,11 +215,15 @@ struct FieldAccess {
   const sampling::Geometry* geometry = nullptr;
   sampling::MapView<T> surf, bone;
   bool has_bone = false;
+  // The bone-beneath map (model/bone_beneath.hpp) once prepared, else value == nullptr.
+  sampling::MapView<float> beneath;
 
   FieldSample surf_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, surf, x); }
   FieldSample bone_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, bone, x); }
   // D_bone(x) without its gradient (8 fetches), kOutsideValue outside the box.
   double bone_value_at(const Vec3d& x) const { return sampling::value(*geometry, bone, x); }
+  // Distance along the skin's inward normal to bone (mm), kOutsideValue outside the box.
+  double beneath_at(const Vec3d& x) const { return sampling::value(*geometry, beneath, x); }
 };
 
 // The distance maps in the chosen storage. Built once (may take seconds and memory); constant
@@ -225,10 +235,15 @@ class FieldSampler {
   // and spacing (UsageError); values must be finite (InputError); memory is checked before each
   // allocation (ResourceError).
   FieldSampler(DistanceMap surf, DistanceMap bone, SamplerConfig config = {});
+  // Maps that are a window of a scene (model/map_window.hpp): voxel (0,0,0) lies at `origin`
+  // in the scene frame; points outside the window sample as outside the grid.
+  FieldSampler(DistanceMap surf, DistanceMap bone, SamplerConfig config, const Vec3d& origin);
   // No bone map: the bone terms of the force model are skipped.
   explicit FieldSampler(DistanceMap surf, SamplerConfig config = {});
 
   const Grid& grid() const { return grid_; }
+  // Scene position of voxel (0,0,0): zero unless the maps are a window.
+  Vec3d origin() const { return {geometry_.origin[0], geometry_.origin[1], geometry_.origin[2]}; }
   const SamplerConfig& config() const { return config_; }
   bool has_bone() const { return has_bone_; }
   // Quantisation step (mm) of each map with Int16 storage; 0 otherwise.
@@ -253,6 +268,19 @@ class FieldSampler {
   // Convenience (tests, tools): one sample, dispatched per call.
   FieldSample sample_surf(const Vec3d& x) const;
   FieldSample sample_bone(const Vec3d& x) const;
+  // D_bone(x) alone (kOutsideValue outside the box or without a bone map).
+  double bone_value(const Vec3d& x) const;
+
+  // palp's bone-beneath map (model/bone_beneath.hpp): traced on the first call (a fraction of a
+  // second for a CT, 4 B/voxel more), at once afterwards; safe from several threads. Ticks see
+  // it (FieldAccess::beneath) only after it is prepared. No-op without a bone map.
+  void prepare_bone_beneath() const;
+  // Takes a bone-beneath map traced elsewhere (a window of a whole scene's: map_window.hpp)
+  // instead of tracing one; UsageError for a wrong size or one already prepared.
+  void adopt_bone_beneath(std::vector<float> map) const;
+  bool has_bone_beneath() const;
+  // The prepared map, nullptr before (tests, tools).
+  const float* bone_beneath_data() const;
 
  private:
   void build(DistanceMap& surf, DistanceMap* bone);
@@ -296,6 +324,7 @@ class FieldSampler {
     a.surf = view<T>(false);
     a.bone = view<T>(true);
     a.has_bone = has_bone_;
+    a.beneath.value = bone_beneath_data();
     return a;
   }
 
@@ -309,6 +338,13 @@ class FieldSampler {
   std::vector<float> interleaved_;                 // Interleaved records
   std::size_t record_ = 0;                         // floats per Interleaved record
   std::vector<float> surf_grad_, bone_grad_;       // PrecomputedField with Float32 / Int16
+  // Built lazily, once (a unique_ptr so the sampler stays movable).
+  struct Beneath {
+    std::once_flag once;
+    std::vector<float> map;
+    std::atomic<const float*> ready{nullptr};
+  };
+  std::unique_ptr<Beneath> beneath_ = std::make_unique<Beneath>();
 };
 
 }  // namespace palp

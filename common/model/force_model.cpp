@@ -71,14 +71,13 @@ inline Vec3d printed_bone_force(const ForceParams& prm, const FieldSample& bone,
   return d_norm >= prm.direction_epsilon ? (fb / d_norm) * d_bone : Vec3d{};
 }
 
-// palp's bone along the skin normal: sphere-tracing steps from x along -v_s after the first
-// (|D_bone(x)|), each one value of D_bone (8 fetches, no gradient). Not dist / cos(v_b, v_s),
-// the distance to the nearest bone's tangent plane: midway between two ribs the distance field's
-// gradient is the bisector of both and points straight along the skin normal, so that plane lay
-// beneath and an intercostal space felt like a rib. One step from there already passes between
-// the ribs (study_force_model's contrast, torso, finger:1 at 6 mm: rib / space 1.08 -> 1.16; two
-// steps 1.20 for 0.8 us more on finger:37's tick).
-constexpr int kBoneTraceSteps = 1;
+// palp's bone along the skin normal: the distance to bone along -v_s is read from the sampler's
+// bone-beneath map (model/bone_beneath.hpp, traced to convergence once; Model prepares it), not
+// dist / cos(v_b, v_s), the distance to the nearest bone's tangent plane: midway between two ribs
+// the distance field's gradient is the bisector of both and points straight along the skin
+// normal, so that plane lay beneath and an intercostal space felt like a rib. A few
+// sphere-tracing steps in the tick (the previous version: one after |D_bone(x)|) still stopped
+// far short of the true distance on the CT, where the nearest bone over a space is a rib beside.
 
 // palp's bone proxy: steps pushing a held point that its entry plane left inside bone out along
 // the plane's normal.
@@ -180,12 +179,10 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
       const double dist = -bone.value;
       const double cos_b = has_vb && has_dir ? dot(v_b, v_s) : 0.0;
       if (!inside_bone && dist > 0.0 && cos_b > 0.0) {
-        // Along -v_s the bone is at least `reach` away: sphere tracing steps by D_bone, which
-        // never passes bone, so the sum is a lower bound, exact for bone straight beneath.
+        // Along -v_s the bone is at least `dist` away; the map (prepared by Model) says how far.
         double reach = dist;
-        if (prm.bone_along_normal)
-          for (int k = 0; k < kBoneTraceSteps; ++k)
-            reach += std::max(0.0, -fields.bone_value_at(x - reach * v_s));
+        if (prm.bone_along_normal && fields.beneath.value != nullptr)
+          reach = std::max(dist, fields.beneath_at(x));
         const double fade =
             prm.bone_fade_mm > 0.0 ? smoothstep(skin_x.value / prm.bone_fade_mm) : 1.0;
         // the printed law f_b = 20 (x / 5)^-3 with its 5 mm scaled to bone_reach_mm
@@ -563,6 +560,8 @@ Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams 
   if (tool_.points.empty())
     throw UsageError("force model: tool '" + tool_.name + "' has no points");
   validate(params_);
+  if (params_.model == ModelKind::Palp && params_.bone_along_normal)
+    fields_->prepare_bone_beneath();
 }
 
 Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool)

@@ -38,7 +38,7 @@ using Clock = std::chrono::steady_clock;
 // Bump when the algorithms change what prep writes, so old caches are not reused.
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
 // bone too thin for an interior voxel
-constexpr int kPrepAlgorithmVersion = 4;
+constexpr int kPrepAlgorithmVersion = 5;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
@@ -135,7 +135,8 @@ nlohmann::json params_json(const PrepParams& params) {
           {"surface", surface_method_name(params.surface.method)},
           {"skin_iso_hu", params.surface.skin_hu},
           {"bone_iso_hu", params.surface.bone_hu},
-          {"subvoxel_band_mm", params.surface.band_mm}};
+          {"subvoxel_band_mm", params.surface.band_mm},
+          {"bone_levels", params.adapt_bone_levels ? "adapted" : "as given"}};
 }
 
 // The sub-voxel band on this grid: the parameter, or twice the coarsest spacing.
@@ -162,7 +163,8 @@ bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::j
   const nlohmann::json json = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
   if (json.is_discarded() || json.value("cache_key", "") != key) return false;
   if (!json.contains("file_bytes") || !json["file_bytes"].is_object()) return false;
-  for (const char* name : {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile}) {
+  for (const char* name :
+       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
     std::error_code ec;
     const auto size = fs::file_size(out_dir / name, ec);
     if (ec || !json["file_bytes"].contains(name) || json["file_bytes"][name] != size) return false;
@@ -206,7 +208,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   // A failed or interrupted run leaves no temporary file, and no output at all in a directory
   // it created (which is removed).
   PrepOutputGuard guard(
-      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kPrepJsonFile});
+      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile, kPrepJsonFile});
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
@@ -264,19 +266,34 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
           ". To prep it anyway: palp prep --not-hu-ok INPUT --out DIR (then use DIR as the "
           "scene)");
   }
-  stage("bone mask", [&] { bone = segment_bone(ct, body, params.segmentation, &result.stats); });
+  // The bone levels, shifted with the scan's soft-tissue peak unless given (prep/hu_levels.hpp).
+  SegmentationParams segmentation = params.segmentation;
+  SurfaceParams surface = params.surface;
+  stage("HU levels", [&] {
+    result.hu_levels = estimate_hu_levels(ct, body,
+                                          {segmentation.bone_seed_hu, segmentation.bone_grow_hu,
+                                           segmentation.marrow_min_hu, surface.bone_hu});
+    if (params.adapt_bone_levels) {
+      segmentation.bone_seed_hu = result.hu_levels.levels.seed_hu;
+      segmentation.bone_grow_hu = result.hu_levels.levels.grow_hu;
+      segmentation.marrow_min_hu = result.hu_levels.levels.marrow_min_hu;
+      surface.bone_hu = result.hu_levels.levels.iso_hu;
+    }
+  });
+  stage("bone mask", [&] { bone = segment_bone(ct, body, segmentation, &result.stats); });
   const bool subvoxel = params.surface.method == SurfaceMethod::subvoxel;
   SurfacePoints skin_points, bone_points;
   nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
   if (subvoxel) {
     stage("surface points", [&] {
       skin_points = surface_points(ct, body, params.surface.skin_hu, params.distance.threads);
-      bone_points = surface_points(ct, bone, params.surface.bone_hu, params.distance.threads);
+      bone_points = surface_points(ct, bone, surface.bone_hu, params.distance.threads);
       point_counts = {{"skin", {skin_points.points.size(), skin_points.interpolated}},
                       {"bone", {bone_points.points.size(), bone_points.interpolated}}};
     });
   }
-  ct = CtVolume{};  // the HU are not needed past segmentation and the surface points
+  stage("write CT", [&] { write_atomically(dir / kCtFile, ct); });
+  ct = CtVolume{};  // the HU are not needed past segmentation, the surface points and the copy
   result.stats.body_voxels = count_nonzero(body);
   result.stats.bone_voxels = count_nonzero(bone);
   stage("write masks", [&] {
@@ -321,8 +338,21 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   if (!result.hu_warning.empty()) json["not_hu_ok"] = result.hu_warning;
   json["parameters"] = params_json(params);
   json["surface"] = surface_method_name(params.surface.method);
+  {
+    const HuLevels& h = result.hu_levels;
+    json["hu_levels"] = {
+        {"mode", params.adapt_bone_levels ? "adapted to the scan" : "as given"},
+        {"soft_tissue_peak_hu", h.peak_found ? nlohmann::json(h.soft_peak_hu) : nlohmann::json()},
+        {"soft_tissue_share", h.peak_share},
+        {"offset_hu", params.adapt_bone_levels ? h.offset_hu : 0.0},
+        {"note", h.note},
+        {"bone_seed_hu", segmentation.bone_seed_hu},
+        {"bone_grow_hu", segmentation.bone_grow_hu},
+        {"marrow_min_hu", segmentation.marrow_min_hu},
+        {"bone_iso_hu", surface.bone_hu}};
+  }
   if (subvoxel) {
-    json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", params.surface.bone_hu}};
+    json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", surface.bone_hu}};
     json["subvoxel_band_mm_used"] = band;
     // [points, placed by HU]: the rest straddle no level (the mask cut there: table contact,
     // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
@@ -345,7 +375,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   json["peak_memory_bytes_after_stage"] = stage_peaks;
   json["threads"] = params.distance.threads;
   nlohmann::json sizes = nlohmann::json::object();
-  for (const char* name : {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile}) {
+  for (const char* name :
+       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
     sizes[name] = fs::file_size(dir / name);
   }
   json["file_bytes"] = sizes;

@@ -11,6 +11,7 @@
 
 #include "base/volume.hpp"
 #include "prep/distance_transform.hpp"
+#include "prep/hu_levels.hpp"
 #include "prep/segmentation.hpp"
 
 namespace palp {
@@ -35,6 +36,9 @@ struct PrepParams {
   SegmentationParams segmentation;
   DistanceParams distance;
   SurfaceParams surface;
+  // The bone levels (segmentation's bone_seed_hu, bone_grow_hu, marrow_min_hu and the surface's
+  // bone_hu) follow the scan's soft-tissue peak (prep/hu_levels.hpp); false: used as given.
+  bool adapt_bone_levels = true;
   bool use_cache = true;
   // Prep a volume that does not look like a CT in HU (prep/ct_check.hpp) instead of refusing it.
   // Not part of the cache key: it changes whether prep runs, never what it writes.
@@ -61,6 +65,7 @@ struct PrepResult {
   double obliquity_deg = 0.0;  // of the input's direction matrix
   bool reoriented = false;     // resampled onto the nearest axis-aligned frame
   std::string hu_warning;      // what the CT check found when not_hu_ok let it through
+  HuLevels hu_levels;          // what the scan's histogram gave (used when adapt_bone_levels)
 };
 
 // Progress reports: a stage starting ("reading CT", ...) or finishing (with its seconds).
@@ -83,5 +88,7 @@ inline constexpr const char* kBoneFile = "bone.nii.gz";
 inline constexpr const char* kSurfaceDistanceFile = "d_surf.nii.gz";
 inline constexpr const char* kBoneDistanceFile = "d_bone.nii.gz";
 inline constexpr const char* kPrepJsonFile = "prep.json";
+// The CT itself (int16 HU, after reorientation: on the maps' grid), for palpd's render volume.
+inline constexpr const char* kCtFile = "ct.nii.gz";
 
 }  // namespace palp

@@ -103,6 +103,17 @@ Scene load_scene(const std::string& scene, const SceneOptions& options) {
   DistanceMap bone = read_map(dir, kBoneDistanceFile);
   check_same_grid(surf, bone, dir);
   out.grid = surf.grid;
+  // The CT and body mask (a prep directory written before palp kept the CT has none).
+  std::error_code ec;
+  if (options.load_ct && fs::is_regular_file(dir / kCtFile, ec) &&
+      fs::is_regular_file(dir / kBodyFile, ec)) {
+    auto ct = std::make_shared<CtVolume>(read_ct((dir / kCtFile).string()));
+    auto body = std::make_shared<Mask>(read_nifti_mask((dir / kBodyFile).string()));
+    if (ct->grid.dims == out.grid.dims && body->grid.dims == out.grid.dims) {
+      out.ct = std::move(ct);
+      out.body = std::move(body);
+    }
+  }
   // sampler: the maps move in (no copy with float32 storage).
   out.fields =
       std::make_shared<const FieldSampler>(std::move(surf), std::move(bone), options.sampler);

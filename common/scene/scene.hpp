@@ -22,6 +22,7 @@ struct SceneOptions {
   PrepParams prep;        // used when the scene is a CT input that still has to be prepped
   std::string cache_dir;  // where CT inputs are prepped; empty = default_scene_cache_dir()
   PrepProgress progress;  // reports prep stages of a CT input (not called for a cache hit)
+  bool load_ct = false;   // also read the CT (ct.nii.gz) and body mask, when the directory has them
 };
 
 struct Scene {
@@ -31,6 +32,10 @@ struct Scene {
   Grid grid;             // the maps' grid (dims, spacing, the input's world placement)
   double load_seconds = 0.0;
   std::shared_ptr<const FieldSampler> fields;
+  // With SceneOptions::load_ct, from a prep directory that has them (null otherwise): the CT's
+  // HU and the body mask on the maps' grid.
+  std::shared_ptr<const CtVolume> ct;
+  std::shared_ptr<const Mask> body;
 };
 
 // Loads SCENE (see the top of this file). Throws InputError for a prep directory with missing

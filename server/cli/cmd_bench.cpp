@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,7 +16,10 @@
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/model_setup.hpp"
+#include "io/ct_io.hpp"
 #include "model/force_model.hpp"
+#include "model/map_window.hpp"
+#include "prep/prep.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
 
@@ -41,9 +46,21 @@ constexpr const char* kBenchOptions =
   --warmup N              untimed ticks first (default 2000)
   --trajectory FILE       poses to tick through (default: the generated path)
   --param NAME=VALUE      force parameter override, repeatable (as in palp run)
+  --window-mm M           keep only the maps' window the path can reach: the box of its device
+                          positions widened by the tool's reach and M mm (docs/tuning.md); the
+                          JSON's maps_mib is then the window's, whole_maps_mib the scene's
   -q, --quiet             print only the JSON line
   -h, --help              show this help
 )";
+
+// The maps a model on `fields` holds (values, gradient fields, palp's bone-beneath map), MiB.
+double maps_mib(const FieldSampler& fields, const ForceParams& params) {
+  const bool beneath =
+      params.model == ModelKind::Palp && params.bone_along_normal && fields.has_bone();
+  return static_cast<double>(fields.grid().voxel_count() *
+                             (fields.bytes_per_voxel() + (beneath ? 4 : 0))) /
+         1048576.0;
+}
 
 std::size_t parse_count(const Args& args, const std::string& key, double fallback) {
   const double n = args.number(key, fallback);
@@ -156,7 +173,7 @@ int cmd_bench(const Arguments& argv_in) {
   Arguments argv = argv_in;
   const std::vector<std::string> assignments = take_repeated(argv, "param");
   std::vector<std::string> valued = kSceneOptions;
-  valued.insert(valued.end(), {"tool", "ticks", "warmup", "trajectory"});
+  valued.insert(valued.end(), {"tool", "ticks", "warmup", "trajectory", "window-mm"});
   const Args args(argv, {"help", "quiet"}, valued);
   if (args.has("help")) {
     std::cout << kBenchUsage << kSceneOptionsHelp << kBenchOptions;
@@ -177,12 +194,35 @@ int cmd_bench(const Arguments& argv_in) {
 
   // Setup: scene, model, poses (not timed).
   const Scene scene = load_scene_for(args, "bench", quiet);
-  const Model model(scene.fields, tool, params);
   std::string path_name;
   const auto trajectory = args.get("trajectory");
   const Trajectory path = trajectory ? read_trajectory_csv(*trajectory)
                                      : default_path(*scene.fields, pad_offset(tool), &path_name);
   if (trajectory) path_name = *trajectory;
+  if (path.empty()) throw InputError("bench: the trajectory has no rows");
+  std::shared_ptr<const FieldSampler> fields = scene.fields;
+  const double whole_mib = maps_mib(*scene.fields, params);
+  if (args.get("window-mm")) {
+    const double margin = args.number("window-mm", 0.0);
+    if (!(margin >= 0.0 && margin <= 1000.0)) throw UsageError("--window-mm must be 0..1000");
+    double reach = 0.0;
+    for (const Vec3d& p : tool.points) reach = std::max(reach, norm(p));
+    Vec3d lo = path.front().pose.position, hi = lo;
+    for (const TrajectorySample& row : path) {
+      lo = {std::min(lo.x, row.pose.position.x), std::min(lo.y, row.pose.position.y),
+            std::min(lo.z, row.pose.position.z)};
+      hi = {std::max(hi.x, row.pose.position.x), std::max(hi.y, row.pose.position.y),
+            std::max(hi.z, row.pose.position.z)};
+    }
+    const Vec3d widen{reach + margin, reach + margin, reach + margin};
+    const MapWindow window = window_for_box(scene.fields->grid(), lo - widen, hi + widen);
+    const auto dir = std::filesystem::path(scene.prep_dir);
+    fields = window_sampler(read_nifti_float((dir / kSurfaceDistanceFile).string()),
+                            read_nifti_float((dir / kBoneDistanceFile).string()), *scene.fields,
+                            window, scene.fields->config());
+  }
+  const Model model(fields, tool, params);
+  const double model_mib = maps_mib(*fields, params);
 
   // Timing, then the summary.
   const double clock_ns = clock_pair_ns();
@@ -203,16 +243,26 @@ int cmd_bench(const Arguments& argv_in) {
     std::printf("  contacts  %zu points, %.2f in contact on average, touching in %.1f%% of ticks\n",
                 tool.points.size(), in_contact_mean, 100.0 * touching);
     std::printf("  clock     %.0f ns per pair of reads (included in the figures)\n", clock_ns);
+    if (fields != scene.fields)
+      std::printf(
+          "  maps      %.1f MiB in a %lldx%lldx%lld window (the whole scene's: %.1f MiB, "
+          "%.1fx)\n",
+          model_mib, static_cast<long long>(fields->grid().dims[0]),
+          static_cast<long long>(fields->grid().dims[1]),
+          static_cast<long long>(fields->grid().dims[2]), whole_mib,
+          model_mib > 0.0 ? whole_mib / model_mib : 0.0);
+    else
+      std::printf("  maps      %.1f MiB\n", model_mib);
   }
   std::printf(
       "{\"scene\":%s,\"tool\":%s,\"scheme\":\"%s\",\"storage\":\"%s\",\"path\":%s,"
       "\"ticks\":%zu,\"warmup\":%zu,\"tick_ns_p50\":%.0f,\"tick_ns_p90\":%.0f,"
       "\"tick_ns_p99\":%.0f,\"tick_ns_p999\":%.0f,\"tick_ns_max\":%.0f,\"tick_ns_mean\":%.1f,"
       "\"contacts\":%zu,\"in_contact_mean\":%.3f,\"touching_fraction\":%.4f,"
-      "\"clock_pair_ns\":%.0f}\n",
+      "\"clock_pair_ns\":%.0f,\"maps_mib\":%.2f,\"whole_maps_mib\":%.2f}\n",
       json_string(scene.source).c_str(), json_string(tool.name).c_str(), scheme, storage,
       json_string(path_name).c_str(), ticks, warmup, s.p50, s.p90, s.p99, s.p999, s.max, s.mean,
-      tool.points.size(), in_contact_mean, touching, clock_ns);
+      tool.points.size(), in_contact_mean, touching, clock_ns, model_mib, whole_mib);
   return 0;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <deque>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/config_file.hpp"
+#include "cli/tls_options.hpp"
 #include "net/protocol.hpp"
 #include "scene/trajectory.hpp"
 #include "wire/framing.hpp"
@@ -46,6 +48,12 @@ Options:
   --config FILE           palpd's config file, to read its token
   --name NAME             the name palpd logs for this client (default palp-ctl)
   --timeout S             seconds to wait for palpd's answers (default 5)
+  --tls-ca FILE           palp.v1 over TLS: check the server's certificate against this CA and
+                          the host name
+  --tls-pin SHA256        or: trust exactly the server certificate with this SHA-256
+                          fingerprint (openssl x509 -noout -fingerprint -sha256 -in CERT)
+  --tls-cert FILE         this client's certificate (palpd --tls-client-ca asks controllers)
+  --tls-key FILE          its key (mode 600)
   -h, --help              show this help
 Each result is printed as "ok" or "refused: <palpd's reason>"; the exit code is 0 when everything
 was done, 1 when palpd refused or could not be reached, 2 for a usage mistake.
@@ -139,14 +147,16 @@ Action parse_action(const std::vector<std::string>& words) {
 // the SceneInfo and Stats that follow, or the deadline.
 class Session {
  public:
-  Session(std::string host, std::string port, v1::Hello hello, Action action, double timeout_s)
+  Session(std::string host, std::string port, v1::Hello hello, Action action, double timeout_s,
+          tls::ClientContext* tls)
       : host_(std::move(host)),
         port_(std::move(port)),
         hello_(std::move(hello)),
         action_(std::move(action)),
         timeout_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
             std::chrono::duration<double>(timeout_s))),
-        socket_(io_),
+        stream_(io_),
+        tls_(tls),
         decoder_(wire::kDefaultMaxServerFrame) {}
 
   int run() {
@@ -154,14 +164,13 @@ class Session {
     asio::error_code ec;
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
-    asio::async_connect(
-        socket_, endpoints, [this](const asio::error_code& e, const tcp::endpoint&) {
-          if (e) return fail("cannot connect to " + host_ + ":" + port_ + ": " + e.message());
-          v1::ClientMessage m;
-          *m.mutable_hello() = hello_;
-          send(m);
-          read();
-        });
+    tls::async_connect(stream_, endpoints, host_, port_, tls_, [this](const std::string& failure) {
+      if (!failure.empty()) return fail(failure);
+      v1::ClientMessage m;
+      *m.mutable_hello() = hello_;
+      send(m);
+      read();
+    });
     io_.run_for(timeout_);
     if (!done_) {
       fail(welcomed_ ? "no answer from palpd within the timeout (--timeout)"
@@ -180,14 +189,20 @@ class Session {
   }
   void finish() {
     done_ = true;
-    asio::error_code ec;
-    socket_.close(ec);
+    stream_.close();
     io_.stop();
   }
   void send(const v1::ClientMessage& m) {
-    auto bytes = std::make_shared<std::string>(wire::encode_frame(m));
-    asio::async_write(socket_, asio::buffer(*bytes),
-                      [bytes](const asio::error_code&, std::size_t) {});
+    outbox_.push_back(wire::encode_frame(m));
+    if (outbox_.size() == 1) write_next();
+  }
+  void write_next() {
+    stream_.async_write(asio::buffer(outbox_.front()),
+                        [this](const asio::error_code& ec, std::size_t) {
+                          if (ec || done_) return;
+                          outbox_.pop_front();
+                          if (!outbox_.empty()) write_next();
+                        });
   }
   void next_command() {
     if (next_ < action_.commands.size()) {
@@ -202,7 +217,7 @@ class Session {
     after_scene_ = after_stats_ = false;
   }
   void read() {
-    socket_.async_read_some(
+    stream_.async_read_some(
         asio::buffer(buffer_), [this](const asio::error_code& ec, std::size_t n) {
           if (done_) return;
           if (ec) {
@@ -355,7 +370,9 @@ class Session {
   Action action_;
   std::chrono::steady_clock::duration timeout_;
   asio::io_context io_;
-  tcp::socket socket_;
+  tls::Stream stream_;
+  tls::ClientContext* tls_ = nullptr;
+  std::deque<std::string> outbox_;  // one write in flight (TLS needs it)
   wire::FrameDecoder decoder_;
   std::array<std::uint8_t, 65536> buffer_{};
   std::size_t next_ = 0;
@@ -370,7 +387,9 @@ class Session {
 }  // namespace
 
 int cmd_ctl(const Arguments& argv) {
-  const Args args(argv, {"help"}, {"token", "config", "name", "timeout"});
+  const Args args(
+      argv, {"help"},
+      {"token", "config", "name", "timeout", "tls-ca", "tls-pin", "tls-cert", "tls-key"});
   if (args.has("help")) {
     std::cout << kCtlUsage;
     return 0;
@@ -397,7 +416,8 @@ int cmd_ctl(const Arguments& argv) {
   hello.set_token(token);
   hello.set_client_name(args.get("name").value_or("palp-ctl"));
   hello.set_frame_rate_hz(1.0);  // frames are not what ctl is for
-  Session session(host, target.substr(colon + 1), hello, action, timeout);
+  const std::unique_ptr<tls::ClientContext> tls = client_tls(args);
+  Session session(host, target.substr(colon + 1), hello, action, timeout, tls.get());
   return session.run();
 }
 

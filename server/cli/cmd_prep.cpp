@@ -47,6 +47,10 @@ Options:
   --max-table-thickness MM  thicker horizontal bands below the patient are kept (default %g)
   --bone-seed HU          bone region-growing seeds at or above (default %g)
   --bone-grow HU          bone grows into voxels at or above (default %g)
+  --bone-levels adapt|given  adapt (default): the bone levels (--bone-seed, --bone-grow,
+                          --bone-hu and the marrow level) move with the scan's soft-tissue peak,
+                          measured inside the body, by its offset from 50 HU (at most 40 HU);
+                          given: used as written. prep.json records both ("hu_levels")
   --min-bone-island ML    drop bone islands smaller than this (default %g)
   --not-hu-ok             prep a volume that does not look like a CT in HU (prep refuses a
                           label map, an MR or a CT saved without its rescale by default)
@@ -65,7 +69,7 @@ int cmd_prep(const Arguments& argv) {
   const Args args(
       argv, {"help", "no-cache", "quiet", "not-hu-ok"},
       {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed", "bone-grow",
-       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu"});
+       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu", "bone-levels"});
   if (args.has("help")) {
     std::cout << prep_usage();
     return 0;
@@ -89,6 +93,11 @@ int cmd_prep(const Arguments& argv) {
   }
   params.surface.skin_hu = args.number("skin-hu", params.surface.skin_hu);
   params.surface.bone_hu = args.number("bone-hu", params.surface.bone_hu);
+  if (const auto levels = args.get("bone-levels")) {
+    if (*levels != "adapt" && *levels != "given")
+      throw UsageError("--bone-levels must be adapt or given, not '" + *levels + "'");
+    params.adapt_bone_levels = *levels == "adapt";
+  }
   const double threads = args.number("threads", default_thread_count());
   if (threads < 1 || threads > 1024 || threads != static_cast<unsigned>(threads)) {
     throw UsageError("--threads needs a whole number from 1 to 1024");
@@ -128,6 +137,18 @@ int cmd_prep(const Arguments& argv) {
                   r.obliquity_deg, patient_frame(r.grid).orientation_code().c_str());
     std::printf("\n");
     if (!r.hu_warning.empty()) std::printf("  warning   --not-hu-ok: %s\n", r.hu_warning.c_str());
+    const HuLevels& h = r.hu_levels;
+    if (h.peak_found)
+      std::printf("  HU        soft-tissue peak %.0f HU", h.soft_peak_hu);
+    else
+      std::printf("  HU        no soft-tissue peak");
+    if (!params.adapt_bone_levels)
+      std::printf(": bone levels as given\n");
+    else if (!h.note.empty())
+      std::printf(": %s\n", h.note.c_str());
+    else
+      std::printf(": bone levels %+.0f HU (seed %.0f, grow %.0f, surface %.0f)\n", h.offset_hu,
+                  h.levels.seed_hu, h.levels.grow_hu, h.levels.iso_hu);
   }
   std::printf("  body      %llu voxels (%.0f ml)\n",
               static_cast<unsigned long long>(r.stats.body_voxels),

@@ -16,11 +16,15 @@
 #include <string>
 #include <vector>
 
+#include <deque>
+
 #include "asio.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
+#include "cli/check_rate.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli/tls_options.hpp"
 #include "loop/haptic_loop.hpp"
 #include "net/protocol.hpp"
 #include "wire/framing.hpp"
@@ -29,6 +33,7 @@ namespace palp::cli {
 namespace {
 
 constexpr const char* kProbeUsage = R"(usage: palp probe HOST:PORT [options]
+       palp probe --check-rate HZ [--duration S] [options]
 
 A headless palpd observer: prints frames/s, the delivered fraction, latency percentiles and the
 server's stats, and exits non-zero (1) if the stream stalls or the server refuses the client.
@@ -43,6 +48,12 @@ Options:
   --role ROLE             observer (default) or controller
   --token TOKEN           the server's token (controller)
   --name NAME             client name (default palp-probe)
+  --tls-ca FILE           palp.v1 over TLS: check the server's certificate against this CA and
+                          the host name
+  --tls-pin SHA256        or: trust exactly the server certificate with this SHA-256
+                          fingerprint (openssl x509 -noout -fingerprint -sha256 -in CERT)
+  --tls-cert FILE         this client's certificate (a controller, when palpd asks for one)
+  --tls-key FILE          its key (mode 600)
   -q, --quiet             print only the JSON line
   -h, --help              show this help
 )";
@@ -81,13 +92,15 @@ double percentile(std::vector<double>& v, double p) {
 
 class Probe {
  public:
-  Probe(std::string host, std::string port, v1::Hello hello, double duration_s, double stall_s)
+  Probe(std::string host, std::string port, v1::Hello hello, double duration_s, double stall_s,
+        tls::ClientContext* tls)
       : host_(std::move(host)),
         port_(std::move(port)),
         hello_(std::move(hello)),
         duration_ns_(static_cast<std::int64_t>(duration_s * 1e9)),
         stall_ns_(static_cast<std::int64_t>(stall_s * 1e9)),
-        socket_(io_),
+        stream_(io_),
+        tls_(tls),
         timer_(io_),
         decoder_(wire::kDefaultMaxServerFrame) {}
 
@@ -97,19 +110,16 @@ class Probe {
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
     start_ns_ = rt::monotonic_ns();
-    asio::async_connect(socket_, endpoints,
-                        [this](const asio::error_code& e, const tcp::endpoint& endpoint) {
-                          if (e) {
-                            fail("cannot connect to " + host_ + ":" + port_ + ": " + e.message());
-                            return;
-                          }
-                          loopback_ = endpoint.address().is_loopback();
-                          socket_.set_option(tcp::no_delay(true));
-                          v1::ClientMessage m;
-                          *m.mutable_hello() = hello_;
-                          send(m);
-                          read();
-                        });
+    tls::async_connect(stream_, endpoints, host_, port_, tls_, [this](const std::string& failure) {
+      if (!failure.empty()) return fail(failure);
+      asio::error_code e;
+      const tcp::endpoint endpoint = stream_.socket().remote_endpoint(e);
+      loopback_ = !e && endpoint.address().is_loopback();
+      v1::ClientMessage m;
+      *m.mutable_hello() = hello_;
+      send(m);
+      read();
+    });
     tick();
     io_.run();
     return std::move(report_);
@@ -124,19 +134,25 @@ class Probe {
   }
   void finish() {
     done_ = true;
-    asio::error_code ec;
     timer_.cancel();
-    socket_.close(ec);
+    stream_.close();
   }
 
   void send(const v1::ClientMessage& m) {
-    auto bytes = std::make_shared<std::string>(wire::encode_frame(m));
-    asio::async_write(socket_, asio::buffer(*bytes),
-                      [bytes](const asio::error_code&, std::size_t) {});
+    outbox_.push_back(wire::encode_frame(m));
+    if (outbox_.size() == 1) write_next();
+  }
+  void write_next() {
+    stream_.async_write(asio::buffer(outbox_.front()),
+                        [this](const asio::error_code& ec, std::size_t) {
+                          if (ec || done_) return;
+                          outbox_.pop_front();
+                          if (!outbox_.empty()) write_next();
+                        });
   }
 
   void read() {
-    socket_.async_read_some(
+    stream_.async_read_some(
         asio::buffer(buffer_), [this](const asio::error_code& ec, std::size_t n) {
           if (done_) return;
           if (ec) {
@@ -265,7 +281,9 @@ class Probe {
   v1::Hello hello_;
   std::int64_t duration_ns_, stall_ns_;
   asio::io_context io_;
-  tcp::socket socket_;
+  tls::Stream stream_;
+  tls::ClientContext* tls_ = nullptr;
+  std::deque<std::string> outbox_;  // one write in flight (TLS needs it)
   asio::steady_timer timer_;
   wire::FrameDecoder decoder_;
   std::array<std::uint8_t, 65536> buffer_{};
@@ -286,13 +304,15 @@ std::string json_number(double v) {
 }  // namespace
 
 int cmd_probe(const Arguments& argv) {
+  if (wants_check_rate(argv)) return cmd_check_rate(argv);
   const Args args(argv, {"help", "quiet", "contacts", "same-host"},
-                  {"duration", "rate", "stall", "volume-max-dim", "role", "token", "name"});
+                  {"duration", "rate", "stall", "volume-max-dim", "role", "token", "name", "tls-ca",
+                   "tls-pin", "tls-cert", "tls-key"});
   if (args.has("help")) {
-    std::cout << kProbeUsage;
+    std::cout << kProbeUsage << kCheckRateHelp;
     return 0;
   }
-  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT");
+  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT (or --check-rate HZ)");
   const std::string target = args.positional()[0];
   const auto colon = target.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == target.size())
@@ -322,7 +342,8 @@ int cmd_probe(const Arguments& argv) {
   hello.set_want_contacts(args.has("contacts"));
   hello.set_volume_max_dim(static_cast<std::uint32_t>(max_dim));
 
-  Probe probe(host, target.substr(colon + 1), hello, duration, stall);
+  const std::unique_ptr<tls::ClientContext> tls = client_tls(args);
+  Probe probe(host, target.substr(colon + 1), hello, duration, stall, tls.get());
   Report r = probe.run();
   const double span_s = static_cast<double>(r.last_rx_ns - r.first_rx_ns) * 1e-9;
   const double fps = r.frames > 1 && span_s > 0 ? static_cast<double>(r.frames - 1) / span_s : 0.0;
@@ -436,6 +457,18 @@ int cmd_probe(const Arguments& argv) {
           static_cast<unsigned long long>(s.overruns()),
           static_cast<unsigned long long>(s.faults()), s.jitter_max_us(), s.tick_mean_us(),
           s.clients(), s.realtime() ? "real time" : "not real time");
+      // the device as palpd sees it (e.g. a Falcon: homing, what to do), and its link
+      static const char* const kStates[] = {"unspecified", "present", "absent", "fault"};
+      const int st = static_cast<int>(s.device_state());
+      std::printf("  status    device %s%s%s", st >= 0 && st <= 3 ? kStates[st] : "?",
+                  s.device_message().empty() ? "" : ": ", s.device_message().c_str());
+      if (s.device_exchanges() > 0)
+        std::printf("; link %llu exchanges, %llu corrupt and %llu short frames, %llu lost replies",
+                    static_cast<unsigned long long>(s.device_exchanges()),
+                    static_cast<unsigned long long>(s.device_corrupt_frames()),
+                    static_cast<unsigned long long>(s.device_short_frames()),
+                    static_cast<unsigned long long>(s.device_lost_replies()));
+      std::printf("\n");
       std::printf("  jitter   ");
       for (int b = 0; b < s.jitter_counts_size(); ++b) {
         if (b < s.jitter_bucket_upper_us_size())
@@ -445,6 +478,21 @@ int cmd_probe(const Arguments& argv) {
           std::printf(" more:%llu", static_cast<unsigned long long>(s.jitter_counts(b)));
       }
       std::printf("\n");
+      if (!s.wake_mode().empty()) {
+        std::printf(
+            "  wake-up   %s, spin window %.0f us; the loop thread uses %.1f %% of a CPU, "
+            "%.1f %% spinning; kernel wake-up latency max %.1f us:\n           ",
+            s.wake_mode().c_str(), s.spin_window_us(), 100 * s.loop_cpu_fraction(),
+            100 * s.spin_cpu_fraction(), s.wake_latency_max_us());
+        for (int b = 0; b < s.wake_latency_counts_size(); ++b) {
+          if (b < s.jitter_bucket_upper_us_size())
+            std::printf(" <%gus:%llu", s.jitter_bucket_upper_us(b),
+                        static_cast<unsigned long long>(s.wake_latency_counts(b)));
+          else
+            std::printf(" more:%llu", static_cast<unsigned long long>(s.wake_latency_counts(b)));
+        }
+        std::printf("\n");
+      }
     }
   }
   std::printf(
@@ -452,7 +500,7 @@ int cmd_probe(const Arguments& argv) {
       "\"gap_frames\":%llu,\"max_gap\":%llu,\"max_interval_ms\":%s,\"intervals_over_50ms\":%llu,"
       "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
       "\"server_rate_hz\":%s,\"overruns\":%llu,\"faults\":%llu,\"jitter_max_us\":%s,"
-      "\"clients\":%u}\n",
+      "\"clients\":%u,\"wake\":\"%s\",\"spin_window_us\":%s,\"spin_cpu_fraction\":%s}\n",
       r.failure.empty() && r.frames > 0 ? "true" : "false",
       static_cast<unsigned long long>(r.frames), json_number(fps).c_str(),
       json_number(delivered).c_str(), static_cast<unsigned long long>(r.gaps),
@@ -463,7 +511,10 @@ int cmd_probe(const Arguments& argv) {
       json_number(lmax).c_str(), json_number(r.have_stats ? r.stats.rate_hz() : NAN).c_str(),
       static_cast<unsigned long long>(r.stats.overruns()),
       static_cast<unsigned long long>(r.stats.faults()),
-      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients());
+      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients(),
+      r.stats.wake_mode().c_str(),
+      json_number(r.have_stats ? r.stats.spin_window_us() : NAN).c_str(),
+      json_number(r.have_stats ? r.stats.spin_cpu_fraction() : NAN).c_str());
   if (!r.failure.empty()) {
     std::fprintf(stderr, "palp: error: probe: %s\n", r.failure.c_str());
     return 1;

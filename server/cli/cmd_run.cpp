@@ -1,6 +1,7 @@
 // palp run --scene SCENE --tool TOOL --trajectory FILE --out FILE: the offline, deterministic
 // run of the spec: one tick per trajectory row, one force CSV row per tick.
 //   trajectory row (t, pose) -> tick (force model) -> [device profile filters] -> force CSV row
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@
 
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli/config_file.hpp"
 #include "cli/model_setup.hpp"
 #include "model/force_model.hpp"
 #include "safety/safety.hpp"
@@ -43,6 +45,8 @@ constexpr const char* kRunOptions =
                             bone_along_normal 0|1
   --device-profile NAME   apply a device's limits after the model: touch, falcon,
                           phantom-premium, omega (default: none, the model's own output)
+  --config FILE           TOML with scene, tool, model, scheme, storage, param (e.g. what
+                          palp tune --out writes); the command line wins
   -q, --quiet             print only errors
   -h, --help              show this help
 )";
@@ -103,10 +107,22 @@ void print_summary(const RunSummary& s, std::size_t ticks, const std::string& ou
 }  // namespace
 
 int cmd_run(const Arguments& argv_in) {
-  Arguments argv = argv_in;
+  // --config FILE: the model keys of a palpd config or a `palp tune --out` file, before the
+  // command line's options (which win); `rate` is the loop rate the file was tuned for and is
+  // not used here (a run follows the trajectory's own times).
+  Arguments argv;
+  const bool help = std::find(argv_in.begin(), argv_in.end(), "--help") != argv_in.end() ||
+                    std::find(argv_in.begin(), argv_in.end(), "-h") != argv_in.end();
+  if (const auto config = help ? std::nullopt : config_path(argv_in)) {
+    for (std::string& a : config_arguments(*config, {},
+                                           {"scene", "tool", "model", "scheme", "storage", "param",
+                                            "rate"}))
+      if (a.rfind("--rate=", 0) != 0) argv.push_back(std::move(a));
+  }
+  argv.insert(argv.end(), argv_in.begin(), argv_in.end());
   const std::vector<std::string> assignments = take_repeated(argv, "param");
   std::vector<std::string> valued = kSceneOptions;
-  valued.insert(valued.end(), {"tool", "trajectory", "out", "device-profile"});
+  valued.insert(valued.end(), {"tool", "trajectory", "out", "device-profile", "config"});
   const Args args(argv, {"help", "quiet"}, valued);
   if (args.has("help")) {
     print_usage();

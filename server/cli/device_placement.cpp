@@ -33,12 +33,12 @@ Vec3d workspace_half(const std::string& text) {
   return {v[0], v[1], v[2]};
 }
 
-// Devices with a frame of their own (usb-haptic) are registered onto the patient; devices that
+// Devices with a frame of their own (usb-haptic, falcon) are registered onto the patient; devices that
 // move in the scene frame refuse registration options.
 std::optional<net::SceneDescription::Placement> place_device(const Args& args,
                                                              std::string_view kind,
                                                              const Scene& scene, bool quiet) {
-  const bool placed = kind == "usb-haptic";
+  const bool placed = kind == "usb-haptic" || kind == "falcon";
   const bool asked = args.get("device-axes") || args.get("device-scale") ||
                      args.get("workspace-mm") ||
                      ((args.get("home") || args.get("home-clearance")) && kind != "spacemouse");

@@ -52,6 +52,7 @@ Scene load_scene_for(const Args& args, const std::string& command, bool quiet) {
   const auto scene_name = args.get("scene");
   if (!scene_name) throw UsageError(command + " needs --scene SCENE");
   SceneOptions options = scene_options(args);
+  options.load_ct = command == "palpd";  // palpd ships the CT in its render volume
   if (!quiet) {
     options.progress = [](const std::string& stage, bool finished, double seconds) {
       if (!finished) std::fprintf(stderr, "  prep %-14s ...", stage.c_str());

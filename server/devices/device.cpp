@@ -2,6 +2,7 @@
 #include "devices/device.hpp"
 
 #include "base/errors.hpp"
+#include "devices/falcon_device.hpp"
 #include "devices/spacemouse_device.hpp"
 #include "devices/usb_haptic_device.hpp"
 #include "rt/recording.hpp"
@@ -61,9 +62,10 @@ std::unique_ptr<Device> make_device(std::string_view spec) {
     return std::make_unique<UsbHapticDevice>(std::move(options));
   }
   if (kind == "spacemouse") return make_spacemouse_device(arg);
+  if (kind == "falcon") return make_falcon_device(arg);
   throw UsageError("unknown device '" + std::string(spec) +
                    "' (sim, sim:FILE, replay:FILE, remote, usb-haptic[:VID:PID], "
-                   "spacemouse[:position|:rate][:VID:PID])");
+                   "spacemouse[:position|:rate][:VID:PID], falcon[:INDEX])");
 }
 
 }  // namespace palp::rt

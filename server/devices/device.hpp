@@ -13,6 +13,8 @@
 //   usb-haptic[:VID:PID]  a force-feedback device speaking the open haptic protocol over USB
 //                  (docs/usb-protocol.md; default 1209:0001), hot-plug safe
 //                  (devices/usb_haptic_device.hpp)
+//   falcon[:INDEX] a Novint Falcon on libusb: firmware load, homing, delta kinematics, 3-DOF
+//                  force (devices/falcon_device.hpp, docs/devices.md)
 //   spacemouse[:position|:rate][:VID:PID]  a 3Dconnexion SpaceMouse as a pose source (rate mode
 //                  by default); no force output, so clients show the force on screen
 //                  (devices/spacemouse_device.hpp)
@@ -63,6 +65,14 @@ struct DeviceSample {
   std::uint32_t forced_fault = 0;
 };
 
+// A framed device link's counters (Stats), for devices that have one (0: none).
+struct DeviceLinkCounters {
+  std::uint64_t exchanges = 0;     // frames answered
+  std::uint64_t corrupt = 0;       // frames dropped as corrupt
+  std::uint64_t short_frames = 0;  // frames dropped as cut short
+  std::uint64_t lost_replies = 0;  // requests never answered
+};
+
 struct DeviceCommand {
   Vec3d force{};   // N
   Vec3d torque{};  // N·mm
@@ -101,6 +111,8 @@ class Device {
   double declared_max_force_N() const noexcept { return declared_limits().max_force_N; }
   // Not real time: the device's last event or error, for people ("" when nothing to say).
   virtual std::string status_message() const { return {}; }
+  // Any thread (atomic loads): the link's counters, for Stats.
+  virtual DeviceLinkCounters link_counters() const noexcept { return {}; }
 
   const std::string& last_error() const { return error_; }
 
@@ -201,7 +213,8 @@ class RemoteDevice final : public Device {
   std::int64_t timeout_ns_ = 250'000'000;
 };
 
-// "sim", "sim:FILE", "replay:FILE", "remote", "usb-haptic[:VID:PID]". UsageError for anything
+// "sim", "sim:FILE", "replay:FILE", "remote", "usb-haptic[:VID:PID]", "spacemouse...",
+// "falcon[:INDEX]" (without firmware: palpd adds it). UsageError for anything
 // else, InputError for a file that cannot be read.
 std::unique_ptr<Device> make_device(std::string_view spec);
 

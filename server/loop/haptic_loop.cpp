@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <system_error>
 
@@ -27,32 +29,33 @@ void store_max(std::atomic<std::int64_t>& target, std::int64_t value) {
     target.store(value, std::memory_order_relaxed);
 }
 
+std::int64_t period_for(double rate_hz) {
+  if (!(rate_hz >= 1.0 && rate_hz <= 100000.0))
+    throw UsageError("--rate must be between 1 and 100000 Hz");
+  return static_cast<std::int64_t>(1e9 / rate_hz + 0.5);
+}
+
+std::string pct_text(double q) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", q * 100);
+  return text;
+}
+
+std::string us_text(std::int64_t ns) {
+  return std::to_string((ns + 500) / 1000) + " us";
+}
+
 }  // namespace
-
-std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-std::size_t jitter_bucket(std::int64_t late_ns) noexcept {
-  const double us = late_ns > 0 ? static_cast<double>(late_ns) * 1e-3 : 0.0;
-  for (std::size_t b = 0; b < kJitterBucketUpperUs.size(); ++b)
-    if (us < kJitterBucketUpperUs[b]) return b;
-  return kJitterBucketUpperUs.size();
-}
 
 HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopConfig config)
     : config_(config),
       device_(device),
-      period_ns_(0),
+      period_ns_(period_for(config.rate_hz)),
       dt_s_(0.0),
       net_ring_(config.net_slots, model ? contact_capacity_for(config, *model) : 64),
-      record_ring_(config.record_slots, 0) {
+      record_ring_(config.record_slots, 0),
+      waker_(config.wake, period_ns_, system_clock()) {
   if (!model) throw UsageError("haptic loop: no model");
-  if (!(config.rate_hz >= 1.0 && config.rate_hz <= 100000.0))
-    throw UsageError("--rate must be between 1 and 100000 Hz");
-  period_ns_ = static_cast<std::int64_t>(1e9 / config.rate_hz + 0.5);
   dt_s_ = static_cast<double>(period_ns_) * 1e-9;
   current_ = std::make_unique<Bundle>(Bundle{model, make_state(*model)});
   requested_ = std::move(model);
@@ -82,33 +85,61 @@ HapticLoop::~HapticLoop() {
 void HapticLoop::start() {
   if (thread_.joinable()) return;
   stop_.store(false);
+  setup_.store(0);
   try {
     thread_ = std::thread([this] { run(); });
   } catch (const std::system_error& e) {
     throw ResourceError(std::string("cannot start the haptic thread: ") + e.what());
   }
-  if (!config_.realtime) {
-    realtime_report_ = "real-time scheduling not requested (--no-realtime)";
-    return;
+  realtime_report_ = realtime_setup();
+  // the thread calibrates its wake-up once set up (at most 0.1 s); its outcome goes in the report
+  setup_.store(1, std::memory_order_release);
+  for (int i = 0; i < 2000 && setup_.load(std::memory_order_acquire) != 2; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const WakeStats w = waker_.stats();
+  realtime_report_ += std::string("; wake-up: ") + to_string(w.mode);
+  if (w.mode == WakeMode::Hybrid) {
+    realtime_report_ += ", spin window " + us_text(w.spin_window_ns);
+    if (config_.wake.spin_us > 0)
+      realtime_report_ += " (--spin-us)";
+    else
+      realtime_report_ += " (wake-up latency p" + pct_text(config_.wake.quantile) + " " +
+                          us_text(w.calibrated_quantile_ns) +
+                          " measured at start, adapted as the loop runs)";
+    if (!slack_report_.empty()) realtime_report_ += ", " + slack_report_;
   }
+}
+
+std::string HapticLoop::realtime_setup() {
+  std::string report;
+  if (config_.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(config_.cpu, &set);
+    const int rc = pthread_setaffinity_np(thread_.native_handle(), sizeof set, &set);
+    report = rc == 0 ? "loop thread pinned to CPU " + std::to_string(config_.cpu) + "; "
+                     : "warning: cannot pin the loop thread to CPU " + std::to_string(config_.cpu) +
+                           " (" + std::strerror(rc) + "); ";
+  }
+  if (!config_.realtime) return report + "real-time scheduling not requested (--no-realtime)";
   sched_param param{};
   param.sched_priority = config_.priority;
   const int sched_rc = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &param);
   const int lock_rc = mlockall(MCL_CURRENT) == 0 ? 0 : errno;
   realtime_ = sched_rc == 0 && lock_rc == 0;
-  if (realtime_) {
-    realtime_report_ =
-        "real time: SCHED_FIFO priority " + std::to_string(config_.priority) + ", memory locked";
-    return;
-  }
-  realtime_report_ = "warning: running without real-time guarantees:";
+  if (realtime_)
+    return report + "real time: SCHED_FIFO priority " + std::to_string(config_.priority) +
+           ", memory locked";
+  std::string warning = "warning: running without real-time guarantees:";
   if (sched_rc != 0)
-    realtime_report_ += " SCHED_FIFO refused (" + std::string(std::strerror(sched_rc)) +
-                        "; needs CAP_SYS_NICE or an rtprio limit);";
+    warning += " SCHED_FIFO refused (" + std::string(std::strerror(sched_rc)) +
+               "; needs CAP_SYS_NICE or an rtprio limit);";
   if (lock_rc != 0)
-    realtime_report_ += " mlockall refused (" + std::string(std::strerror(lock_rc)) +
-                        "; needs CAP_IPC_LOCK or a memlock limit);";
-  realtime_report_ += " expect more jitter";
+    warning += " mlockall refused (" + std::string(std::strerror(lock_rc)) +
+               "; needs CAP_IPC_LOCK or a memlock limit);";
+  warning += " expect more jitter";
+  // a warning leads the report (palpd prints those even with --quiet)
+  return report.rfind("warning", 0) == 0 ? report + warning.substr(9) : warning + "; " + report;
 }
 
 void HapticLoop::stop() {
@@ -119,25 +150,34 @@ void HapticLoop::stop() {
 }
 
 void HapticLoop::run() {
-  const std::int64_t start = monotonic_ns() + period_ns_;
-  std::int64_t n = 0;
+  while (setup_.load(std::memory_order_acquire) == 0 && !stop_.load(std::memory_order_acquire))
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  // Hybrid: no timer slack on the sleep before the spin (the plain sleep mode stays as it was).
+  if (config_.wake.mode == WakeMode::Hybrid) slack_report_ = minimise_timer_slack();
+  waker_.calibrate();
+  setup_.store(2, std::memory_order_release);
+  DeadlineTicker ticker(period_ns_, waker_);
+  const std::int64_t cpu0 = thread_cpu_ns();
+  started_ns_.store(monotonic_ns(), std::memory_order_relaxed);
+  ticker.start(monotonic_ns() + period_ns_);
+  std::uint32_t since_cpu = 0;
   while (!stop_.load(std::memory_order_acquire)) {
-    const std::int64_t deadline = start + n * period_ns_;
-    timespec ts{};
-    ts.tv_sec = static_cast<time_t>(deadline / 1'000'000'000);
-    ts.tv_nsec = static_cast<long>(deadline % 1'000'000'000);
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
-    step(deadline, monotonic_ns());
-    ++n;
-    const std::int64_t end = monotonic_ns();
-    const std::int64_t next = start + n * period_ns_;
-    if (end > next) {
-      const std::int64_t missed = (end - next) / period_ns_ + 1;
-      overruns_.fetch_add(static_cast<std::uint64_t>(missed), std::memory_order_relaxed);
-      n += missed;
+    const DeadlineTicker::Due due = ticker.wait();
+    step(due.deadline_ns, due.now_ns);
+    if (const std::uint64_t missed = ticker.finish(monotonic_ns()))
+      overruns_.fetch_add(missed, std::memory_order_relaxed);
+    if (++since_cpu == 256) {
+      since_cpu = 0;
+      sample_cpu(cpu0);
     }
   }
+  sample_cpu(cpu0);
+}
+
+void HapticLoop::sample_cpu(std::int64_t cpu0) noexcept {
+  loop_cpu_ns_.store(thread_cpu_ns() - cpu0, std::memory_order_relaxed);
+  loop_cpu_wall_ns_.store(monotonic_ns() - started_ns_.load(std::memory_order_relaxed),
+                          std::memory_order_relaxed);
 }
 
 void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
@@ -319,6 +359,7 @@ void HapticLoop::publish(const TickRecord& record, const State* state, std::uint
       s->contact_count = static_cast<std::uint32_t>(n);
     }
     net_ring_.commit();
+    net_signal_.notify();  // never blocks (wake_signal.hpp)
   }
   if (recording_on_) {
     if (Snapshot* r = record_ring_.claim()) {
@@ -381,6 +422,12 @@ LoopStats HapticLoop::stats() const {
   s.net_dropped = net_ring_.dropped();
   s.record_published = record_ring_.published();
   s.record_dropped = record_ring_.dropped();
+  s.wake = waker_.stats();
+  const std::int64_t started = started_ns_.load(std::memory_order_relaxed);
+  s.running_ns = started > 0 ? monotonic_ns() - started : 0;
+  s.loop_cpu_ns = loop_cpu_ns_.load(std::memory_order_relaxed);
+  s.loop_cpu_wall_ns = loop_cpu_wall_ns_.load(std::memory_order_relaxed);
+  s.net_signals = net_signal_.writes();
   return s;
 }
 

@@ -3,10 +3,12 @@
 // Every tick (step()):
 //   watchdog (deadline) -> read device -> tick (force model) -> safety filters (device profile)
 //   -> write device -> publish a snapshot (network ring) and a record (record ring, when on)
-// and never allocates, locks, logs, serializes or throws. Deadlines are absolute
-// (clock_nanosleep TIMER_ABSTIME on CLOCK_MONOTONIC): tick n is due at start + n * period. When a
-// tick ends after the next deadline, the deadlines already passed are skipped (phase kept) and
-// counted as overruns. The wake-up lateness of every tick goes into a fixed histogram.
+// and never allocates, locks, logs, serializes or throws. Deadlines are absolute (CLOCK_MONOTONIC):
+// tick n is due at start + n * period; how the loop waits for one (sleep, or sleep then a bounded
+// spin) and the skipping of deadlines a long tick passed (counted as overruns) are in wake.hpp.
+// The lateness of every tick's start goes into a fixed histogram, the wake-up latency of every
+// sleep into another. After each snapshot it publishes, the loop signals the network thread
+// (net_signal(), an eventfd written without blocking; rt/wake_signal.hpp).
 //
 // Watchdog: a tick that starts more than `watchdog_late_s` after its deadline, or a device that
 // answers Timeout / Disconnected / Error (or NoData for longer than `device_timeout_s`), zeroes
@@ -42,9 +44,11 @@
 #include <thread>
 
 #include "devices/device.hpp"
+#include "loop/wake.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
 #include "rt/snapshot.hpp"
+#include "rt/wake_signal.hpp"
 #include "safety/engagement.hpp"
 #include "safety/force_chain.hpp"
 #include "safety/safety.hpp"
@@ -63,16 +67,6 @@ enum LoopFault : std::uint32_t {
   kZeroNoPose = 1u << 9,         // no pose from the device yet
   kZeroDeviceAbsent = 1u << 10,  // the device is not plugged in (hot-plug; not a fault)
 };
-
-// CLOCK_MONOTONIC in nanoseconds (the time base of every snapshot and message).
-std::int64_t monotonic_ns() noexcept;
-
-// Upper bounds (µs) of the lateness histogram; one more bucket counts everything beyond.
-inline constexpr std::array<double, 12> kJitterBucketUpperUs = {1,   2,   5,   10,   20,   50,
-                                                                100, 200, 500, 1000, 2000, 5000};
-inline constexpr std::size_t kJitterBuckets = kJitterBucketUpperUs.size() + 1;
-// The bucket of a lateness (ns; negative counts as 0).
-std::size_t jitter_bucket(std::int64_t late_ns) noexcept;
 
 struct LoopConfig {
   double rate_hz = 1000.0;
@@ -97,6 +91,8 @@ struct LoopConfig {
   std::size_t net_slots = 1024;      // snapshot ring toward the network
   std::size_t record_slots = 16384;  // record ring toward the recorder
   std::size_t contact_capacity = 0;  // contacts per snapshot; 0 = the tool's, at least 64
+  WakeConfig wake;  // how the loop waits for deadlines (wake.hpp); hybrid: timer slack 1 ns
+  int cpu = -1;     // >= 0: the loop thread is pinned to this CPU
 };
 
 struct LoopStats {
@@ -120,6 +116,11 @@ struct LoopStats {
   double passivity_dissipated_mJ = 0.0;             // energy it took out, in all
   std::uint64_t net_published = 0, net_dropped = 0;
   std::uint64_t record_published = 0, record_dropped = 0;
+  WakeStats wake;                     // wake-up latency histogram, spin window and time spun
+  std::int64_t running_ns = 0;        // since the thread's first tick (0: not started)
+  std::int64_t loop_cpu_ns = 0;       // CPU time of the loop thread (sampled every 256 ticks)
+  std::int64_t loop_cpu_wall_ns = 0;  // the time running that loop_cpu_ns covers
+  std::uint64_t net_signals = 0;      // eventfd writes toward the network thread
 };
 
 class HapticLoop {
@@ -131,7 +132,8 @@ class HapticLoop {
   HapticLoop(const HapticLoop&) = delete;
   HapticLoop& operator=(const HapticLoop&) = delete;
 
-  // Starts the thread (ResourceError if it cannot). The real-time setup's outcome is in
+  // Starts the thread (ResourceError if it cannot). The real-time setup's outcome (scheduling,
+  // memory, CPU pinning, the wake-up mode and its calibrated spin window) is in
   // realtime_report() once start() returns.
   void start();
   // Stops and joins the thread, then writes zero force to the device. Idempotent.
@@ -156,6 +158,7 @@ class HapticLoop {
   std::uint64_t set_recording(bool on);
 
   SnapshotRing& net_ring() { return net_ring_; }
+  WakeSignal& net_signal() { return net_signal_; }
   SnapshotRing& record_ring() { return record_ring_; }
   LoopStats stats() const;
   // Not real time: at the next tick out of contact, move the registration's home so that where
@@ -177,6 +180,8 @@ class HapticLoop {
     State state;
   };
   void run();
+  void sample_cpu(std::int64_t cpu0) noexcept;  // the loop thread's CPU time since cpu0
+  std::string realtime_setup();  // pinning and scheduling of the started thread; its report
   void collect_retired();
   void publish(const TickRecord& record, const State* state, std::uint32_t points,
                DeviceState device_state) noexcept;
@@ -222,10 +227,15 @@ class HapticLoop {
 
   SnapshotRing net_ring_;
   SnapshotRing record_ring_;
+  WakeSignal net_signal_;
+  Waker waker_;
+  std::atomic<int> setup_{0};  // 1: start() set the thread up; 2: the thread calibrated
+  std::atomic<std::int64_t> started_ns_{0}, loop_cpu_ns_{0}, loop_cpu_wall_ns_{0};
 
   mutable std::mutex model_mutex_;  // guards requested_ (never taken by the loop)
   std::shared_ptr<const Model> requested_;
   std::string realtime_report_;
+  std::string slack_report_;  // written by the thread before it calibrates
   std::thread thread_;
 };
 

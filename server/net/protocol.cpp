@@ -7,6 +7,20 @@
 
 namespace palp::net {
 
+std::shared_ptr<const std::string> frame_of(const v1::ServerMessage& message) {
+  return std::make_shared<const std::string>(wire::encode_frame(message));
+}
+
+std::shared_ptr<const std::string> error_frame(v1::Error::Code code, const std::string& reason,
+                                               bool fatal) {
+  v1::ServerMessage m;
+  v1::Error* e = m.mutable_error();
+  e->set_code(code);
+  e->set_reason(reason);
+  e->set_fatal(fatal);
+  return frame_of(m);
+}
+
 using wire::to_proto;
 
 v1::DeviceState to_proto(rt::DeviceState state) {

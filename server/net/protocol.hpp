@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -16,6 +17,11 @@ using wire::kMaxNameBytes;
 using wire::kProtocolVersion;
 
 v1::DeviceState to_proto(rt::DeviceState state);
+
+// A ServerMessage's frame, shared by every client it is queued for; one holding an Error.
+std::shared_ptr<const std::string> frame_of(const v1::ServerMessage& message);
+std::shared_ptr<const std::string> error_frame(v1::Error::Code code, const std::string& reason,
+                                               bool fatal);
 
 // A HapticFrame for a snapshot (device state included), with its contacts when `contacts`.
 void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* out);

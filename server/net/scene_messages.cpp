@@ -2,11 +2,14 @@
 #include "net/scene_messages.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <string>
 #include <vector>
 
 #include "net/protocol.hpp"
 #include "safety/virtual_coupling.hpp"
 #include "wire/messages.hpp"
+#include "wire/volume_codec.hpp"
 
 namespace palp::net {
 
@@ -75,43 +78,74 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
   }
 }
 
-VolumePlan plan_volume(const Grid& grid, std::uint32_t step, std::uint32_t max_dim,
+VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& request,
                        std::size_t chunk_bytes) {
   VolumePlan plan;
+  const Grid& grid = scene.grid;
   const Index3 dims = grid.dims;
+  plan.hu = request.hu && scene.ct && scene.body && scene.ct->grid.dims == dims &&
+            scene.body->grid.dims == dims;
+  plan.bone = request.bone && scene.fields->has_bone();
+  plan.deflate = request.deflate;
+  plan.voxel_bytes = sizeof(float) * (plan.bone ? 2 : 1) + (plan.hu ? 3 : 0);
+  std::uint32_t step = request.step;
   if (step == 0) {
     const std::int64_t largest = std::max({dims[0], dims[1], dims[2]});
-    step = static_cast<std::uint32_t>((largest + max_dim - 1) / max_dim);
+    step = static_cast<std::uint32_t>((largest + request.max_dim - 1) / request.max_dim);
   }
   step = std::clamp<std::uint32_t>(step, 1, 1024);
+  // One slice must fit a chunk whatever was asked: coarser until it does.
+  const auto slice_bytes = [&](std::uint32_t s) {
+    return static_cast<std::size_t>(((dims[0] + s - 1) / s) * ((dims[1] + s - 1) / s)) *
+           plan.voxel_bytes;
+  };
+  while (step < 1024 && slice_bytes(step) > kMaxChunkRawBytes) ++step;
   plan.step = step;
   for (int a = 0; a < 3; ++a) plan.dims[a] = (dims[a] + step - 1) / step;
-  const std::size_t slice_bytes =
-      static_cast<std::size_t>(plan.dims[0] * plan.dims[1]) * sizeof(float);
   plan.slab = static_cast<std::uint32_t>(
-      std::max<std::size_t>(1, chunk_bytes / std::max<std::size_t>(1, slice_bytes)));
+      std::max<std::size_t>(1, chunk_bytes / std::max<std::size_t>(1, slice_bytes(step))));
   plan.chunks = static_cast<std::uint32_t>((plan.dims[2] + plan.slab - 1) / plan.slab);
   return plan;
 }
 
-std::uint32_t fill_volume_chunk(const FieldSampler& fields, const Grid& grid,
-                                const VolumePlan& plan, std::uint32_t k_begin, std::uint32_t index,
-                                v1::VolumeChunk* c) {
+namespace {
+std::string as_bytes(const void* data, std::size_t n, bool deflate) {
+  std::string raw(static_cast<const char*>(data), n);
+  return deflate ? wire::deflate_bytes(raw) : raw;
+}
+}  // namespace
+
+std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan& plan,
+                                std::uint32_t k_begin, std::uint32_t index, v1::VolumeChunk* c) {
+  const FieldSampler& fields = *scene.fields;
+  const Grid& grid = scene.grid;
   const std::uint32_t k_count =
       std::min<std::uint32_t>(plan.slab, static_cast<std::uint32_t>(plan.dims[2]) - k_begin);
   const std::size_t n = static_cast<std::size_t>(plan.dims[0] * plan.dims[1]) * k_count;
-  std::vector<float> surf(n), bone(fields.has_bone() ? n : 0);
+  std::vector<float> surf(n), bone(plan.bone ? n : 0);
+  std::vector<std::int16_t> hu(plan.hu ? n : 0);
+  std::vector<std::uint8_t> body(plan.hu ? n : 0);
   const Vec3 sp = grid.spacing;
+  const std::int64_t st = plan.step;
   std::size_t v = 0;
   for (std::uint32_t k = 0; k < k_count; ++k)
     for (std::int64_t j = 0; j < plan.dims[1]; ++j)
       for (std::int64_t i = 0; i < plan.dims[0]; ++i, ++v) {
-        const double st = plan.step;
-        const Vec3d x{static_cast<double>(i) * st * sp[0], static_cast<double>(j) * st * sp[1],
-                      static_cast<double>(k_begin + k) * st * sp[2]};
+        const std::int64_t gi = i * st, gj = j * st, gk = (k_begin + k) * st;
+        const Vec3d x{static_cast<double>(gi) * sp[0], static_cast<double>(gj) * sp[1],
+                      static_cast<double>(gk) * sp[2]};
         surf[v] = static_cast<float>(fields.sample_surf(x).value);
-        if (!bone.empty()) bone[v] = static_cast<float>(fields.sample_bone(x).value);
+        if (plan.bone) bone[v] = static_cast<float>(fields.sample_bone(x).value);
+        if (plan.hu) {
+          const std::size_t g =
+              static_cast<std::size_t>(gi + grid.dims[0] * (gj + grid.dims[1] * gk));
+          hu[v] = scene.ct->data[g];
+          body[v] = scene.body->data[g] ? 1 : 0;
+        }
       }
+  if constexpr (std::endian::native == std::endian::big)
+    for (std::int16_t& h : hu)
+      h = static_cast<std::int16_t>(__builtin_bswap16(static_cast<std::uint16_t>(h)));
   c->set_step(plan.step);
   for (int a = 0; a < 3; ++a) {
     c->add_dims(plan.dims[a]);
@@ -119,9 +153,13 @@ std::uint32_t fill_volume_chunk(const FieldSampler& fields, const Grid& grid,
   }
   c->set_k_begin(k_begin);
   c->set_k_count(k_count);
-  c->set_d_surf(reinterpret_cast<const char*>(surf.data()), surf.size() * sizeof(float));
-  if (!bone.empty())
-    c->set_d_bone(reinterpret_cast<const char*>(bone.data()), bone.size() * sizeof(float));
+  c->set_deflate(plan.deflate);
+  c->set_d_surf(as_bytes(surf.data(), surf.size() * sizeof(float), plan.deflate));
+  if (plan.bone) c->set_d_bone(as_bytes(bone.data(), bone.size() * sizeof(float), plan.deflate));
+  if (plan.hu) {
+    c->set_hu(as_bytes(hu.data(), hu.size() * sizeof(std::int16_t), plan.deflate));
+    c->set_body(as_bytes(body.data(), body.size(), plan.deflate));
+  }
   c->set_chunk_index(index);
   c->set_chunk_count(plan.chunks);
   return k_count;
@@ -161,6 +199,20 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_engage_gain(ls.engage_gain);
   st->set_passivity_ticks(ls.passivity_ticks);
   st->set_passivity_dissipated_mj(ls.passivity_dissipated_mJ);
+  st->set_wake_mode(rt::to_string(ls.wake.mode));
+  for (std::uint64_t c : ls.wake.latency) st->add_wake_latency_counts(c);
+  st->set_wake_latency_max_us(static_cast<double>(ls.wake.latency_max_ns) * 1e-3);
+  st->set_spin_window_us(static_cast<double>(ls.wake.spin_window_ns) * 1e-3);
+  const double running = static_cast<double>(ls.running_ns);
+  st->set_spin_cpu_fraction(running > 0 ? static_cast<double>(ls.wake.spin_ns) / running : 0.0);
+  st->set_loop_cpu_fraction(ls.loop_cpu_wall_ns > 0 ? static_cast<double>(ls.loop_cpu_ns) /
+                                                          static_cast<double>(ls.loop_cpu_wall_ns)
+                                                    : 0.0);
+  const rt::DeviceLinkCounters link = loop.device().link_counters();
+  st->set_device_exchanges(link.exchanges);
+  st->set_device_corrupt_frames(link.corrupt);
+  st->set_device_short_frames(link.short_frames);
+  st->set_device_lost_replies(link.lost_replies);
 }
 
 }  // namespace palp::net

@@ -15,21 +15,35 @@ namespace palp::net {
 // SceneInfo for the scene and the loop's current model, rate and device.
 void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, v1::SceneInfo* out);
 
+// What a client asked for in its Hello (palp.proto, Hello.volume_*).
+struct VolumeRequest {
+  std::uint32_t step = 0;     // 0: from max_dim
+  std::uint32_t max_dim = 0;  // at most this many voxels an axis (with step 0)
+  bool hu = false;            // the CT's HU and the body mask (when the scene has them)
+  bool bone = true;           // d_bone (when the scene has it)
+  bool deflate = false;       // byte fields as zlib streams
+};
+
 // How the render volume goes out: every `step`-th voxel, `slab` slices a chunk.
 struct VolumePlan {
   std::uint32_t step = 0;  // 0: no volume
   std::array<std::int64_t, 3> dims{};
   std::uint32_t slab = 1;
   std::uint32_t chunks = 0;
+  bool hu = false, bone = false, deflate = false;  // what each chunk carries
+  std::size_t voxel_bytes = 4;                     // raw bytes a voxel (all fields)
 };
-// The plan for a client asking `step` (0: from max_dim) or at most `max_dim` voxels an axis.
-VolumePlan plan_volume(const Grid& grid, std::uint32_t step, std::uint32_t max_dim,
+// The largest raw chunk palpd sends: one slice of a step is never more than this (the step
+// grows until it fits), so every chunk fits the client's frame limit (16 MiB).
+inline constexpr std::size_t kMaxChunkRawBytes = 12u << 20;
+
+// The plan for `request` on `scene` (chunks of about `chunk_bytes` raw bytes).
+VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& request,
                        std::size_t chunk_bytes);
-// Chunk `index` (slices from `k_begin`) of the plan: the maps sampled at the voxel centres.
-// Returns the number of slices it holds.
-std::uint32_t fill_volume_chunk(const FieldSampler& fields, const Grid& grid,
-                                const VolumePlan& plan, std::uint32_t k_begin, std::uint32_t index,
-                                v1::VolumeChunk* out);
+// Chunk `index` (slices from `k_begin`) of the plan: the maps sampled at the voxel centres, the
+// HU and body mask at the same voxels. Returns the number of slices it holds.
+std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan& plan,
+                                std::uint32_t k_begin, std::uint32_t index, v1::VolumeChunk* out);
 
 // Stats from the loop's counters (`rate_hz`: ticks per second since the last Stats).
 void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const SceneDescription& scene,

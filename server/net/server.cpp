@@ -18,6 +18,7 @@
 #include "net/listen_check.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
+#include "net/tls_accept.hpp"
 #include "net/token_guard.hpp"
 #include "wire/framing.hpp"
 
@@ -26,19 +27,6 @@ namespace palp::net {
 using asio::ip::tcp;
 
 namespace {
-
-Bytes frame_of(const v1::ServerMessage& message) {
-  return std::make_shared<const std::string>(wire::encode_frame(message));
-}
-
-Bytes error_frame(v1::Error::Code code, const std::string& reason, bool fatal) {
-  v1::ServerMessage m;
-  v1::Error* e = m.mutable_error();
-  e->set_code(code);
-  e->set_reason(reason);
-  e->set_fatal(fatal);
-  return frame_of(m);
-}
 
 std::int64_t seconds_to_ns(double s) {
   return static_cast<std::int64_t>(s * 1e9);
@@ -56,7 +44,8 @@ class Server::Impl {
         loop_(loop),
         control_(control),
         acceptor_(io_),
-        poll_timer_(io_),
+        pump_(io_, loop.net_ring(), loop.net_signal(), config_.net_wake, config_.poll_interval_s,
+              [this] { frames_published(); }),
         house_timer_(io_) {
     bind_acceptor(acceptor_, config_.bind, config_.port);
     asio::error_code ec;
@@ -74,9 +63,12 @@ class Server::Impl {
     last_stats_ns_ = rt::monotonic_ns();
     last_stats_ticks_ = loop_.stats().ticks;
     accept();
-    schedule_poll();
+    pump_.start();
     schedule_house();
-    thread_ = std::thread([this] { io_.run(); });
+    thread_ = std::thread([this] {
+      if (config_.cpu >= 0) rt::pin_this_thread(config_.cpu);  // checked by palpd's options
+      io_.run();
+    });
   }
 
   void stop() {
@@ -84,7 +76,7 @@ class Server::Impl {
     asio::post(io_, [this] {
       asio::error_code ec;
       acceptor_.close(ec);
-      poll_timer_.cancel();
+      pump_.stop();
       house_timer_.cancel();
       for (auto& s : sessions_) close(*s);
       sessions_.clear();
@@ -110,24 +102,28 @@ class Server::Impl {
     c.frames_dropped = frames_dropped_.load();
     c.timeouts = timeouts_.load();
     c.overflows = overflows_.load();
+    c.net_wakeups = pump_.wakeups();
     return c;
   }
 
   struct Session {
     Session(asio::io_context& io, const ServerConfig& config)
-        : socket(io),
+        : stream(io),
           decoder(config.max_frame_bytes),
           queue(config.queue_frames, config.max_queue_bytes) {}
-    tcp::socket socket;
+    tls::Stream stream;         // plain, or TLS once the handshake began
+    tls::PeerCertificate cert;  // the client's certificate (TLS with --tls-client-ca)
     std::uint64_t id = 0;
     std::string name;
     std::string address;  // the remote address, for the per-address Hello budget
+    std::string refusal;  // over the Hello budget: said after the TLS handshake (it could not
+                          // be read before), a plain server says it at once
     v1::Role role = v1::ROLE_UNSPECIFIED;
     bool welcomed = false;  // Hello accepted
     bool ready = false;     // scene and volume sent: frames flow
     bool closing = false;   // a fatal error is queued: close once written
     bool closed = false;
-    bool reading = false;
+    bool reading = false, handshaking = false;
     bool writing = false;
     bool want_contacts = false;
     bool end_logged = false;  // its leaving (or refusal) is in the log
@@ -151,7 +147,7 @@ class Server::Impl {
   // ------------------------------------------------------------------ accept
   void accept() {
     auto session = std::make_shared<Session>(io_, config_);
-    acceptor_.async_accept(session->socket, [this, session](const asio::error_code& ec) {
+    acceptor_.async_accept(session->stream.socket(), [this, session](const asio::error_code& ec) {
       if (ec) {
         if (ec != asio::error::operation_aborted && acceptor_.is_open()) accept();
         return;
@@ -163,12 +159,13 @@ class Server::Impl {
 
   void on_accept(const SessionPtr& s) {
     asio::error_code ec;
-    s->socket.set_option(tcp::no_delay(true), ec);
+    s->stream.socket().set_option(tcp::no_delay(true), ec);
     if (config_.send_buffer_bytes > 0)
-      s->socket.set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes), ec);
+      s->stream.socket().set_option(asio::socket_base::send_buffer_size(config_.send_buffer_bytes),
+                                    ec);
     s->id = ++next_id_;
     s->connected_ns = s->last_rx_ns = rt::monotonic_ns();
-    const tcp::endpoint remote = s->socket.remote_endpoint(ec);
+    const tcp::endpoint remote = s->stream.socket().remote_endpoint(ec);
     s->address = ec ? std::string("?") : remote.address().to_string();
     accepted_.fetch_add(1);
     std::erase_if(sessions_, [](const SessionPtr& other) { return other->closed; });
@@ -182,22 +179,38 @@ class Server::Impl {
     sessions_.push_back(s);
     client_count_.store(sessions_.size());
     if (pending_here >= config_.max_pending_per_address || pending >= config_.max_pending) {
-      fatal(s, v1::Error::TOO_MANY_CLIENTS,
-            pending_here >= config_.max_pending_per_address
-                ? "too many connections from " + s->address + " waiting to say Hello (at most " +
-                      std::to_string(config_.max_pending_per_address) + ")"
-                : "too many connections waiting to say Hello (at most " +
-                      std::to_string(config_.max_pending) + ")");
-      return;
+      s->refusal = pending_here >= config_.max_pending_per_address
+                       ? "too many connections from " + s->address +
+                             " waiting to say Hello (at most " +
+                             std::to_string(config_.max_pending_per_address) + ")"
+                       : "too many connections waiting to say Hello (at most " +
+                             std::to_string(config_.max_pending) + ")";
+      if (!config_.tls) return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
     }
-    read(s);
+    if (!config_.tls) return read(s);
+    s->handshaking = true;
+    tls_accept(s->stream, *config_.tls, [this, s](const TlsAccepted& r) {
+      s->handshaking = false;
+      if (!r.notice.empty()) log_client(r.notice);
+      if (s->closed) return;
+      if (r.kind == TlsAccepted::Kind::PlainText)
+        return fatal(s, v1::Error::UNAUTHORIZED, plain_text_refusal());
+      if (r.kind == TlsAccepted::Kind::Failed) {
+        log_client(who(*s) + " refused: " + r.message);
+        s->end_logged = true;
+        return close(*s);
+      }
+      s->cert = r.client;
+      if (!s->refusal.empty()) return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
+      read(s);
+    });
   }
 
   // ------------------------------------------------------------------ read
   void read(const SessionPtr& s) {
     if (s->closing || s->closed || s->reading) return;
     s->reading = true;
-    s->socket.async_read_some(
+    s->stream.async_read_some(
         asio::buffer(s->rbuf), [this, s](const asio::error_code& ec, std::size_t n) {
           s->reading = false;
           if (s->closed) return;
@@ -287,6 +300,11 @@ class Server::Impl {
                 " is not supported (this server speaks " + std::to_string(kProtocolVersion) + ")");
       return;
     }
+    if (auto no = certificate_refusal(config_.tls.get(), s->cert, h.role() == v1::CONTROLLER);
+        !no.empty())
+      return fatal(s, v1::Error::UNAUTHORIZED, no);
+    if (!h.token().empty() && !s->stream.secure() && !is_loopback_address(s->address))
+      return fatal(s, v1::Error::UNAUTHORIZED, clear_text_token_refusal(s->address));
     if (h.role() == v1::CONTROLLER) {
       const std::int64_t now = rt::monotonic_ns();
       if (const std::int64_t wait_ns = token_guard_.wait_ns(s->address, now); wait_ns > 0) {
@@ -308,10 +326,6 @@ class Server::Impl {
                       : "CONTROLLER needs the server's token: the one given is wrong");
         return;
       }
-      if (!h.token().empty() && !is_loopback_address(s->address))
-        log_client("warning: " + s->address +
-                   " sent the controller token in clear text over the network; anyone on the "
-                   "path can read it (keep palpd on a trusted network, or tunnel it)");
       token_guard_.succeeded(s->address);
       for (const auto& other : sessions_)
         if (other != s && other->role == v1::CONTROLLER && !other->closed) {
@@ -346,7 +360,7 @@ class Server::Impl {
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
-    plan_volume(*s, h.volume_step(), h.volume_max_dim());
+    plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(), h.volume_deflate()});
     if (s->volume.chunks == 0) s->ready = true;
     log_client(who(*s) + " joined");
     pump(s);
@@ -357,7 +371,8 @@ class Server::Impl {
     if (config_.log_clients) client_log_.say(line);
   }
   static std::string who(const Session& s) {
-    return describe_client(s.id, s.address, s.welcomed, s.role == v1::CONTROLLER, s.name);
+    return describe_client(s.id, s.address, s.welcomed, s.role == v1::CONTROLLER,
+                           s.cert.verified ? s.name + " [" + s.cert.subject + "]" : s.name);
   }
 
   void command(const SessionPtr& s, const v1::Command& c) {
@@ -387,17 +402,17 @@ class Server::Impl {
     return frame_of(m);
   }
 
-  void plan_volume(Session& s, std::uint32_t step, std::uint32_t max_dim) {
-    if (!scene_.fields || (step == 0 && max_dim == 0)) return;
-    s.volume = net::plan_volume(scene_.grid, step, max_dim, config_.volume_chunk_bytes);
+  void plan_volume(Session& s, const VolumeRequest& r) {
+    if (!scene_.fields || (r.step == 0 && r.max_dim == 0)) return;
+    s.volume = net::plan_volume(scene_, r, config_.volume_chunk_bytes);
     s.volume_k = 0;
     s.volume_chunk = 0;
   }
 
   Bytes next_volume_chunk(Session& s) {
     v1::ServerMessage m;
-    s.volume_k += fill_volume_chunk(*scene_.fields, scene_.grid, s.volume, s.volume_k,
-                                    s.volume_chunk, m.mutable_volume());
+    s.volume_k +=
+        fill_volume_chunk(scene_, s.volume, s.volume_k, s.volume_chunk, m.mutable_volume());
     ++s.volume_chunk;
     if (s.volume_chunk == s.volume.chunks) s.ready = true;
     return frame_of(m);
@@ -420,18 +435,18 @@ class Server::Impl {
     for (const Bytes& b : s->inflight) s->buffers.push_back(asio::buffer(*b));
     s->writing = true;
     s->write_started_ns = rt::monotonic_ns();
-    asio::async_write(s->socket, s->buffers,
-                      [this, s, frames_now](const asio::error_code& ec, std::size_t) {
-                        s->writing = false;
-                        if (s->closed) return;
-                        if (ec) {
-                          close(*s);
-                          return;
-                        }
-                        s->frames_sent += frames_now;
-                        frames_sent_.fetch_add(frames_now);
-                        pump(s);
-                      });
+    s->stream.async_write(s->buffers,
+                          [this, s, frames_now](const asio::error_code& ec, std::size_t) {
+                            s->writing = false;
+                            if (s->closed) return;
+                            if (ec) {
+                              close(*s);
+                              return;
+                            }
+                            s->frames_sent += frames_now;
+                            frames_sent_.fetch_add(frames_now);
+                            pump(s);
+                          });
   }
 
   // Queue a message / replace the queued SceneInfo for `s`; false (and the client dropped) when
@@ -485,23 +500,16 @@ class Server::Impl {
     s.closed = true;
     if (!s.end_logged && s.welcomed) log_client(who(s) + " " + why);
     s.end_logged = true;
-    asio::error_code ec;
-    s.socket.shutdown(tcp::socket::shutdown_both, ec);
-    s.socket.close(ec);
+    s.stream.close();
     s.queue.bury(graveyard_);
   }
 
   // ------------------------------------------------------------------ frames from the loop
-  void schedule_poll() {
-    poll_timer_.expires_after(std::chrono::nanoseconds(
-        std::max<std::int64_t>(seconds_to_ns(config_.poll_interval_s), 50'000)));
-    poll_timer_.async_wait([this](const asio::error_code& ec) {
-      if (ec) return;
-      if (scene_dirty_) send_scene_to_all();
-      drain();
-      graveyard_.free_some(kFreePerPoll);
-      schedule_poll();
-    });
+  // Run by the frame pump (frame_pump.hpp) whenever the loop published, and on its backstop.
+  void frames_published() {
+    if (scene_dirty_) send_scene_to_all();
+    drain();
+    graveyard_.free_some(kFreePerPoll);
   }
 
   void drain() {
@@ -564,7 +572,10 @@ class Server::Impl {
       if (s->closing) continue;
       if (!s->welcomed && now - s->connected_ns > seconds_to_ns(config_.hello_timeout_s)) {
         timeouts_.fetch_add(1);
-        fatal(s, v1::Error::TIMEOUT, "no Hello received in time");
+        if (s->handshaking)
+          close(*s, "refused: no TLS handshake in time");
+        else
+          fatal(s, v1::Error::TIMEOUT, "no Hello received in time");
         continue;
       }
       if (config_.idle_timeout_s > 0 &&
@@ -589,6 +600,8 @@ class Server::Impl {
     v1::Stats* st = m.mutable_stats();
     fill_stats(ls, loop_, scene_, control_, rate, now, static_cast<std::uint32_t>(sessions_.size()),
                st);
+    for (const SessionPtr& s : sessions_)
+      if (s->role == v1::CONTROLLER && s->welcomed && !s->closed) st->set_controller(who(*s));
     for (const SessionPtr& s : sessions_) {
       if (!s->welcomed || s->closing || s->closed) continue;
       st->set_client_frames_sent(s->frames_sent);
@@ -603,7 +616,8 @@ class Server::Impl {
   ControlTarget* control_;
   asio::io_context io_;
   tcp::acceptor acceptor_;
-  asio::steady_timer poll_timer_, house_timer_;
+  FramePump pump_;
+  asio::steady_timer house_timer_;
   std::thread thread_;
   std::vector<SessionPtr> sessions_;
   // Queues of dropped clients, freed kFreePerPoll messages per poll.

@@ -34,6 +34,11 @@
 #include "loop/haptic_loop.hpp"
 #include "model/field_sampler.hpp"
 #include "net/control_target.hpp"
+#include "net/frame_pump.hpp"
+
+namespace palp::tls {
+class ServerContext;
+}
 
 namespace palp::net {
 
@@ -53,11 +58,16 @@ struct ServerConfig {
   double idle_timeout_s = 30.0;  // 0: off
   double write_timeout_s = 5.0;  // 0: off
   double stats_interval_s = 1.0;
-  double poll_interval_s = 0.0005;  // how often the io thread drains the loop's snapshot ring
+  NetWake net_wake = NetWake::Event;  // how the io thread learns of new frames (frame_pump.hpp)
+  double poll_interval_s = 0.0005;    // NetWake::Poll: how often it drains the loop's ring
+  int cpu = -1;                       // >= 0: the io thread is pinned to this CPU
   std::size_t volume_chunk_bytes = 1 << 20;  // per map, per chunk
   int send_buffer_bytes = 0;                 // SO_SNDBUF of client sockets (0: system default)
   std::string server_name = "palpd";
   bool log_clients = true;  // clients joining, leaving and refused, on stderr (rate-bounded)
+  // Set: palp.v1 over TLS only (plain text refused); with a client CA, controllers need a
+  // certificate (net/tls_accept.hpp). Unset: plain text, the token only from loopback.
+  std::shared_ptr<tls::ServerContext> tls;
 };
 
 // Whether palpd could listen on bind:port (port 0 always can), checked before the scene is
@@ -73,6 +83,8 @@ struct SceneDescription {
   std::string device;
   std::string device_profile;
   std::shared_ptr<const FieldSampler> fields;  // sampled for the render volume
+  std::shared_ptr<const CtVolume> ct;          // the CT's HU on the grid (may be null)
+  std::shared_ptr<const Mask> body;            // the body mask on the grid (with ct)
   // The device's registration, for devices placed on the patient (unset: scene-frame devices).
   struct Placement {
     Registration registration;
@@ -90,7 +102,8 @@ struct ServerCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t frames_dropped = 0;  // stale frames dropped from client queues
   std::uint64_t timeouts = 0;
-  std::uint64_t overflows = 0;  // clients dropped for exceeding max_queue_bytes
+  std::uint64_t overflows = 0;    // clients dropped for exceeding max_queue_bytes
+  std::uint64_t net_wakeups = 0;  // times the io thread took frames from the loop (frame_pump)
 };
 
 class Server {

@@ -364,6 +364,7 @@ void UsbLink::reconcile() {
   libusb_device** list = nullptr;
   const ssize_t n = libusb_get_device_list(context_->raw(), &list);
   libusb_device* found = nullptr;
+  unsigned matches = 0;  // the match_index-th device of this VID:PID is the one
   for (ssize_t i = 0; i < n && !found; ++i) {
     libusb_device_descriptor desc{};
     // The device just closed after a removal may still be listed until libusb's hot-plug thread
@@ -372,7 +373,7 @@ void UsbLink::reconcile() {
         libusb_get_device_address(list[i]) == closed_address_)
       continue;
     if (libusb_get_device_descriptor(list[i], &desc) == 0 && desc.idVendor == config_.id.vendor &&
-        desc.idProduct == config_.id.product)
+        desc.idProduct == config_.id.product && matches++ == config_.match_index)
       found = list[i];
   }
   if (found) try_open(found);

@@ -119,6 +119,7 @@ const char* to_string(LinkState state);
 struct LinkConfig {
   UsbId id;
   int interface_number = 0;
+  unsigned match_index = 0;  // with several devices of this VID:PID plugged in: which one (0: first)
   std::uint8_t in_endpoint = 0x81;
   std::uint8_t out_endpoint = 0;  // 0: no OUT endpoint
   bool interrupt = true;          // interrupt endpoints (false: bulk)

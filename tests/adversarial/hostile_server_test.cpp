@@ -16,6 +16,7 @@
 
 #include "adversarial/adversarial_util.hpp"
 #include "palp.pb.h"
+#include "wire/volume_codec.hpp"
 #include "wire/messages.hpp"
 
 namespace palp::adversarial {
@@ -65,6 +66,27 @@ std::string volume_chunk(std::int64_t dims, std::size_t bytes) {
   v->set_k_begin(0);
   v->set_k_count(static_cast<std::uint32_t>(std::min<std::int64_t>(dims, 1 << 30)));
   v->set_d_surf(std::string(bytes, '\0'));
+  v->set_chunk_index(0);
+  v->set_chunk_count(1);
+  return wire::encode_frame(m);
+}
+
+// A chunk matching the scene whose deflated HU would inflate to 256 MiB (its slices need 2 MB):
+// the client inflates into exactly what the slices need and refuses the rest.
+std::string deflate_bomb_chunk() {
+  v1::ServerMessage m;
+  v1::VolumeChunk* v = m.mutable_volume();
+  v->set_step(1);
+  for (int a = 0; a < 3; ++a) {
+    v->add_dims(100);
+    v->add_spacing(1.0);
+  }
+  v->set_k_begin(0);
+  v->set_k_count(100);
+  v->set_deflate(true);
+  v->set_d_surf(wire::deflate_bytes(std::string(100 * 100 * 100 * 4, '\0')));
+  v->set_hu(wire::deflate_bytes(std::string(256u << 20, '\0')));
+  v->set_body(wire::deflate_bytes(std::string(100 * 100 * 100, '\1')));
   v->set_chunk_index(0);
   v->set_chunk_count(1);
   return wire::encode_frame(m);
@@ -186,6 +208,11 @@ std::vector<Behaviour> behaviours() {
           {"volume_without_its_bytes",
            [](int fd, const std::atomic<bool>& stop) {
              send_all(fd, welcome() + scene() + volume_chunk(100, 1000));
+             linger(fd, stop, 30.0);
+           }},
+          {"volume_deflate_bomb",
+           [](int fd, const std::atomic<bool>& stop) {
+             send_all(fd, welcome() + scene() + deflate_bomb_chunk());
              linger(fd, stop, 30.0);
            }},
           {"nan_and_huge_frames", [nan](int fd, const std::atomic<bool>& stop) {

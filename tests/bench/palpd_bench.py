@@ -10,6 +10,10 @@
                                              each direction (netem's "delay D loss L" on both ends)
   palpd_bench.py summary NAME STATS_JSON PROBE_JSON...
                                              one table row: misses, lateness, latency, delivery
+  palpd_bench.py hog SECONDS                 a CPU hog: spins for SECONDS (pin it with taskset)
+  palpd_bench.py wake-table RESULTS_JSONL    palpd_wake.sh's rows as one Markdown table: per
+                                             case and variant the median and the worst of the
+                                             repeats (misses, lateness, latency, CPU)
 
 Every mode is bounded by its SECONDS (and the garbage client by a message count as well).
 """
@@ -191,7 +195,71 @@ def summary(name, stats_path, probe_paths):
         "clients_rejected": st["clients_rejected"],
         "timeouts": st["timeouts"],
     }
+    wake = st.get("wake")
+    if wake:  # palpd with the wake-up counters (issue 18)
+        elapsed = st["elapsed_s"] or 1.0
+        row.update({
+            "wake_mode": wake["mode"],
+            "spin_window_us": wake["spin_window_us"],
+            "spin_cpu_pct": 100.0 * wake["spin_cpu_fraction"],
+            "loop_cpu_pct": 100.0 * wake["loop_cpu_fraction"],
+            "wake_p99_us_at_most": wake["latency_p99_us_at_most"],
+            "wake_max_us": wake["latency_max_us"],
+            "palpd_cpu_pct": 100.0 * st.get("process_cpu_s", 0.0) / elapsed,
+            "net_signals": st.get("net_signals"),
+            "net_wakeups": st.get("net_wakeups"),
+        })
     print(json.dumps(row))
+
+
+def hog(seconds):
+    end = time.monotonic() + seconds
+    n = 0
+    while time.monotonic() < end:
+        n += 1
+    print(json.dumps({"mode": "hog", "seconds": seconds, "loops": n}))
+
+
+def wake_table(path):
+    rows = [json.loads(line) for line in open(path) if line.strip()]
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["case"], r["variant"]), []).append(r)
+
+    def med(v):
+        v = sorted(x for x in v if x is not None)
+        if not v:
+            return None
+        n = len(v)
+        return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+
+    def worst(v):
+        v = [x for x in v if x is not None]
+        return max(v) if v else None
+
+    def f(v, d=1):
+        return "n/a" if v is None else f"{v:.{d}f}"
+
+    def mw(rs, key, d=1):
+        v = [r.get(key) for r in rs]
+        return f"{f(med(v), d)} ({f(worst(v), d)})"
+
+    print("| case | variant | runs | misses % median (worst) | faults | lateness max us median "
+          "(worst) | wake-up p99 us | latency p99 us median (worst observer, worst run) | "
+          "min delivered | palpd CPU % | loop thread CPU % (spinning) | spin window us | "
+          "load |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for (case, variant), rs in groups.items():
+        print(f"| {case} | {variant} | {len(rs)} | {mw(rs, 'miss_pct', 3)} | "
+              f"{sum(r['faults'] for r in rs)} | {mw(rs, 'late_max_us', 0)} | "
+              f"<= {f(med([r.get('wake_p99_us_at_most') for r in rs]), 0)} | "
+              f"{mw(rs, 'latency_p99_us_max', 0)} | "
+              f"{f(min(r['delivered_min'] for r in rs), 4)} | "
+              f"{f(med([r.get('palpd_cpu_pct') for r in rs]))} | "
+              f"{f(med([r.get('loop_cpu_pct') for r in rs]))} "
+              f"({f(med([r.get('spin_cpu_pct') for r in rs]))}) | "
+              f"{f(med([r.get('spin_window_us') for r in rs]), 0)} | "
+              f"{f(med([r.get('load1') for r in rs]), 2)} |")
 
 
 def main(argv):
@@ -208,6 +276,10 @@ def main(argv):
              int(argv[7]) if len(argv) > 7 else 1)
     elif mode == "summary":
         summary(argv[2], argv[3], argv[4:])
+    elif mode == "hog":
+        hog(float(argv[2]))
+    elif mode == "wake-table":
+        wake_table(argv[2])
     else:
         print(__doc__, file=sys.stderr)
         return 2

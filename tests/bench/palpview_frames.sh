@@ -6,7 +6,8 @@
 #   BUILD_DIR  a build with palpd and palpview (e.g. build)
 #   SCENE      any palpd scene (phantom:torso, a prep directory, a CT file)
 # Writes OUT_DIR/{deform,nodeform}.json (palpview --stats-json) and .png, prints palpview's
-# summary lines. Runs palpview under xvfb-run (screen as large as the window) when DISPLAY is
+# summary lines. PALPVIEW_MAX_DIM (default 256) is palpview's --volume-max-dim (512: a 512-voxel
+# CT at full resolution); the JSON's volume_received_s is palpview's start -> whole volume. Runs palpview under xvfb-run (screen as large as the window) when DISPLAY is
 # unset; the render time is then llvmpipe's (CPU), not a GPU's.
 set -euo pipefail
 build=${1:?build dir}
@@ -41,6 +42,7 @@ for mode in deform nodeform; do
   [ "$mode" = nodeform ] && extra=(--no-deformation)
   run "$build/client/palpview" --connect "127.0.0.1:$port" --width "$width" --height "$height" \
     --screenshot "$out/$mode.png" --frames "$frames" --timeout 600 \
+    --volume-max-dim "${PALPVIEW_MAX_DIM:-256}" \
     --stats-json "$out/$mode.json" "${extra[@]}"
 done
 echo "results in $out"

@@ -156,15 +156,15 @@ w=$work
 "$palp" traj slide-speed -q --scene phantom:cube --out "$w/speed.csv"
 pairs_ramp=() pairs_speed=()
 for n in 1 7 19 37; do
-  "$palp" run -q --scene phantom:cube --tool finger:$n --trajectory "$w/ramp.csv" \
+  "$palp" run -q --model paper --scene phantom:cube --tool finger:$n --trajectory "$w/ramp.csv" \
     --out "$w/ramp_f$n.csv"
-  "$palp" run -q --scene phantom:cube --tool finger:$n --trajectory "$w/speed.csv" \
+  "$palp" run -q --model paper --scene phantom:cube --tool finger:$n --trajectory "$w/speed.csv" \
     --out "$w/speed_f$n.raw.csv"
   $py $helper add-speed "$w/speed_f$n.raw.csv" "$w/speed.csv" "$w/speed_f$n.csv"
   pairs_ramp+=("finger:$n=$w/ramp_f$n.csv")
   pairs_speed+=("finger:$n=$w/speed_f$n.csv")
 done
-echo "## Fig. 4a: palp traj slide-ramp --scene phantom:cube; palp run --tool finger:N" >>"$summary"
+echo "## Fig. 4a: palp traj slide-ramp --scene phantom:cube; palp run --model paper --tool finger:N" >>"$summary"
 $py $helper fig4 "$data/fig4a_slide_ramp.csv" "$summary" "${pairs_ramp[@]}"
 $py $helper ramp-stats "$summary" "$w/ramp_f37.csv" ramp
 # Friction against indentation for the second chart: finger:37, with the law's sliding value.
@@ -180,7 +180,7 @@ law = np.array([0.4 * pf.breakaway(2.0 * pf.surface_force(x) + 1.0) for x in d])
 pf.write(sys.argv[2], ["depth", "f_lateral", "law_sliding", "f_surf"],
          [d, c["f_lateral"][m], law, pf.surface_force(d)], every=10)
 EOF
-echo "## Fig. 4b: palp traj slide-speed --scene phantom:cube; palp run --tool finger:N" >>"$summary"
+echo "## Fig. 4b: palp traj slide-speed --scene phantom:cube; palp run --model paper --tool finger:N" >>"$summary"
 $py $helper fig4 "$data/fig4b_slide_speed.csv" "$summary" "${pairs_speed[@]}"
 $py $helper speed-stats "$summary" "$w/speed_f37.csv" "$w/speed.csv" speed
 
@@ -189,13 +189,13 @@ fig5a() {  # label scene traj-options...
   local label=$1 scene=$2
   shift 2
   "$palp" traj ribs -q --scene "$scene" "$@" --out "$w/ribs_$label.csv"
-  "$palp" run -q --scene "$scene" --tool finger:37 --trajectory "$w/ribs_$label.csv" \
+  "$palp" run -q --model paper --scene "$scene" --tool finger:37 --trajectory "$w/ribs_$label.csv" \
     --out "$w/ribs_${label}_f.csv"
-  "$palp" run -q --scene "$scene" --tool finger:37 --trajectory "$w/ribs_$label.csv" \
+  "$palp" run -q --model paper --scene "$scene" --tool finger:37 --trajectory "$w/ribs_$label.csv" \
     --param bone_enabled=0 --out "$w/ribs_${label}_nobone.csv"
   "$build/tests/bench/bone_along_path" --scene "$scene" --tool finger:37 \
     --trajectory "$w/ribs_$label.csv" --out "$w/ribs_${label}_bone.csv" >/dev/null
-  echo "## Fig. 5a-like ($label): palp traj ribs --scene $scene $*; palp run --tool finger:37" \
+  echo "## Fig. 5a-like ($label): palp traj ribs --scene $scene $*; palp run --model paper --tool finger:37" \
     "(and --param bone_enabled=0); bone_along_path" >>"$summary"
   $py $helper fig5a "$data/fig5a_$label.csv" "$summary" "$label" "$w/ribs_${label}_f.csv" \
     "$w/ribs_${label}_nobone.csv" "$w/ribs_${label}_bone.csv" "$w/ribs_$label.csv"
@@ -222,6 +222,6 @@ $py $helper fig5b "$data/fig5b_tick_vs_contacts.csv" "$w/ticks.csv"
 echo "# measured in ${SECONDS} s wall, load afterwards $(cut -d' ' -f1-3 /proc/loadavg)" \
   >>"$summary"
 
-"$0" "$build" --charts-only
+PALP_FIGURES_DIR="$figures" "$0" "$build" --charts-only
 echo "== summary ($summary; work files in $work)"
 cat "$summary"

@@ -450,7 +450,7 @@ void smoothness(const std::string& ct_path, Csv& csv) {
       prm.bone_enabled = false;
       const Model m(v.fields, tool, prm);
       State st = make_state(m);
-      std::vector<double> f;
+      std::vector<double> f, map_depth;  // map_depth: D_surf at the pad centre (nominal: depth)
       double skin_gap = 0.0;  // largest |D_surf| on the HU iso-surface: the maps' own error
       for (int t = 0; t <= n; ++t) {
         const double along = spec.from + (spec.to - spec.from) * t / n;
@@ -462,24 +462,28 @@ void smoothness(const std::string& ct_path, Csv& csv) {
         const Quat q = surface_orientation(nrm, axis.superior);
         tick(m, st, pad_pose(skin - depth * nrm, nrm, q, offset));
         f.push_back(norm(st.f_device));
+        map_depth.push_back(v.fields->sample_surf(skin - depth * nrm).value);
       }
-      double sq = 0.0, step = 0.0, mean = 0.0;
+      double sq = 0.0, step = 0.0, mean = 0.0, sq_depth = 0.0;
       int cnt = 0;
       for (int t = half; t + half < static_cast<int>(f.size()); ++t) {
-        double avg = 0.0;
-        for (int j = t - half; j <= t + half; ++j) avg += f[j];
+        double avg = 0.0, avg_depth = 0.0;
+        for (int j = t - half; j <= t + half; ++j) avg += f[j], avg_depth += map_depth[j];
         avg /= 2 * half + 1;
+        avg_depth /= 2 * half + 1;
         sq += (f[t] - avg) * (f[t] - avg);
+        sq_depth += (map_depth[t] - avg_depth) * (map_depth[t] - avg_depth);
         mean += f[t];
         ++cnt;
       }
       for (std::size_t t = 1; t < f.size(); ++t) step = std::max(step, std::fabs(f[t] - f[t - 1]));
-      const double sd = std::sqrt(sq / cnt);
+      const double sd = std::sqrt(sq / cnt), sd_depth = std::sqrt(sq_depth / cnt);
       csv.row({std::string(to_string(v.model)), depth, mean / cnt, sd, step, skin_gap});
       std::printf(
           "smooth %-5s finger:1 %g mm true depth, %.0f mm at 20 mm/s: mean %.3f N, detrended "
-          "std %.3f N, largest tick step %.3f N (|D_surf| on the iso-surface up to %.2f mm)\n",
-          to_string(v.model), depth, len, mean / cnt, sd, step, skin_gap);
+          "std %.3f N, largest tick step %.3f N (|D_surf| on the iso-surface up to %.2f mm; "
+          "D_surf at the pad centre: detrended std %.3f mm)\n",
+          to_string(v.model), depth, len, mean / cnt, sd, step, skin_gap, sd_depth);
     }
 }
 

@@ -41,15 +41,7 @@ bool display_available() {
 }
 
 testing::CliOutcome run_palpview(const std::string& args) {
-  const std::string command = std::string(PALPVIEW_PATH) + " " + args + " 2>&1 </dev/null";
-  testing::CliOutcome outcome;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
+  return testing::run_command(std::string(PALPVIEW_PATH) + " " + args + " 2>&1 </dev/null");
 }
 
 // palpd in the background, stopped (SIGTERM) when this goes out of scope.
@@ -187,7 +179,7 @@ TEST(Palpview, DefaultViewIsThePatientsAnteriorHoweverStored) {
     const auto r = run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) +
                                 " --screenshot " + png.string() +
                                 " --frames 2 --width 240 --height 160 --timeout 120 --no-tool"
-                                " --no-deformation --no-overlays" +
+                                " --no-deformation --no-overlays --follow 0" +
                                 (code.size() > 3 ? " --view posterior" : ""));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     shots[code] = read_rgb(png);

@@ -5,9 +5,9 @@
 // a stand-in ssh), and install-lab.sh lists its files in --dry-run and installs idempotently
 // into a staging directory.
 //
-// Data flow: the files are read from the source tree (found from __FILE__); palp comes from
-// PALP_CLI_PATH and palpd from the same build directory (BUILD/server/palpd); the scripts run
-// through /bin/sh with their output captured.
+// Data flow: the files are read from the source tree (PALP_SOURCE_DIR, set by
+// tests/CMakeLists.txt); palp comes from PALP_CLI_PATH and palpd from the same build directory
+// (BUILD/server/palpd); the scripts run through /bin/sh with their output captured.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -37,24 +37,20 @@ using testing::CliOutcome;
 using testing::read_text;
 using testing::shared_cli_dir;
 
-const fs::path kSourceDir = fs::path(__FILE__).parent_path().parent_path().parent_path();
+const fs::path kSourceDir = fs::path(PALP_SOURCE_DIR);
 const fs::path kBuildDir = fs::path(PALP_CLI_PATH).parent_path().parent_path();
 const fs::path kPalpd = kBuildDir / "server" / "palpd";
 
 std::string quoted(const fs::path& path) {
-  return "'" + path.string() + "'";
+  std::string text(1, '\'');  // (not "'" + ...: g++ 12 then warns -Wrestrict, falsely)
+  text += path.string();
+  text += '\'';
+  return text;
 }
 
 // Runs a shell command line, stderr with stdout.
 CliOutcome run_shell(const std::string& command) {
-  CliOutcome outcome;
-  FILE* pipe = popen((command + " 2>&1 </dev/null").c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) outcome.output += buffer.data();
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
+  return palp::testing::run_command(command + " 2>&1 </dev/null");
 }
 
 bool have_program(const std::string& name) {
@@ -258,7 +254,8 @@ TEST(Deploy, UdevRulesAreWellFormedAndCoverEveryDevice) {
   }
   EXPECT_EQ(gotos, labels);
   EXPECT_TRUE(access_line) << "no MODE=0660 GROUP=palp TAG+=uaccess rule for the devices";
-  std::map<std::string, std::string> expected = {{"1209:0001", "usb-haptic"}};
+  std::map<std::string, std::string> expected = {{"1209:0001", "usb-haptic"},
+                                                  {"0403:cb48", "falcon"}};
   for (const char* pid :
        {"c603", "c605", "c606", "c621", "c623", "c625", "c626", "c627", "c628", "c629", "c62b"})
     expected[std::string("046d:") + pid] = "spacemouse";
@@ -483,9 +480,60 @@ TEST(Deploy, InstallIntoAStagingDirectoryIsIdempotent) {
 
 TEST(Deploy, ScriptsAreShellcheckClean) {
   if (!have_program("shellcheck")) GTEST_SKIP() << "shellcheck not installed";
-  const CliOutcome run = run_shell("shellcheck " + quoted(kSourceDir / "deploy/lab.sh") + " " +
-                                   quoted(kSourceDir / "deploy/install-lab.sh"));
+  std::string command = "shellcheck";
+  for (const char* script : {"deploy/lab.sh", "deploy/install-lab.sh", "deploy/make-certs.sh"}) {
+    command += ' ';
+    command += quoted(kSourceDir / script);
+  }
+  const CliOutcome run = run_shell(command);
   EXPECT_EQ(run.exit_code, 0) << run.output;
+}
+
+// ------------------------------------------------------------------------------ make-certs.sh
+// A lab CA, palpd's certificate and a station's from the script; palpd with them in its config
+// (the keys of palpd.toml's TLS section); palp probe and palp ctl over TLS, refused without it.
+TEST(Deploy, MakeCertsGivesPalpdProbeAndCtlATlsSession) {
+  if (!fs::exists(kPalpd)) GTEST_SKIP() << kPalpd << " not built (ninja palpd)";
+  if (!have_program("openssl")) GTEST_SKIP() << "the openssl command is not installed";
+  const fs::path dir = test_dir("tls");
+  const std::string certs = quoted(kSourceDir / "deploy/make-certs.sh") + " " + quoted(dir / "pki");
+  const CliOutcome made = run_shell(certs + " ca && " + certs + " server localhost 127.0.0.1 && " +
+                                    certs + " client station-1");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_EQ(fs::status(dir / "pki/server.key").permissions() & fs::perms::group_read,
+            fs::perms::none);
+  EXPECT_NE(run_shell(certs + " client station-1").exit_code, 0);  // never overwritten
+  std::string config = read_text(kSourceDir / "deploy/palpd.toml");
+  config += "tls-cert = '" + (dir / "pki/server.crt").string() + "'\n";
+  config += "tls-key = '" + (dir / "pki/server.key").string() + "'\n";
+  config += "tls-client-ca = '" + (dir / "pki/ca.crt").string() + "'\n";
+  write_file(dir / "palpd.toml", config);
+  const std::string palp = quoted(PALP_CLI_PATH);
+  const std::string log = quoted(dir / "palpd.log");
+  const std::string ca = " --tls-ca " + quoted(dir / "pki/ca.crt");
+  std::string station = " --tls-cert " + quoted(dir / "pki/clients/station-1.crt");
+  station += " --tls-key " + quoted(dir / "pki/clients/station-1.key");
+  std::string script = quoted(kPalpd) + " --config " + quoted(dir / "palpd.toml");
+  script += " --scene phantom:sphere --device sim --port 0 --bind 127.0.0.1 --duration 6";
+  script += " --no-realtime --cache-dir " + quoted(dir / "cache") + " >" + log + " 2>&1 &\n";
+  script +=
+      "for i in $(seq 300); do grep -q 'listening on' " + log + " && break; sleep 0.1; done\n";
+  script += "port=$(sed -n 's/.*listening on [^ ]*:\\([0-9]*\\),.*/\\1/p' " + log + " | head -1)\n";
+  script += palp + " probe 127.0.0.1:$port --duration 1 -q" + ca + "; echo \"probe=$?\"\n";
+  script += palp + " probe 127.0.0.1:$port --duration 1 -q; echo \"plain=$?\"\n";
+  script += palp + " ctl 127.0.0.1:$port status" + ca + station + "; echo \"ctl=$?\"\n";
+  script += palp + " ctl 127.0.0.1:$port status" + ca + "; echo \"nocert=$?\"\n";
+  script += "wait; cat " + log;
+  const CliOutcome run = run_shell(script);
+  EXPECT_NE(run.output.find("probe=0"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("plain=1"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("over TLS only"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("ctl=0"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("nocert=1"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("none was presented"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("TLS 1.3 on: certificate CN=localhost"), std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("[CN=station-1,O=palp lab]"), std::string::npos) << run.output;
 }
 
 }  // namespace

@@ -24,14 +24,15 @@ namespace fs = std::filesystem;
 using testing::CliOutcome;
 using testing::read_text;
 
-const fs::path kSourceDir = fs::path(__FILE__).parent_path().parent_path().parent_path();
+// (not from __FILE__: a compiler cache may make that path relative)
+const fs::path kSourceDir = PALP_SOURCE_DIR;
 const fs::path kBuildDir = fs::path(PALP_CLI_PATH).parent_path().parent_path();
 
 // The commands checked: "palp SUB" or a program, and the binary that runs it.
 const std::map<std::string, fs::path>& commands() {
   static const std::map<std::string, fs::path> list = [] {
     std::map<std::string, fs::path> m;
-    for (const char* sub : {"phantom", "prep", "run", "traj", "bench", "probe", "ctl"})
+    for (const char* sub : {"phantom", "prep", "run", "traj", "bench", "probe", "ctl", "tune"})
       m[std::string("palp ") + sub] = PALP_CLI_PATH;
     m["palpd"] = kBuildDir / "server" / "palpd";
     m["palpview"] = kBuildDir / "client" / "palpview";

@@ -19,12 +19,8 @@ struct CliOutcome {
   std::string output;
 };
 
-// Runs `palp ARGS` with PALP_SCENE_CACHE=cache; stderr goes with stdout unless `stdout_only`.
-inline CliOutcome run_palp_cli(const std::string& args, const std::filesystem::path& cache,
-                               bool stdout_only = false) {
-  const std::string command = "PALP_SCENE_CACHE='" + cache.string() + "' " +
-                              std::string(PALP_CLI_PATH) + " " + args +
-                              (stdout_only ? " 2>/dev/null" : " 2>&1") + " </dev/null";
+// Runs a shell command line as given and collects its stdout and exit status.
+inline CliOutcome run_command(const std::string& command) {
   CliOutcome outcome;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return outcome;
@@ -33,6 +29,13 @@ inline CliOutcome run_palp_cli(const std::string& args, const std::filesystem::p
   const int status = pclose(pipe);
   outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return outcome;
+}
+
+// Runs `palp ARGS` with PALP_SCENE_CACHE=cache; stderr goes with stdout unless `stdout_only`.
+inline CliOutcome run_palp_cli(const std::string& args, const std::filesystem::path& cache,
+                               bool stdout_only = false) {
+  return run_command("PALP_SCENE_CACHE='" + cache.string() + "' " + std::string(PALP_CLI_PATH) +
+                     " " + args + (stdout_only ? " 2>/dev/null" : " 2>&1") + " </dev/null");
 }
 
 inline int count_lines(const std::string& text) {

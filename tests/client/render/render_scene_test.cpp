@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <numbers>
@@ -389,11 +390,68 @@ TEST(RenderScene, PressingDeformsTheSkinInsideTheRoiOnly) {
     }
   EXPECT_GT(changed_inside, 20u) << "ROI " << x_lo << ".." << x_hi << " x " << y_lo << ".." << y_hi;
   EXPECT_EQ(changed_outside, 0u) << "worst difference outside the ROI: " << worst_outside;
+  // Only the written box went to the texture (a sub-volume upload), not the whole volume.
+  const std::int64_t box = (roi.hi[0] - roi.lo[0]) * (roi.hi[1] - roi.lo[1]) *
+                           (roi.hi[2] - roi.lo[2]) * static_cast<std::int64_t>(sizeof(float));
+  EXPECT_EQ(view.scene->last_upload_bytes(), box);
+  EXPECT_LT(box, kDim * kDim * kDim * static_cast<std::int64_t>(sizeof(float)) / 10);
 
   // Releasing restores the original scalars and image exactly.
   const RgbImage released = view.draw(resting);
   EXPECT_EQ(view.scene->render_scalars(), compose_render_scalar(volume->d_surf, volume->d_bone));
   EXPECT_EQ(differing_pixels(before, released), 0u);
+}
+
+// The ball as a CT: soft tissue (40 HU) inside the body mask, air outside, and a "rib": a bar
+// of 700 HU, 4 mm thick, 6 mm under the front skin, across x at the ball's centre height.
+std::shared_ptr<const RenderVolume> ct_ball_volume() {
+  auto v = std::make_shared<RenderVolume>(*ball_volume());
+  const std::size_t n = v->d_surf.size();
+  v->hu.assign(n, -1000);
+  v->body.assign(n, 0);
+  for (std::int64_t k = 0; k < kDim; ++k)
+    for (std::int64_t j = 0; j < kDim; ++j)
+      for (std::int64_t i = 0; i < kDim; ++i) {
+        const auto at = static_cast<std::size_t>((k * kDim + j) * kDim + i);
+        if (v->d_surf[at] < 0) continue;
+        v->body[at] = 1;
+        const double y = kSpacing * j, z = kSpacing * k;
+        const bool rib =
+            std::abs(y - (kCentre - kRadius + 8.0)) <= 2.0 && std::abs(z - kCentre) <= 4.0;
+        v->hu[at] = rib ? 700 : 40;
+      }
+  return v;
+}
+
+// Where along the press line (x, z at the centre) the rib is brightest: its y voxel.
+std::int64_t rib_voxel(const std::vector<float>& scalars) {
+  const std::int64_t c = static_cast<std::int64_t>(kCentre / kSpacing + 0.5);
+  std::int64_t best = 0;
+  for (std::int64_t j = 0; j < kDim; ++j)
+    if (scalars[static_cast<std::size_t>((c * kDim + j) * kDim + c)] >
+        scalars[static_cast<std::size_t>((c * kDim + best) * kDim + c)])
+      best = j;
+  return best;
+}
+
+TEST(RenderScene, TheCtsOwnTextureIsDisplacedUnderAPress) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  SceneSettings settings = quiet_settings();
+  settings.preset = PresetId::Bone;
+  Offscreen view(settings);
+  const auto volume = ct_ball_volume();
+  const RgbImage before = view.draw(pressed_state(volume, -20.0));
+  // Outside the body mask the HU are replaced by air: nothing there is drawn.
+  EXPECT_EQ(view.scene->render_scalars()[0], kOutsideValue);
+  const std::int64_t rib_before = rib_voxel(view.scene->render_scalars());
+  const RgbImage after = view.draw(pressed_state(volume, 6.0));
+  ASSERT_TRUE(view.last_deform.active);
+  const std::int64_t rib_after = rib_voxel(view.scene->render_scalars());
+  std::printf("rib at y voxel %lld before, %lld pressed (%.0f mm inwards)\n",
+              static_cast<long long>(rib_before), static_cast<long long>(rib_after),
+              kSpacing * static_cast<double>(rib_after - rib_before));
+  EXPECT_GE(rib_after, rib_before + 1) << "the rib did not move inwards under the press";
+  EXPECT_GT(differing_pixels(before, after), 20u);
 }
 
 TEST(RenderScene, PresetsGiveDifferentImages) {

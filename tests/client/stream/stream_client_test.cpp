@@ -35,6 +35,7 @@
 #include "io/phantom.hpp"
 #include "support/cli_test_util.hpp"
 #include "wire/framing.hpp"
+#include "wire/volume_codec.hpp"
 #include "wire/messages.hpp"
 
 extern char** environ;
@@ -659,6 +660,53 @@ TEST(StreamClient, AssemblesAVolumeFromChunksInOrder) {
   EXPECT_TRUE(s.scene->device_renders_force == false);          // unset: proto3 default
 }
 
+// The CT (HU and body mask) and the maps as zlib streams, inflated to exactly their slices.
+v1::ServerMessage ct_chunk(std::uint32_t index, std::uint32_t count, std::uint32_t k_begin,
+                           std::uint32_t k_count) {
+  v1::ServerMessage m = chunk(index, count, k_begin, k_count);
+  v1::VolumeChunk* c = m.mutable_volume();
+  std::vector<std::int16_t> hu(64 * k_count);
+  std::string body(hu.size(), '\0');
+  for (std::size_t i = 0; i < hu.size(); ++i) {
+    hu[i] = static_cast<std::int16_t>(-1000 + static_cast<int>(k_begin * 64 + i));
+    body[i] = static_cast<char>(i % 2);
+  }
+  c->set_d_surf(wire::deflate_bytes(c->d_surf()));
+  c->set_hu(wire::deflate_bytes(
+      std::string(reinterpret_cast<const char*>(hu.data()), hu.size() * sizeof(std::int16_t))));
+  c->set_body(wire::deflate_bytes(body));
+  c->set_deflate(true);
+  return m;
+}
+
+TEST(StreamClient, AssemblesADeflatedCtVolume) {
+  FakeServer server([](FakeServer::Session& s, const std::atomic<bool>&) {
+    s.send(welcome());
+    s.send(scene8());
+    s.send(ct_chunk(0, 2, 0, 5));
+    s.send(ct_chunk(1, 2, 5, 3));
+    v1::ServerMessage f;
+    f.mutable_frame()->set_seq(3);
+    s.send(f);
+  });
+  StreamOptions o = options_for(server.port());
+  o.volume_max_dim = 8;
+  o.stall_s = 30;
+  StreamClient client(o);
+  client.start();
+  const LatestState s =
+      wait_for(client, [](const LatestState& l) { return is_state(l, LinkState::Live); });
+  ASSERT_EQ(s.link.state, LinkState::Live) << s.link.message;
+  ASSERT_TRUE(s.volume);
+  ASSERT_EQ(s.volume->hu.size(), 512u);
+  ASSERT_EQ(s.volume->body.size(), 512u);
+  for (std::size_t i = 0; i < 512; ++i) {
+    ASSERT_EQ(s.volume->d_surf[i], static_cast<float>(i));
+    ASSERT_EQ(s.volume->hu[i], -1000 + static_cast<int>(i));
+    ASSERT_EQ(s.volume->body[i], (i % 64) % 2);
+  }
+}
+
 // Each malformed stream drops the connection with a message naming the problem; the client
 // neither crashes nor writes outside the volume, and retries (Reconnecting).
 TEST(StreamClient, MalformedServerInputDropsTheConnectionWithAClearMessage) {
@@ -686,7 +734,18 @@ TEST(StreamClient, MalformedServerInputDropsTheConnectionWithAClearMessage) {
     big_scene.mutable_scene()->mutable_grid()->set_dims(a, 300);
     big_chunk.mutable_volume()->set_dims(a, 300);
   }
+  // A zlib stream that inflates to far more than its slices (a "bomb": 64 MiB of zeros), one
+  // that is not zlib, and HU without the body mask.
+  v1::ServerMessage bomb = ct_chunk(0, 1, 0, 8);
+  bomb.mutable_volume()->set_hu(wire::deflate_bytes(std::string(64u << 20, '\0')));
+  v1::ServerMessage not_zlib = ct_chunk(0, 1, 0, 8);
+  not_zlib.mutable_volume()->set_body("not zlib");
+  v1::ServerMessage hu_alone = chunk(0, 1, 0, 8);
+  hu_alone.mutable_volume()->set_hu(std::string(1024, '\0'));
   const std::vector<Case> cases = {
+      {"deflate bomb", {enc(scene8()), enc(bomb)}, "hu: not a zlib stream of 1024 bytes"},
+      {"not zlib", {enc(scene8()), enc(not_zlib)}, "body: not a zlib stream of 512 bytes"},
+      {"hu without body", {enc(scene8()), enc(hu_alone)}, "hu and body come together"},
       {"more than asked", {enc(big_scene), enc(big_chunk)}, "asked for at most 8 a side"},
       {"short d_surf", {enc(scene8()), enc(chunk(0, 2, 0, 4, 10))}, "d_surf has 10 bytes"},
       {"long d_surf", {enc(scene8()), enc(chunk(0, 2, 0, 4, 1025))}, "d_surf has 1025 bytes"},

@@ -3,11 +3,14 @@
 // labels never enter the segmentation. Skips when the data is absent.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 #include <cstdio>
 #include <filesystem>
 #include <string>
 
 #include "io/ct_io.hpp"
+#include "prep/hu_levels.hpp"
 #include "prep/segmentation.hpp"
 #include "support/mask_metrics.hpp"
 
@@ -70,8 +73,17 @@ TEST(BoneSegmentation, AgainstExpertLabelsOfTheSharedCt) {
   const CtVolume ct = read_ct(ct_path);
   const DistanceMap labels = read_nifti_float(labels_path);  // 0, 1, 2 as read
   ASSERT_EQ(labels.grid.dims, ct.grid.dims);
-  const SegmentationParams params;
+  SegmentationParams params;
   const Mask body = segment_body(ct, params);
+  // The levels as prep sets them: shifted with the scan's soft-tissue peak (prep/hu_levels.hpp).
+  const HuLevels levels = estimate_hu_levels(ct, body);
+  if (std::getenv("PALP_FIXED_BONE_LEVELS") == nullptr) {
+    params.bone_seed_hu = levels.levels.seed_hu;
+    params.bone_grow_hu = levels.levels.grow_hu;
+    params.marrow_min_hu = levels.levels.marrow_min_hu;
+  }
+  std::printf("bone levels: seed %.0f, grow %.0f, marrow %.0f HU\n", params.bone_seed_hu,
+              params.bone_grow_hu, params.marrow_min_hu);
   const Mask bone = segment_bone(ct, body, params);
   Mask truth_bone(ct.grid, 0), organs(ct.grid, 0);
   for (std::size_t n = 0; n < labels.data.size(); ++n) {
@@ -99,10 +111,13 @@ TEST(BoneSegmentation, AgainstExpertLabelsOfTheSharedCt) {
   EXPECT_EQ(m.organ_voxels_outside_body, 0);
   EXPECT_GT(m.superficial_voxels, 1000);
   // What the current method achieves (the goal, Dice >= 0.90 and <= 1.0 mm, is not met).
-  EXPECT_GE(m.dice, 0.80);
-  EXPECT_LE(m.assd_mm, 1.74);
-  EXPECT_GE(m.superficial_recall, 0.75);
-  EXPECT_GE(m.precision, 0.88);  // over-segmentation (vessels, calcifications, table) stays rare
+  // With the levels adapted (PALP_FIXED_BONE_LEVELS=1 measures the fixed ones: Dice 0.809,
+  // precision 0.884, 1.73 mm, rib recall 0.759).
+  if (std::getenv("PALP_FIXED_BONE_LEVELS") != nullptr) return;
+  EXPECT_GE(m.dice, 0.83);
+  EXPECT_LE(m.assd_mm, 1.77);
+  EXPECT_GE(m.superficial_recall, 0.78);
+  EXPECT_GE(m.precision, 0.84);  // over-segmentation (vessels, calcifications, table) stays rare
 }
 
 }  // namespace

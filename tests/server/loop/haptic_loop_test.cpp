@@ -486,6 +486,7 @@ TEST(HapticLoop, StepNeverAllocates) {
   auto other = std::make_shared<const Model>(model->fields_ptr(), parse_tool("finger:19"));
   loop.swap_model(other);
   loop.set_recording(true);
+  loop.net_signal().attach(false);  // the network thread's eventfd, written every tick
   g_allocations = 0;
   g_count_allocations = true;
   for (std::int64_t n = 1; n < 200; ++n) {
@@ -499,6 +500,9 @@ TEST(HapticLoop, StepNeverAllocates) {
   EXPECT_EQ(s.ticks, 200u);
   EXPECT_EQ(s.faults, 2u);  // the device timeout and the late tick
   EXPECT_EQ(s.record_published, 199u);
+  // every snapshot published was signalled, without allocating
+  EXPECT_EQ(s.net_signals, 199u);
+  EXPECT_EQ(loop.net_signal().consume(), 199u);
 }
 
 // The rates palpd is tested at, on the loop's own thread; only counts are checked.

@@ -168,20 +168,21 @@ TEST_F(ServerTest, LateJoinerGetsSceneAndVolumeBeforeFrames) {
   ASSERT_TRUE(m.has_welcome());
   ASSERT_TRUE(late.next(m));
   ASSERT_TRUE(m.has_scene());
-  // 32^3 at step 2 -> 16^3; 4096-byte chunks hold 4 slices of 16 x 16 floats: 4 chunks.
+  // 32^3 at step 2 -> 16^3; 4096-byte chunks hold 2 slices of 16 x 16 x (d_surf, d_bone)
+  // floats: 8 chunks.
   const FieldSampler& fields = model_->fields();
-  for (std::uint32_t chunk = 0; chunk < 4; ++chunk) {
+  for (std::uint32_t chunk = 0; chunk < 8; ++chunk) {
     ASSERT_TRUE(late.next(m));
     ASSERT_TRUE(m.has_volume()) << "chunk " << chunk << " came after a " << m.msg_case();
     const v1::VolumeChunk& v = m.volume();
     EXPECT_EQ(v.chunk_index(), chunk);
-    EXPECT_EQ(v.chunk_count(), 4u);
+    EXPECT_EQ(v.chunk_count(), 8u);
     EXPECT_EQ(v.step(), 2u);
     EXPECT_EQ(v.dims(0), 16);
     EXPECT_EQ(v.spacing(0), 4.0);
-    EXPECT_EQ(v.k_begin(), 4 * chunk);
-    EXPECT_EQ(v.k_count(), 4u);
-    ASSERT_EQ(v.d_surf().size(), 16u * 16u * 4u * sizeof(float));
+    EXPECT_EQ(v.k_begin(), 2 * chunk);
+    EXPECT_EQ(v.k_count(), 2u);
+    ASSERT_EQ(v.d_surf().size(), 16u * 16u * 2u * sizeof(float));
     ASSERT_EQ(v.d_bone().size(), v.d_surf().size());
     // Sampled voxel (i, j, k) = original voxel (2i, 2j, 2(k_begin + k)).
     float value;
@@ -569,6 +570,8 @@ TEST_F(ServerTest, PingGetsPongAndStatsArrive) {
   ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kStats, m));
   EXPECT_EQ(m.stats().target_rate_hz(), 1000.0);
   EXPECT_EQ(m.stats().jitter_counts_size(), m.stats().jitter_bucket_upper_us_size() + 1);
+  EXPECT_EQ(m.stats().wake_latency_counts_size(), m.stats().jitter_bucket_upper_us_size() + 1);
+  EXPECT_EQ(m.stats().wake_mode(), "hybrid");  // the default
   EXPECT_GE(m.stats().clients(), 1u);
   EXPECT_GT(m.stats().ticks(), 0u);
 }

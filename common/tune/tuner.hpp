@@ -1,0 +1,119 @@
+// palp tune: per scene, tool and loop rate, the cheapest model configuration whose forces a hand
+// cannot tell from the most accurate one, with the tick well inside the loop period.
+//
+// Data flow: scene maps (d_surf, d_bone) -> one FieldSampler per (gradient scheme, storage) ->
+// candidates (sampler x contact-point count of the tool's footprint) -> the palpation
+// trajectories (press, slides across the ribs at two speeds, a slide at constant depth), ticked
+// at the loop rate -> per candidate: force error against the reference, the largest per-tick
+// step beyond the reference's, tick time (median of repeats), memory -> judged against the
+// tolerance and the time budget -> the cheapest accepted candidate.
+//
+// The reference is the most accurate configuration palp offers for the tool named: the
+// precomputed (continuous) gradient, float32 maps, the tool's own contact points (finger:37 is
+// the densest palp has; naming finger:7 makes 7 points the most a lab wants).
+//
+// Tolerance (docs/tuning.md): the force just-noticeable difference is ~7-10 % of the force
+// (Jones 1989; Pang, Tan & Durlach 1991), so a candidate's RMS force error may be
+// max(abs_n, rel x the reference's RMS force); its largest single error max_factor times that,
+// and its largest per-tick step at most that much above the reference's.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "base/volume.hpp"
+#include "model/field_sampler.hpp"
+#include "model/force_model.hpp"
+#include "model/tool.hpp"
+#include "scene/trajectory.hpp"
+
+namespace palp::tune {
+
+struct Tolerance {
+  double rel = 0.07;          // of the reference's RMS force
+  double abs_n = 0.05;        // N, the floor
+  double max_factor = 3.0;    // the largest single error, in tolerances
+  double tick_budget = 0.25;  // tick p99 at most this share of the loop period
+  double time_tie = 0.10;     // ticks within this share of the fastest count as equally fast
+};
+
+struct Candidate {
+  std::string tool;       // canonical tool name, e.g. "finger:19"
+  SamplerConfig sampler;  // gradient scheme and storage
+};
+
+struct Measured {
+  double rms_error_n = 0.0;          // RMS over ticks of |F - F_ref|
+  double max_error_n = 0.0;          // largest |F - F_ref|
+  double lateral_rms_error_n = 0.0;  // RMS of the friction (tangential) part's error
+  double step_excess_n = 0.0;        // max over ticks of |dF| - |dF_ref| (0 when never larger)
+  double tick_p50_us = 0.0;          // median over repeats of each repeat's median tick
+  double tick_p99_us = 0.0;          // median over repeats of each repeat's p99 tick
+  std::size_t map_bytes = 0;         // the sampler's maps (and gradients, bone-beneath map)
+};
+
+struct Judged {
+  Candidate candidate;
+  Measured measured;
+  bool reference = false;
+  bool accepted = false;
+  bool chosen = false;
+  std::string reason;  // why rejected, or "accepted"
+};
+
+struct Outcome {
+  std::vector<Judged> results;  // the reference first
+  std::size_t chosen = 0;       // index into results (the reference when nothing cheaper passes)
+  double tolerance_n = 0.0;     // the RMS tolerance applied
+  double reference_rms_force_n = 0.0;
+  double period_us = 0.0;
+  std::size_t ticks = 0;                  // ticks per candidate and repeat
+  std::vector<std::string> trajectories;  // names of the trajectories used
+};
+
+// The pure decision: marks accepted / rejected (with the reason) and the chosen one, the
+// cheapest accepted: among those whose tick p50 is within time_tie of the fastest accepted, the
+// least memory, then the smallest force error, then order. results[0] is the reference; it is
+// judged on time only (its errors are zero by definition). Returns the chosen index; when
+// nothing passes (not even the reference's time) the reference is returned, marked not accepted.
+std::size_t judge(std::vector<Judged>& results, const Tolerance& tol, double tolerance_n,
+                  double period_us);
+
+// The RMS tolerance for a reference whose RMS force is `reference_rms_n`.
+double tolerance_for(const Tolerance& tol, double reference_rms_n);
+
+// The contact-point counts palp offers for the footprint of `tool`, at most as dense as it
+// (finger, twofinger: 37, 19, 7, 1 per pad up to the given count; probe: the grid as given and
+// halved along each axis, down to 1x1), densest first. The first (the given tool) is the
+// reference's: the tool a lab names is the most accurate it wants.
+std::vector<std::string> footprint_tools(const Tool& tool);
+
+struct Setup {
+  std::string tool;  // any tool of the footprint (e.g. "finger:7")
+  double rate_hz = 1000.0;
+  ForceParams params;  // the model and its parameters for the tool's kind
+  int repeats = 5;     // timing repeats (medians reported)
+  Tolerance tolerance;
+};
+
+struct NamedTrajectory {
+  std::string name;
+  Trajectory path;
+};
+
+// The trajectories a hand uses on this scene at `rate_hz`: a press and hold, a slide at constant
+// depth at several speeds, and (where the scene has a body axis) slides across the ribs at 20 and
+// 100 mm/s. Those that do not fit the scene are left out (none left: InputError).
+std::vector<NamedTrajectory> palpation_trajectories(const FieldSampler& fields, const Tool& tool,
+                                                    double rate_hz);
+
+// Progress: a line per candidate measured.
+using Progress = void (*)(const Judged& judged, std::size_t index, std::size_t count);
+
+// Measures every candidate on the maps (copied into each sampler) and judges them.
+Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setup,
+             Progress progress = nullptr);
+
+}  // namespace palp::tune
