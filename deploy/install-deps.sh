@@ -11,6 +11,7 @@ packages=(
   libvtk9-dev libglfw3-dev xvfb xauth libgl1-mesa-dri
   libusb-1.0-0-dev libumockdev-dev umockdev
   libssl-dev openssl
+  libopenigtlink-dev openigtlink-examples cyclonedds-dev cyclonedds-tools python3
 )
 
 missing=()

@@ -32,6 +32,7 @@
 #include "cli/rt_options.hpp"
 #include "cli/tls_options.hpp"
 #include "devices/device.hpp"
+#include "interop/igtl_options.hpp"
 #include "io/gzip.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
@@ -160,6 +161,7 @@ const std::vector<std::string> kValued = {
     "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes",
     "falcon-firmware", "falcon-tool-from",
     "tls-cert", "tls-key", "tls-client-ca"};
+const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
 
 // Now, as 2026-11-24T12:00:00Z.
 std::string utc_now_text() {
@@ -324,14 +326,15 @@ int run(const cli::Arguments& argv_in) {
   // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
-      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp;
+      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
+                << interop::kIgtlOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
   std::map<std::string, int> lines;
   cli::Arguments from_config;
   if (config)
-    from_config = cli::config_arguments(*config, kFlags, cli::with_rt_options(kValued), &lines);
+    from_config = cli::config_arguments(*config, kFlags, cli::with_rt_options(kValuedAll), &lines);
   try {
     from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
     return run_configured(std::move(from_config));
@@ -345,10 +348,11 @@ int run_configured(cli::Arguments argv) {
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;
   valued = cli::with_rt_options(std::move(valued));
-  valued.insert(valued.end(), kValued.begin(), kValued.end());
+  valued.insert(valued.end(), kValuedAll.begin(), kValuedAll.end());
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
-    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp;
+    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
+              << interop::kIgtlOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -533,6 +537,7 @@ int run_configured(cli::Arguments argv) {
   description.body = scene.body;
   description.placement = placement;
   net::Server server(server_config, description, loop, &app);
+  const auto igtl = interop::igtl_beside(args, scene.grid, loop_config.rate_hz, server, quiet);
 
   if (const auto record = args.get("record")) {
     const std::string failure = app.start(*record, "palpd --record");
