@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <deque>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -18,6 +17,7 @@
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/config_file.hpp"
+#include "cli/server_link.hpp"
 #include "cli/tls_options.hpp"
 #include "net/protocol.hpp"
 #include "scene/trajectory.hpp"
@@ -155,24 +155,26 @@ class Session {
         action_(std::move(action)),
         timeout_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
             std::chrono::duration<double>(timeout_s))),
-        stream_(io_),
         tls_(tls),
-        decoder_(wire::kDefaultMaxServerFrame) {}
+        link_(io_, "palpd",
+              {nullptr, [this](const v1::ServerMessage& m) { handle(m); },
+               [this](const std::string& why) { fail(why); }}) {}
 
   int run() {
     tcp::resolver resolver(io_);
     asio::error_code ec;
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
-    tls::async_connect(stream_, endpoints, host_, port_, tls_, [this](const std::string& failure) {
-      if (!failure.empty()) return fail(failure);
-      v1::ClientMessage m;
-      *m.mutable_hello() = hello_;
-      send(m);
-      read();
-    });
+    tls::async_connect(link_.stream(), endpoints, host_, port_, tls_,
+                       [this](const std::string& failure) {
+                         if (!failure.empty()) return fail(failure);
+                         v1::ClientMessage m;
+                         *m.mutable_hello() = hello_;
+                         send(m);
+                         link_.read();
+                       });
     io_.run_for(timeout_);
-    if (!done_) {
+    if (!link_.closed()) {
       fail(welcomed_ ? "no answer from palpd within the timeout (--timeout)"
                      : "palpd did not welcome this client within the timeout");
     }
@@ -188,22 +190,10 @@ class Session {
     finish();
   }
   void finish() {
-    done_ = true;
-    stream_.close();
+    link_.close();
     io_.stop();
   }
-  void send(const v1::ClientMessage& m) {
-    outbox_.push_back(wire::encode_frame(m));
-    if (outbox_.size() == 1) write_next();
-  }
-  void write_next() {
-    stream_.async_write(asio::buffer(outbox_.front()),
-                        [this](const asio::error_code& ec, std::size_t) {
-                          if (ec || done_) return;
-                          outbox_.pop_front();
-                          if (!outbox_.empty()) write_next();
-                        });
-  }
+  void send(const v1::ClientMessage& m) { link_.send(m); }
   void next_command() {
     if (next_ < action_.commands.size()) {
       v1::ClientMessage m;
@@ -215,30 +205,6 @@ class Session {
     // pause and recording), then print it
     waiting_for_after_ = true;
     after_scene_ = after_stats_ = false;
-  }
-  void read() {
-    stream_.async_read_some(
-        asio::buffer(buffer_), [this](const asio::error_code& ec, std::size_t n) {
-          if (done_) return;
-          if (ec) {
-            return fail(ec == asio::error::eof ? "palpd closed the connection"
-                                               : "connection lost: " + ec.message());
-          }
-          decoder_.feed(buffer_.data(), n);
-          std::string_view body;
-          for (;;) {
-            const wire::FrameStatus status = decoder_.next(body);
-            if (status == wire::FrameStatus::Incomplete) break;
-            if (status != wire::FrameStatus::Ok)
-              return fail(std::string("bad frame from palpd: ") + wire::to_string(status));
-            v1::ServerMessage m;
-            if (!m.ParseFromArray(body.data(), static_cast<int>(body.size())))
-              return fail("undecodable message from palpd");
-            handle(m);
-            if (done_) return;
-          }
-          read();
-        });
   }
 
   void handle(const v1::ServerMessage& m) {
@@ -370,13 +336,10 @@ class Session {
   Action action_;
   std::chrono::steady_clock::duration timeout_;
   asio::io_context io_;
-  tls::Stream stream_;
   tls::ClientContext* tls_ = nullptr;
-  std::deque<std::string> outbox_;  // one write in flight (TLS needs it)
-  wire::FrameDecoder decoder_;
-  std::array<std::uint8_t, 65536> buffer_{};
+  ServerLink link_;
   std::size_t next_ = 0;
-  bool welcomed_ = false, done_ = false, refused_ = false, any_ok_ = false;
+  bool welcomed_ = false, refused_ = false, any_ok_ = false;
   bool waiting_for_after_ = false, after_scene_ = false, after_stats_ = false;
   std::optional<v1::SceneInfo> scene_before_;
   v1::SceneInfo scene_now_;

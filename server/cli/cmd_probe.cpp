@@ -16,7 +16,6 @@
 #include <string>
 #include <vector>
 
-#include <deque>
 
 #include "asio.hpp"
 #include "base/errors.hpp"
@@ -24,6 +23,7 @@
 #include "cli/check_rate.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli/server_link.hpp"
 #include "cli/tls_options.hpp"
 #include "loop/haptic_loop.hpp"
 #include "net/protocol.hpp"
@@ -99,10 +99,12 @@ class Probe {
         hello_(std::move(hello)),
         duration_ns_(static_cast<std::int64_t>(duration_s * 1e9)),
         stall_ns_(static_cast<std::int64_t>(stall_s * 1e9)),
-        stream_(io_),
         tls_(tls),
-        timer_(io_),
-        decoder_(wire::kDefaultMaxServerFrame) {}
+        link_(io_, "the server",
+              {[this](std::size_t n) { report_.bytes += n; },
+               [this](const v1::ServerMessage& m) { handle(m); },
+               [this](const std::string& why) { fail(why); }}),
+        timer_(io_) {}
 
   Report run() {
     tcp::resolver resolver(io_);
@@ -110,16 +112,17 @@ class Probe {
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
     start_ns_ = rt::monotonic_ns();
-    tls::async_connect(stream_, endpoints, host_, port_, tls_, [this](const std::string& failure) {
-      if (!failure.empty()) return fail(failure);
-      asio::error_code e;
-      const tcp::endpoint endpoint = stream_.socket().remote_endpoint(e);
-      loopback_ = !e && endpoint.address().is_loopback();
-      v1::ClientMessage m;
-      *m.mutable_hello() = hello_;
-      send(m);
-      read();
-    });
+    tls::async_connect(link_.stream(), endpoints, host_, port_, tls_,
+                       [this](const std::string& failure) {
+                         if (!failure.empty()) return fail(failure);
+                         asio::error_code e;
+                         const tcp::endpoint endpoint = link_.stream().socket().remote_endpoint(e);
+                         loopback_ = !e && endpoint.address().is_loopback();
+                         v1::ClientMessage m;
+                         *m.mutable_hello() = hello_;
+                         send(m);
+                         link_.read();
+                       });
     tick();
     io_.run();
     return std::move(report_);
@@ -133,54 +136,11 @@ class Probe {
     finish();
   }
   void finish() {
-    done_ = true;
     timer_.cancel();
-    stream_.close();
+    link_.close();
   }
 
-  void send(const v1::ClientMessage& m) {
-    outbox_.push_back(wire::encode_frame(m));
-    if (outbox_.size() == 1) write_next();
-  }
-  void write_next() {
-    stream_.async_write(asio::buffer(outbox_.front()),
-                        [this](const asio::error_code& ec, std::size_t) {
-                          if (ec || done_) return;
-                          outbox_.pop_front();
-                          if (!outbox_.empty()) write_next();
-                        });
-  }
-
-  void read() {
-    stream_.async_read_some(
-        asio::buffer(buffer_), [this](const asio::error_code& ec, std::size_t n) {
-          if (done_) return;
-          if (ec) {
-            fail(ec == asio::error::eof ? "the server closed the connection"
-                                        : "connection lost: " + ec.message());
-            return;
-          }
-          report_.bytes += n;
-          decoder_.feed(buffer_.data(), n);
-          std::string_view body;
-          for (;;) {
-            const wire::FrameStatus status = decoder_.next(body);
-            if (status == wire::FrameStatus::Incomplete) break;
-            if (status != wire::FrameStatus::Ok) {
-              fail(std::string("bad frame from the server: ") + wire::to_string(status));
-              return;
-            }
-            v1::ServerMessage m;
-            if (!m.ParseFromArray(body.data(), static_cast<int>(body.size()))) {
-              fail("undecodable message from the server");
-              return;
-            }
-            handle(m);
-            if (done_) return;
-          }
-          read();
-        });
-  }
+  void send(const v1::ClientMessage& m) { link_.send(m); }
 
   void handle(const v1::ServerMessage& m) {
     const std::int64_t now = rt::monotonic_ns();
@@ -249,7 +209,7 @@ class Probe {
   void tick() {
     timer_.expires_after(std::chrono::milliseconds(50));
     timer_.async_wait([this](const asio::error_code& ec) {
-      if (ec || done_) return;
+      if (ec || link_.closed()) return;
       const std::int64_t now = rt::monotonic_ns();
       if (now - start_ns_ >= duration_ns_) {
         finish();
@@ -281,14 +241,10 @@ class Probe {
   v1::Hello hello_;
   std::int64_t duration_ns_, stall_ns_;
   asio::io_context io_;
-  tls::Stream stream_;
   tls::ClientContext* tls_ = nullptr;
-  std::deque<std::string> outbox_;  // one write in flight (TLS needs it)
+  ServerLink link_;
   asio::steady_timer timer_;
-  wire::FrameDecoder decoder_;
-  std::array<std::uint8_t, 65536> buffer_{};
   Report report_;
-  bool done_ = false;
   bool loopback_ = false;
   std::int64_t start_ns_ = 0, welcomed_ns_ = 0, last_ping_ns_ = 0;
   std::uint64_t ping_id_ = 0;

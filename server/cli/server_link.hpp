@@ -1,0 +1,95 @@
+// The connection of a command-line console (palp probe, palp ctl) to palpd: ClientMessages
+// written one at a time (TLS allows one write in flight), ServerMessages decoded from the bytes
+// as they come. The console connects the stream (tls::async_connect), then calls read() once;
+// every message and failure goes to its handlers until close().
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "asio.hpp"
+#include "palp.pb.h"
+#include "tls/stream.hpp"
+#include "wire/framing.hpp"
+#include "wire/messages.hpp"
+
+namespace palp::cli {
+
+class ServerLink {
+ public:
+  struct Handlers {
+    std::function<void(std::size_t)> bytes;  // bytes read, before they are decoded (optional)
+    std::function<void(const v1::ServerMessage&)> message;
+    std::function<void(const std::string&)> fail;  // the reason; the console then close()s
+  };
+
+  // `peer` names palpd in the failure messages ("palpd", "the server").
+  ServerLink(asio::io_context& io, std::string peer, Handlers handlers)
+      : stream_(io),
+        peer_(std::move(peer)),
+        handlers_(std::move(handlers)),
+        decoder_(wire::kDefaultMaxServerFrame) {}
+
+  tls::Stream& stream() { return stream_; }
+  bool closed() const { return closed_; }
+  void close() {
+    closed_ = true;
+    stream_.close();
+  }
+
+  void send(const v1::ClientMessage& m) {
+    outbox_.push_back(wire::encode_frame(m));
+    if (outbox_.size() == 1) write_next();
+  }
+
+  void read() {
+    stream_.async_read_some(
+        asio::buffer(buffer_), [this](const asio::error_code& ec, std::size_t n) {
+          if (closed_) return;
+          if (ec) {
+            return handlers_.fail(ec == asio::error::eof ? peer_ + " closed the connection"
+                                                         : "connection lost: " + ec.message());
+          }
+          if (handlers_.bytes) handlers_.bytes(n);
+          decoder_.feed(buffer_.data(), n);
+          std::string_view body;
+          for (;;) {
+            const wire::FrameStatus status = decoder_.next(body);
+            if (status == wire::FrameStatus::Incomplete) break;
+            if (status != wire::FrameStatus::Ok)
+              return handlers_.fail("bad frame from " + peer_ + ": " + wire::to_string(status));
+            v1::ServerMessage m;
+            if (!m.ParseFromArray(body.data(), static_cast<int>(body.size())))
+              return handlers_.fail("undecodable message from " + peer_);
+            handlers_.message(m);
+            if (closed_) return;
+          }
+          read();
+        });
+  }
+
+ private:
+  void write_next() {
+    stream_.async_write(asio::buffer(outbox_.front()),
+                        [this](const asio::error_code& ec, std::size_t) {
+                          if (ec || closed_) return;
+                          outbox_.pop_front();
+                          if (!outbox_.empty()) write_next();
+                        });
+  }
+
+  tls::Stream stream_;
+  std::string peer_;
+  Handlers handlers_;
+  std::deque<std::string> outbox_;
+  wire::FrameDecoder decoder_;
+  std::array<std::uint8_t, 65536> buffer_{};
+  bool closed_ = false;
+};
+
+}  // namespace palp::cli
