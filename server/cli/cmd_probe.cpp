@@ -16,7 +16,6 @@
 #include <string>
 #include <vector>
 
-
 #include "asio.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
