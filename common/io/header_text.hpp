@@ -46,6 +46,31 @@ inline std::string lower(std::string_view s) {
   return out;
 }
 
+// Walks a header line by line: next() gives the next line (without its '\n' or a trailing '\r'),
+// offset() the first byte after it and number() its 1-based line number; false at the end.
+class LineCursor {
+ public:
+  explicit LineCursor(std::string_view head) : head_(head) {}
+  bool next(std::string_view& line) {
+    if (pos_ >= head_.size()) return false;
+    std::size_t eol = head_.find('\n', pos_);
+    const std::size_t next = eol == std::string_view::npos ? head_.size() : eol + 1;
+    if (eol == std::string_view::npos) eol = head_.size();
+    line = head_.substr(pos_, eol - pos_);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos_ = next;
+    ++number_;
+    return true;
+  }
+  std::size_t offset() const { return pos_; }
+  int number() const { return number_; }
+
+ private:
+  std::string_view head_;
+  std::size_t pos_ = 0;
+  int number_ = 0;
+};
+
 // A line of the header shown in an error message: printable characters only, shortened.
 inline std::string printable(std::string_view s) {
   std::string out;

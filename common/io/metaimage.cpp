@@ -23,24 +23,19 @@ struct MetaHeader {
 MetaHeader parse_lines(const std::string& path) {
   const std::string head = ht::read_head(path, ht::kMaxHeaderBytes);
   MetaHeader header;
-  std::size_t pos = 0;
-  int line_number = 0;
-  while (pos < head.size()) {
-    std::size_t eol = head.find('\n', pos);
-    const std::size_t next = eol == std::string::npos ? head.size() : eol + 1;
-    if (eol == std::string::npos) eol = head.size();
-    const std::string_view line = ht::trim(std::string_view(head).substr(pos, eol - pos));
-    ++line_number;
-    pos = next;
+  ht::LineCursor lines(head);
+  std::string_view raw;
+  while (lines.next(raw)) {
+    const std::string_view line = ht::trim(raw);
     if (line.empty()) continue;
     const std::size_t eq = line.find('=');
     if (eq == std::string_view::npos)
-      throw InputError(path + ": not a MetaImage header (line " + std::to_string(line_number) +
+      throw InputError(path + ": not a MetaImage header (line " + std::to_string(lines.number()) +
                        " is \"" + ht::printable(line) + "\", expected \"Key = Value\")");
     const std::string key(ht::trim(line.substr(0, eq)));
     header.fields[key] = std::string(ht::trim(line.substr(eq + 1)));
     if (key == "ElementDataFile") {
-      header.data_offset = next;
+      header.data_offset = lines.offset();
       return header;
     }
   }

@@ -36,21 +36,15 @@ void check_magic(std::string_view first_line, const std::string& path) {
 NrrdHeader parse_lines(const std::string& path) {
   const std::string head = ht::read_head(path, ht::kMaxHeaderBytes);
   NrrdHeader header;
-  std::size_t pos = 0;
-  int line_number = 0;
-  while (pos < head.size()) {
-    std::size_t eol = head.find('\n', pos);
-    const std::size_t next = eol == std::string::npos ? head.size() : eol + 1;
-    if (eol == std::string::npos) eol = head.size();
-    std::string_view line = std::string_view(head).substr(pos, eol - pos);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    pos = next;
-    if (++line_number == 1) {
+  ht::LineCursor lines(head);
+  std::string_view line;
+  while (lines.next(line)) {
+    if (lines.number() == 1) {
       check_magic(line, path);
       continue;
     }
     if (line.empty()) {
-      header.data_offset = next;
+      header.data_offset = lines.offset();
       header.has_blank_line = true;
       return header;
     }
@@ -61,12 +55,12 @@ NrrdHeader parse_lines(const std::string& path) {
         (colon == std::string_view::npos || key_value < colon))
       continue;  // key:=value pairs carry no geometry
     if (colon == std::string_view::npos)
-      throw nrrd_error(path, "line " + std::to_string(line_number) + " is \"" +
+      throw nrrd_error(path, "line " + std::to_string(lines.number()) + " is \"" +
                                  ht::printable(line) + "\", expected \"field: value\"");
     header.fields[std::string(line.substr(0, colon))] =
         std::string(ht::trim(line.substr(colon + 2)));
   }
-  if (line_number == 0) throw nrrd_error(path, "file is empty");
+  if (lines.number() == 0) throw nrrd_error(path, "file is empty");
   if (head.size() == ht::kMaxHeaderBytes) throw nrrd_error(path, "header is longer than 1 MiB");
   header.data_offset = head.size();
   return header;

@@ -88,6 +88,26 @@ void append(std::vector<std::uint8_t>& out, T value, bool swap = false) {
   out.insert(out.end(), bytes, bytes + sizeof(T));
 }
 
+// Twelve int16 CT values spanning air to dense bone, for hand-written image files.
+inline const std::vector<std::int16_t> kSampleHu{-1024, -500, 0,    1,    2,    3,
+                                                 40,    500,  1000, 2000, 3000, -5};
+
+// The values' bytes, little-endian on this host or swapped (`swap` = big-endian).
+template <class T>
+std::vector<std::uint8_t> payload(const std::vector<T>& values, bool swap = false) {
+  std::vector<std::uint8_t> out;
+  for (const T v : values) append(out, v, swap);
+  return out;
+}
+
+// A file holding a text header followed by binary data (an attached NRRD, a LOCAL .mha).
+inline void write_header_and_data(const std::string& path, const std::string& header,
+                                  const std::vector<std::uint8_t>& data) {
+  std::vector<std::uint8_t> bytes(header.begin(), header.end());
+  bytes.insert(bytes.end(), data.begin(), data.end());
+  write_bytes(path, bytes);
+}
+
 // Resident memory the process has gained since the last reset_peak_memory(), from VmHWM (the
 // kernel resets the high-water mark when "5" is written to /proc/self/clear_refs).
 inline void reset_peak_memory() {

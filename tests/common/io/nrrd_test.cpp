@@ -15,25 +15,12 @@
 namespace palp {
 namespace {
 
+using testing::kSampleHu;
+using testing::payload;
 using testing::TempDir;
 using testing::write_bytes;
+using testing::write_header_and_data;
 using testing::write_text;
-
-const std::vector<std::int16_t> kValues{-1024, -500, 0, 1, 2, 3, 40, 500, 1000, 2000, 3000, -5};
-
-template <class T>
-std::vector<std::uint8_t> payload(const std::vector<T>& values, bool big = false) {
-  std::vector<std::uint8_t> out;
-  for (const T v : values) testing::append(out, v, big);
-  return out;
-}
-
-void write_nrrd(const std::string& path, const std::string& header,
-                const std::vector<std::uint8_t>& data) {
-  std::vector<std::uint8_t> bytes(header.begin(), header.end());
-  bytes.insert(bytes.end(), data.begin(), data.end());
-  write_bytes(path, bytes);
-}
 
 std::string with(std::string header, const std::string& from, const std::string& to) {
   header.replace(header.find(from), from.size(), to);
@@ -58,24 +45,25 @@ const std::string kHeader =
 
 TEST(Nrrd, AttachedRawWithSpaceDirections) {
   TempDir dir;
-  write_nrrd(dir.file("a.nrrd"), kHeader, payload(kValues));
+  write_header_and_data(dir.file("a.nrrd"), kHeader, payload(kSampleHu));
   const CtVolume ct = read_ct(dir.file("a.nrrd"));
   EXPECT_EQ(ct.grid.dims, (Index3{3, 2, 2}));
   EXPECT_EQ(ct.grid.spacing, (Vec3{0.5, 0.75, 2}));
   EXPECT_EQ(ct.grid.world.origin, (Vec3{-10.5, 20, 300.25}));
   EXPECT_EQ(ct.grid.world.direction, (std::array<double, 9>{0, -1, 0, 1, 0, 0, 0, 0, 1}));
-  EXPECT_EQ(ct.data, kValues);
+  EXPECT_EQ(ct.data, kSampleHu);
 }
 
 TEST(Nrrd, RasSpaceIsConvertedToLps) {
   TempDir dir;
   const std::string header = with(kHeader, "left-posterior-superior", "RAS");
-  write_nrrd(dir.file("ras.nrrd"), header, payload(kValues));
+  write_header_and_data(dir.file("ras.nrrd"), header, payload(kSampleHu));
   const CtVolume ct = read_ct(dir.file("ras.nrrd"));
   EXPECT_EQ(ct.grid.world.origin, (Vec3{10.5, -20, 300.25}));
   EXPECT_EQ(ct.grid.world.direction, (std::array<double, 9>{0, 1, 0, -1, 0, 0, 0, 0, 1}));
-  write_nrrd(dir.file("las.nrrd"),
-             with(kHeader, "left-posterior-superior", "left-anterior-superior"), payload(kValues));
+  write_header_and_data(dir.file("las.nrrd"),
+                        with(kHeader, "left-posterior-superior", "left-anterior-superior"),
+                        payload(kSampleHu));
   EXPECT_EQ(read_ct(dir.file("las.nrrd")).grid.world.origin, (Vec3{-10.5, -20, 300.25}));
 }
 
@@ -83,39 +71,46 @@ TEST(Nrrd, GzipEncodingBigEndianAndTypeSpellings) {
   TempDir dir;
   const std::string header =
       with(with(kHeader, "encoding: raw", "encoding: gzip"), "endian: little", "endian: big");
-  write_nrrd(dir.file("g.nrrd"), header, gzip_compress(ByteSpan(payload(kValues, true))));
-  EXPECT_EQ(read_ct(dir.file("g.nrrd")).data, kValues);
+  write_header_and_data(dir.file("g.nrrd"), header,
+                        gzip_compress(ByteSpan(payload(kSampleHu, true))));
+  EXPECT_EQ(read_ct(dir.file("g.nrrd")).data, kSampleHu);
   for (const char* spelling :
        {"int16", "int16_t", "signed short", "short int", "signed short int"}) {
-    write_nrrd(dir.file("s.nrrd"),
-               with(with(header, "type: short", std::string("type: ") + spelling), "gzip", "gz"),
-               gzip_compress(ByteSpan(payload(kValues, true))));
-    EXPECT_EQ(read_ct(dir.file("s.nrrd")).data, kValues) << spelling;
+    write_header_and_data(
+        dir.file("s.nrrd"),
+        with(with(header, "type: short", std::string("type: ") + spelling), "gzip", "gz"),
+        gzip_compress(ByteSpan(payload(kSampleHu, true))));
+    EXPECT_EQ(read_ct(dir.file("s.nrrd")).data, kSampleHu) << spelling;
   }
   const std::vector<float> f{-1000.4f, 0.5f, 99.5f, 1e6f, 0, 0, 0, 0, 0, 0, 0, 0};
-  write_nrrd(dir.file("f.nrrd"), with(kHeader, "type: short", "type: float"), payload(f));
+  write_header_and_data(dir.file("f.nrrd"), with(kHeader, "type: short", "type: float"),
+                        payload(f));
   EXPECT_EQ(read_ct(dir.file("f.nrrd")).data[2], 100);
   const std::vector<std::uint16_t> u{0, 1, 40000, 3, 0, 0, 0, 0, 0, 0, 0, 0};
   for (const char* spelling :
        {"ushort", "unsigned short", "uint16", "uint16_t", "unsigned short int"}) {
-    write_nrrd(dir.file("u.nrrd"), with(kHeader, "type: short", std::string("type: ") + spelling),
-               payload(u));
+    write_header_and_data(dir.file("u.nrrd"),
+                          with(kHeader, "type: short", std::string("type: ") + spelling),
+                          payload(u));
     EXPECT_EQ(read_ct(dir.file("u.nrrd")).data[2], 32767) << spelling;
   }
   const std::vector<std::uint8_t> b{0, 1, 255, 3, 0, 0, 0, 0, 0, 0, 0, 0};
   for (const char* spelling : {"uchar", "unsigned char", "uint8", "uint8_t"}) {
-    write_nrrd(dir.file("b.nrrd"), with(kHeader, "type: short", std::string("type: ") + spelling),
-               payload(b));
+    write_header_and_data(dir.file("b.nrrd"),
+                          with(kHeader, "type: short", std::string("type: ") + spelling),
+                          payload(b));
     EXPECT_EQ(read_ct(dir.file("b.nrrd")).data[2], 255) << spelling;
   }
   const std::vector<std::int32_t> i{0, 1, -1024, 3, 0, 0, 0, 0, 0, 0, 0, 0};
   for (const char* spelling : {"int", "signed int", "int32", "int32_t"}) {
-    write_nrrd(dir.file("i.nrrd"), with(kHeader, "type: short", std::string("type: ") + spelling),
-               payload(i));
+    write_header_and_data(dir.file("i.nrrd"),
+                          with(kHeader, "type: short", std::string("type: ") + spelling),
+                          payload(i));
     EXPECT_EQ(read_ct(dir.file("i.nrrd")).data[2], -1024) << spelling;
   }
   const std::vector<double> d{0, 1, -2.5, 3, 0, 0, 0, 0, 0, 0, 0, 0};
-  write_nrrd(dir.file("d.nrrd"), with(kHeader, "type: short", "type: double"), payload(d));
+  write_header_and_data(dir.file("d.nrrd"), with(kHeader, "type: short", "type: double"),
+                        payload(d));
   EXPECT_EQ(read_ct(dir.file("d.nrrd")).data[2], -3);
 }
 
@@ -123,7 +118,7 @@ TEST(Nrrd, DetachedHeaderWithSpacingsAndSkips) {
   TempDir dir;
   auto data = std::vector<std::uint8_t>{'l', 'i',  'n', 'e', '\n',
                                         'x', '\n', 'a', 'b', 'c'};  // 2 lines + 3 bytes
-  const auto values = payload(kValues);
+  const auto values = payload(kSampleHu);
   data.insert(data.end(), values.begin(), values.end());
   write_bytes(dir.file("v.raw"), data);
   write_text(dir.file("v.nhdr"),
@@ -140,52 +135,58 @@ TEST(Nrrd, DetachedHeaderWithSpacingsAndSkips) {
   const CtVolume ct = read_ct(dir.file("v.nhdr"));
   EXPECT_EQ(ct.grid.spacing, (Vec3{0.8, 0.8, 2.5}));
   EXPECT_EQ(ct.grid.world, WorldPlacement{});
-  EXPECT_EQ(ct.data, kValues);
+  EXPECT_EQ(ct.data, kSampleHu);
 
   write_text(dir.file("end.nhdr"),
              "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 2 2\nencoding: raw\nendian: little\n"
              "byte skip: -1\ndatafile: v.raw\n");
-  EXPECT_EQ(read_ct(dir.file("end.nhdr")).data, kValues);
+  EXPECT_EQ(read_ct(dir.file("end.nhdr")).data, kSampleHu);
 }
 
 // ---- bad input ----
 
 TEST(NrrdErrors, UnsupportedEncodingAndType) {
   TempDir dir;
-  write_nrrd(dir.file("e.nrrd"), with(kHeader, "encoding: raw", "encoding: bzip2"),
-             payload(kValues));
+  write_header_and_data(dir.file("e.nrrd"), with(kHeader, "encoding: raw", "encoding: bzip2"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("e.nrrd")), InputError,
                     "e.nrrd: encoding bzip2 not supported");
-  write_nrrd(dir.file("a.nrrd"), with(kHeader, "encoding: raw", "encoding: ascii"),
-             payload(kValues));
+  write_header_and_data(dir.file("a.nrrd"), with(kHeader, "encoding: raw", "encoding: ascii"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("a.nrrd")), InputError, "encoding ascii not supported");
-  write_nrrd(dir.file("t.nrrd"), with(kHeader, "type: short", "type: block"), payload(kValues));
+  write_header_and_data(dir.file("t.nrrd"), with(kHeader, "type: short", "type: block"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("t.nrrd")), InputError, "type \"block\" is not supported");
-  write_nrrd(dir.file("d.nrrd"), with(kHeader, "dimension: 3", "dimension: 4"), payload(kValues));
+  write_header_and_data(dir.file("d.nrrd"), with(kHeader, "dimension: 3", "dimension: 4"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("d.nrrd")), InputError, "dimension 4 is not supported");
-  write_nrrd(dir.file("s.nrrd"),
-             with(kHeader, "left-posterior-superior", "left-posterior-superior-time"),
-             payload(kValues));
+  write_header_and_data(dir.file("s.nrrd"),
+                        with(kHeader, "left-posterior-superior", "left-posterior-superior-time"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("s.nrrd")), InputError,
                     "space \"left-posterior-superior-time\"");
 }
 
 TEST(NrrdErrors, MalformedFields) {
   TempDir dir;
-  write_nrrd(dir.file("v.nrrd"), with(kHeader, "(0,0,2)", "(0,zero,2)"), payload(kValues));
+  write_header_and_data(dir.file("v.nrrd"), with(kHeader, "(0,0,2)", "(0,zero,2)"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("v.nrrd")), InputError, "space directions");
-  write_nrrd(dir.file("n.nrrd"), with(kHeader, "(0,0,2)", "none"), payload(kValues));
+  write_header_and_data(dir.file("n.nrrd"), with(kHeader, "(0,0,2)", "none"), payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("n.nrrd")), InputError, "axis 2 is \"none\"");
-  write_nrrd(dir.file("z.nrrd"), with(kHeader, "sizes: 3 2 2", "sizes: 3 0 2"), payload(kValues));
+  write_header_and_data(dir.file("z.nrrd"), with(kHeader, "sizes: 3 2 2", "sizes: 3 0 2"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("z.nrrd")), InputError, "dimensions 3x0x2 are not usable");
-  write_nrrd(dir.file("x.nrrd"), with(kHeader, "sizes: 3 2 2", "sizes: 3 2 two"), payload(kValues));
+  write_header_and_data(dir.file("x.nrrd"), with(kHeader, "sizes: 3 2 2", "sizes: 3 2 two"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("x.nrrd")), InputError, "sizes \"3 2 two\" is not 3 integers");
-  write_nrrd(dir.file("m.nrrd"), "NRRD0009\ntype: short\n\n", payload(kValues));
+  write_header_and_data(dir.file("m.nrrd"), "NRRD0009\ntype: short\n\n", payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("m.nrrd")), InputError, "not a NRRD file");
-  write_nrrd(dir.file("l.nrrd"), with(kHeader, "kinds: domain domain domain", "kinds domain"),
-             payload(kValues));
+  write_header_and_data(dir.file("l.nrrd"),
+                        with(kHeader, "kinds: domain domain domain", "kinds domain"),
+                        payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("l.nrrd")), InputError, "expected \"field: value\"");
-  write_nrrd(dir.file("q.nrrd"), with(kHeader, "type: short\n", ""), payload(kValues));
+  write_header_and_data(dir.file("q.nrrd"), with(kHeader, "type: short\n", ""), payload(kSampleHu));
   EXPECT_PALP_ERROR(read_ct(dir.file("q.nrrd")), InputError, "missing field \"type\"");
   write_text(dir.file("nodata.nhdr"),
              "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 2 2\nencoding: raw\n");
@@ -217,14 +218,14 @@ TEST(NrrdErrors, DataFileThatIsNotARegularFile) {
 
 TEST(NrrdErrors, ShortAndTruncatedData) {
   TempDir dir;
-  auto raw = payload(kValues);
+  auto raw = payload(kSampleHu);
   raw.resize(7);
-  write_nrrd(dir.file("short.nrrd"), kHeader, raw);
+  write_header_and_data(dir.file("short.nrrd"), kHeader, raw);
   EXPECT_PALP_ERROR(read_ct(dir.file("short.nrrd")), InputError,
                     "short.nrrd: header says 24 bytes of voxel data, file has 7");
   auto packed = gzip_compress(ByteSpan(payload(std::vector<std::int16_t>(3000, 9))));
   packed.resize(packed.size() - 12);
-  write_nrrd(
+  write_header_and_data(
       dir.file("cut.nrrd"),
       with(with(kHeader, "encoding: raw", "encoding: gzip"), "sizes: 3 2 2", "sizes: 30 10 10"),
       packed);
