@@ -28,6 +28,7 @@
 #include "support/falcon_emulator.hpp"
 #include "support/net_test_client.hpp"
 #include "support/palpd_test_util.hpp"
+#include "support/served_ball.hpp"
 #include "support/usb_emulator.hpp"
 #include "wire/messages.hpp"
 
@@ -315,20 +316,8 @@ TEST_F(FalconTest, HomingIsReportedToClients) {
   emu.power_on();
   auto device = falcon();
   ASSERT_EQ(device->activate(), DeviceStatus::Ok);
-  auto model = testing::ball_model();
-  HapticLoop loop(model, *device, loop_config());
-  net::SceneDescription scene;
-  scene.source = "ball";
-  scene.grid = model->fields().grid();
-  scene.device = "falcon";
-  net::ServerConfig config;
-  config.port = 0;
-  config.stats_interval_s = 0.2;
-  net::Server server(config, scene, loop, nullptr);
-  loop.start();
-  server.start();
-  testing::TestClient client(server.port());
-  client.hello(v1::OBSERVER, "", net::kProtocolVersion, 0, 200.0);
+  testing::ServedBall served(*device, loop_config(), "falcon");
+  testing::TestClient& client = served.client();
   v1::ServerMessage m;
   auto stats_saying = [&](v1::DeviceState state, const std::string& text) {
     return client.wait_for(
@@ -352,8 +341,7 @@ TEST_F(FalconTest, HomingIsReportedToClients) {
                msg.stats().device_short_frames() == 1;
       },
       m, kWait));
-  server.stop();
-  loop.stop();
+  served.stop();
   device->deactivate();
 }
 

@@ -19,6 +19,7 @@
 #include "net/server.hpp"
 #include "support/net_test_client.hpp"
 #include "support/palpd_test_util.hpp"
+#include "support/served_ball.hpp"
 #include "support/usb_emulator.hpp"
 
 namespace palp::rt {
@@ -491,20 +492,8 @@ TEST_F(SpaceMouseTest, HotplugUnderARunningLoopAndServer) {
   ASSERT_EQ(device->configure(device_config), DeviceStatus::Ok) << device->last_error();
   ASSERT_EQ(device->activate(), DeviceStatus::Ok);  // nothing plugged in yet
   auto& spacemouse = dynamic_cast<SpaceMouseDevice&>(*device);
-  HapticLoop loop(model, *device, loop_config());
-  net::SceneDescription scene;
-  scene.source = "ball";
-  scene.grid = model->fields().grid();
-  scene.device = "spacemouse";
-  net::ServerConfig config;
-  config.port = 0;
-  config.stats_interval_s = 0.2;
-  net::Server server(config, scene, loop, nullptr);
-  loop.start();
-  server.start();
-
-  testing::TestClient client(server.port());
-  client.hello(v1::OBSERVER, "", net::kProtocolVersion, 0, 200.0);
+  testing::ServedBall served(*device, loop_config(), "spacemouse");
+  testing::TestClient& client = served.client();
   v1::ServerMessage m;
   ASSERT_TRUE(client.wait_for_case(v1::ServerMessage::kScene, m, kWait));
   EXPECT_FALSE(m.scene().device_renders_force());  // palpview shows the force on screen
@@ -516,7 +505,7 @@ TEST_F(SpaceMouseTest, HotplugUnderARunningLoopAndServer) {
         m, kWait);
   };
   ASSERT_TRUE(frame_in(v1::DEVICE_ABSENT));
-  ASSERT_TRUE(wait_until([&] { return loop.stats().ticks > 50; }, kWait));
+  ASSERT_TRUE(wait_until([&] { return served.loop().stats().ticks > 50; }, kWait));
 
   // Plugged in after start; the cap pressed fully down: 33.5 mm/s toward the ball, 12 mm away.
   mouse.start_in_stream(0x81, 125.0, [](std::uint64_t, std::int64_t) {
@@ -531,9 +520,11 @@ TEST_F(SpaceMouseTest, HotplugUnderARunningLoopAndServer) {
   EXPECT_GT(spacemouse.counters().writes, 0u);
 
   mouse.unplug();  // mid-stream
-  ASSERT_TRUE(wait_until([&] { return loop.device_state() == DeviceState::Absent; }, kWait));
-  const std::uint64_t ticks_at_unplug = loop.stats().ticks;
-  ASSERT_TRUE(wait_until([&] { return loop.stats().ticks > ticks_at_unplug + 50; }, kWait));
+  ASSERT_TRUE(
+      wait_until([&] { return served.loop().device_state() == DeviceState::Absent; }, kWait));
+  const std::uint64_t ticks_at_unplug = served.loop().stats().ticks;
+  ASSERT_TRUE(
+      wait_until([&] { return served.loop().stats().ticks > ticks_at_unplug + 50; }, kWait));
   ASSERT_TRUE(frame_in(v1::DEVICE_ABSENT));
   EXPECT_EQ(m.frame().force().z(), 0.0);
   ASSERT_TRUE(client.wait_for(
@@ -543,8 +534,8 @@ TEST_F(SpaceMouseTest, HotplugUnderARunningLoopAndServer) {
       m, kWait));
   EXPECT_NE(m.stats().device_message().find("unplugged"), std::string::npos)
       << m.stats().device_message();
-  EXPECT_TRUE(loop.running());
-  EXPECT_EQ(loop.stats().faults, 0u);  // absent is not a fault
+  EXPECT_TRUE(served.loop().running());
+  EXPECT_EQ(served.loop().stats().faults, 0u);  // absent is not a fault
 
   mouse.plug();  // back, at a new address
   ASSERT_TRUE(frame_in(v1::DEVICE_PRESENT));
@@ -553,10 +544,9 @@ TEST_F(SpaceMouseTest, HotplugUnderARunningLoopAndServer) {
       m, kWait));
   EXPECT_EQ(spacemouse.counters().opens, 2u);
   EXPECT_EQ(mouse.claims(), 2u);
-  EXPECT_EQ(loop.stats().absent_events, 2u);  // before the first plug, and the unplug
-  EXPECT_TRUE(loop.running());
-  server.stop();
-  loop.stop();
+  EXPECT_EQ(served.loop().stats().absent_events, 2u);  // before the first plug, and the unplug
+  EXPECT_TRUE(served.loop().running());
+  served.stop();
   device->deactivate();
 }
 

@@ -24,6 +24,7 @@
 #include "safety/safety.hpp"
 #include "support/net_test_client.hpp"
 #include "support/palpd_test_util.hpp"
+#include "support/served_ball.hpp"
 #include "support/usb_emulator.hpp"
 #include "wire/messages.hpp"
 
@@ -455,21 +456,8 @@ TEST_F(UsbHapticTest, ClientsAreToldWhenTheDeviceComesAndGoes) {
   ASSERT_EQ(device->configure(DeviceConfig{}), DeviceStatus::Ok);
   ASSERT_EQ(device->activate(), DeviceStatus::Ok);
   ASSERT_TRUE(wait_until([&] { return device->state() == DeviceState::Present; }, kWait));
-  auto model = testing::ball_model();
-  HapticLoop loop(model, *device, loop_config());
-  net::SceneDescription scene;
-  scene.source = "ball";
-  scene.grid = model->fields().grid();
-  scene.device = "usb-haptic";
-  net::ServerConfig config;
-  config.port = 0;
-  config.stats_interval_s = 0.2;
-  net::Server server(config, scene, loop, nullptr);
-  loop.start();
-  server.start();
-
-  testing::TestClient client(server.port());
-  client.hello(v1::OBSERVER, "", net::kProtocolVersion, 0, 200.0);
+  testing::ServedBall served(*device, loop_config(), "usb-haptic");
+  testing::TestClient& client = served.client();
   v1::ServerMessage m;
   ASSERT_TRUE(client.wait_for_case(v1::ServerMessage::kScene, m, kWait));
   EXPECT_TRUE(m.scene().device_renders_force());
@@ -499,9 +487,8 @@ TEST_F(UsbHapticTest, ClientsAreToldWhenTheDeviceComesAndGoes) {
   ASSERT_TRUE(stats_in(v1::DEVICE_PRESENT));
   EXPECT_NE(m.stats().device_message().find("streaming"), std::string::npos)
       << m.stats().device_message();
-  EXPECT_TRUE(loop.running());
-  server.stop();
-  loop.stop();
+  EXPECT_TRUE(served.loop().running());
+  served.stop();
   device->deactivate();
 }
 
@@ -513,35 +500,22 @@ TEST_F(UsbHapticTest, RegisteredDeviceFeelsTheSceneForceInItsOwnFrame) {
   firmware.power_on(1000.0);
   std::unique_ptr<Device> device = present_device();
   ASSERT_EQ(device->state(), DeviceState::Present);
-  auto model = testing::ball_model();
   LoopConfig lc = loop_config();
   lc.registration.rotation = rotation_from_axes(PatientFrame{}, "IAR");
   lc.registration.home = {31, 31, 31 + 20 + 8 + 10};  // 10 mm above the top of the ball
-  HapticLoop loop(model, *device, lc);
-  net::SceneDescription scene;
-  scene.source = "ball";
-  scene.grid = model->fields().grid();
-  scene.device = "usb-haptic";
   net::SceneDescription::Placement placement;
   placement.registration = lc.registration;
   placement.workspace_half_mm = {50, 50, 50};
   placement.home_site = "auto";
   placement.axes = "IAR";
-  scene.placement = placement;
-  net::ServerConfig config;
-  config.port = 0;
-  net::Server server(config, scene, loop, nullptr);
   // IAR: the device's +x points inferior (scene -z), so 12 mm along it puts the device point 12 mm
   // below home: the pad (8 mm under it) 2 mm into the top of the ball.
   Pose pose;
   pose.position = {12.0, 0.0, 0.0};                                // 12 mm toward inferior
   pose.orientation = Quat{0, std::sqrt(0.5), 0, -std::sqrt(0.5)};  // tool upright in scene
   firmware.set_pose(pose);
-  loop.start();
-  server.start();
-
-  testing::TestClient client(server.port());
-  client.hello(v1::OBSERVER, "", net::kProtocolVersion, 0, 200.0);
+  testing::ServedBall served(*device, lc, "usb-haptic", placement);
+  testing::TestClient& client = served.client();
   v1::ServerMessage m;
   ASSERT_TRUE(client.wait_for_case(v1::ServerMessage::kScene, m, kWait));
   ASSERT_TRUE(m.scene().has_registration());
@@ -563,8 +537,7 @@ TEST_F(UsbHapticTest, RegisteredDeviceFeelsTheSceneForceInItsOwnFrame) {
       wait_until([&] { return std::fabs(firmware.seen().force.x - expected.x) < 0.05; }, kWait));
   EXPECT_LT(firmware.seen().force.x, -0.5);
   EXPECT_NEAR(firmware.seen().force.z, expected.z, 0.05);
-  server.stop();
-  loop.stop();
+  served.stop();
   device->deactivate();
 }
 
