@@ -18,6 +18,8 @@
 #include <thread>
 #include <vector>
 
+#include "support/io_test_util.hpp"
+
 namespace palp::adversarial {
 
 inline std::string read_text(const std::filesystem::path& path) {
@@ -132,25 +134,9 @@ inline bool send_all(int fd, const std::string& bytes) {
 }
 
 // A fresh directory for one test binary, removed at exit.
-class ScratchDir {
+class ScratchDir : public testing::TempDir {
  public:
-  explicit ScratchDir(const std::string& name) {
-    path_ = std::filesystem::temp_directory_path() /
-            ("palp-adversarial-" + name + "-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  std::filesystem::path path_;
+  explicit ScratchDir(const std::string& name) : TempDir("adversarial-" + name) {}
 };
 
 }  // namespace palp::adversarial

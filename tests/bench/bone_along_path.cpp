@@ -24,6 +24,7 @@
 
 #include "base/errors.hpp"
 #include "base/vec.hpp"
+#include "bench_main.hpp"
 #include "model/field_sampler.hpp"
 #include "model/tool.hpp"
 #include "scene/scene.hpp"
@@ -127,13 +128,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const palp::UsageError& e) {
-    std::fprintf(stderr, "bone_along_path: %s\n%s", e.what(), kUsage);
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bone_along_path: %s\n", e.what());
-    return 1;
-  }
+  return palp::bench::bench_main("bone_along_path", kUsage, run, argc, argv);
 }

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "base/errors.hpp"
+#include "bench_main.hpp"
 #include "model/force_model.hpp"
 #include "model/tool.hpp"
 #include "scene/scene.hpp"
@@ -219,13 +220,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const palp::UsageError& e) {
-    std::fprintf(stderr, "tick_vs_contacts: %s\n%s", e.what(), kUsage);
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tick_vs_contacts: %s\n", e.what());
-    return 1;
-  }
+  return palp::bench::bench_main("tick_vs_contacts", kUsage, run, argc, argv);
 }

@@ -16,16 +16,13 @@
 
 namespace palp::testing {
 
-// A fresh directory for the running test, removed afterwards.
+// A fresh directory, removed afterwards: named after the running test, or after `label`.
 class TempDir {
  public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
-    for (char& c : name)
-      if (c == '/') c = '_';
+  TempDir() : TempDir("io-" + running_test_name()) {}
+  explicit TempDir(const std::string& label) {
     path_ = std::filesystem::temp_directory_path() /
-            ("palp-io-" + name + "-" + std::to_string(::getpid()));
+            ("palp-" + label + "-" + std::to_string(::getpid()));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
@@ -40,6 +37,14 @@ class TempDir {
   const std::filesystem::path& path() const { return path_; }
 
  private:
+  static std::string running_test_name() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    return name;
+  }
+
   std::filesystem::path path_;
 };
 
