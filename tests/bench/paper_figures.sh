@@ -17,6 +17,7 @@
 # to a work directory under /tmp (kept, printed). Takes about a minute on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source tests/bench/ensure_built.sh
 build=${PALP_BUILD_DIR:-build}
 charts_only=0
 build_missing=0
@@ -128,18 +129,7 @@ targets=()
 [[ -x $chart ]] || targets+=(palpchart)
 [[ -x $build/tests/bench/tick_vs_contacts ]] || targets+=(tick_vs_contacts)
 [[ -x $build/tests/bench/bone_along_path ]] || targets+=(bone_along_path)
-if ((${#targets[@]})); then
-  if [[ $build_missing == 0 ]]; then
-    echo "$0: not built in $build: ${targets[*]}; build them with" >&2
-    echo "  cmake --build $build --target ${targets[*]}" >&2
-    echo "or run this script with --build" >&2
-    exit 2
-  fi
-  if [[ ! -f "$build/build.ninja" && ! -f "$build/Makefile" ]]; then
-    cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-  fi
-  cmake --build "$build" --parallel "$jobs" --target "${targets[@]}"
-fi
+ensure_built "$build" "$build_missing" "$jobs" "${targets[@]}"
 
 mkdir -p "$work" "$data"
 summary=$data/summary.txt

@@ -15,6 +15,7 @@
 # gates CI.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source tests/bench/ensure_built.sh
 build=${PALP_BUILD_DIR:-build}
 data=${PALP_STUDIES_DIR:-${TMPDIR:-/tmp}/palp-studies}
 figures=${PALP_FIGURES_DIR:-$data/figures}
@@ -160,18 +161,7 @@ if [[ $charts_only == 0 ]]; then
   done
 fi
 [[ -x $chart ]] || missing+=(palpchart)
-if ((${#missing[@]})); then
-  if [[ $build_missing == 0 ]]; then
-    echo "$0: not built in $build: ${missing[*]}; build them with" >&2
-    echo "  cmake --build $build --target ${missing[*]}" >&2
-    echo "or run this script with --build" >&2
-    exit 2
-  fi
-  if [[ ! -f "$build/build.ninja" && ! -f "$build/Makefile" ]]; then
-    cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-  fi
-  cmake --build "$build" --parallel "$jobs" --target "${missing[@]}"
-fi
+ensure_built "$build" "$build_missing" "$jobs" "${missing[@]}"
 
 if [[ $charts_only == 0 ]]; then
   mkdir -p "$data"
