@@ -13,11 +13,13 @@
 
 #include "asio.hpp"
 #include "base/errors.hpp"
+#include "net/admission.hpp"
 #include "net/client_log.hpp"
 #include "net/client_queue.hpp"
 #include "net/listen_check.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
+#include "net/session.hpp"
 #include "net/tls_accept.hpp"
 #include "net/token_guard.hpp"
 #include "wire/framing.hpp"
@@ -36,8 +38,6 @@ std::int64_t seconds_to_ns(double s) {
 
 class Server::Impl {
  public:
-  struct Session;
-
   Impl(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop, ControlTarget* control)
       : config_(std::move(config)),
         scene_(std::move(scene)),
@@ -106,41 +106,7 @@ class Server::Impl {
     return c;
   }
 
-  struct Session {
-    Session(asio::io_context& io, const ServerConfig& config)
-        : stream(io),
-          decoder(config.max_frame_bytes),
-          queue(config.queue_frames, config.max_queue_bytes) {}
-    tls::Stream stream;         // plain, or TLS once the handshake began
-    tls::PeerCertificate cert;  // the client's certificate (TLS with --tls-client-ca)
-    std::uint64_t id = 0;
-    std::string name;
-    std::string address;  // the remote address, for the per-address Hello budget
-    std::string refusal;  // over the Hello budget: said after the TLS handshake (it could not
-                          // be read before), a plain server says it at once
-    v1::Role role = v1::ROLE_UNSPECIFIED;
-    bool welcomed = false;  // Hello accepted
-    bool ready = false;     // scene and volume sent: frames flow
-    bool closing = false;   // a fatal error is queued: close once written
-    bool closed = false;
-    bool reading = false, handshaking = false;
-    bool writing = false;
-    bool want_contacts = false;
-    bool end_logged = false;  // its leaving (or refusal) is in the log
-    std::int64_t frame_interval_ns = 0;
-    std::int64_t next_frame_ns = 0;
-    wire::FrameDecoder decoder;
-    std::array<std::uint8_t, 8192> rbuf{};
-    ClientQueue queue;
-    std::vector<Bytes> inflight;
-    std::vector<asio::const_buffer> buffers;
-    std::int64_t connected_ns = 0, last_rx_ns = 0, write_started_ns = 0;
-    std::uint64_t frames_sent = 0;
-    std::uint64_t frames_dropped_counted = 0;  // of queue.frames_dropped(), in frames_dropped_
-    // Volume streaming.
-    VolumePlan volume;
-    std::uint32_t volume_k = 0, volume_chunk = 0;
-  };
+  using Session = ServerSession;
   using SessionPtr = std::shared_ptr<Session>;
 
  private:
@@ -294,56 +260,23 @@ class Server::Impl {
   }
 
   void hello(const SessionPtr& s, const v1::Hello& h) {
-    if (h.protocol_version() != kProtocolVersion) {
-      fatal(s, v1::Error::VERSION_MISMATCH,
-            "protocol version " + std::to_string(h.protocol_version()) +
-                " is not supported (this server speaks " + std::to_string(kProtocolVersion) + ")");
-      return;
+    HelloFacts facts{&s->cert, s->stream.secure(), s->address};
+    for (const SessionPtr& other : sessions_) {
+      if (other == s || other->closed) continue;
+      if (other->role == v1::CONTROLLER)
+        facts.controller_taken = true;
+      else if (other->welcomed && !other->closing)
+        ++facts.observers;
     }
-    if (auto no = certificate_refusal(config_.tls.get(), s->cert, h.role() == v1::CONTROLLER);
-        !no.empty())
-      return fatal(s, v1::Error::UNAUTHORIZED, no);
-    if (!h.token().empty() && !s->stream.secure() && !is_loopback_address(s->address))
-      return fatal(s, v1::Error::UNAUTHORIZED, clear_text_token_refusal(s->address));
-    if (h.role() == v1::CONTROLLER) {
-      const std::int64_t now = rt::monotonic_ns();
-      if (const std::int64_t wait_ns = token_guard_.wait_ns(s->address, now); wait_ns > 0) {
-        fatal(s, v1::Error::UNAUTHORIZED,
-              "too many wrong tokens from " + s->address + ": wait " +
-                  std::to_string(wait_ns / 1'000'000) + " ms");
-        return;
-      }
-      if (!config_.token.empty() && !same_token(h.token(), config_.token)) {
-        const bool missing = h.token().empty();
-        token_guard_.failed(s->address, now);  // the back-off; the log bounds itself below
+    if (auto no = check_hello(h, facts, config_, token_guard_, rt::monotonic_ns())) {
+      if (no->token_refused) {
         if (config_.log_clients)
-          token_log_.say(std::string(missing ? "no" : "wrong") + " controller token from " +
-                         s->address + " (" + std::to_string(token_guard_.total()) +
-                         " refused in all so far)");
+          token_log_.say(std::string(h.token().empty() ? "no" : "wrong") +
+                         " controller token from " + s->address + " (" +
+                         std::to_string(token_guard_.total()) + " refused in all so far)");
         s->end_logged = true;  // said just above
-        fatal(s, v1::Error::UNAUTHORIZED,
-              missing ? "CONTROLLER needs the server's token: none was given"
-                      : "CONTROLLER needs the server's token: the one given is wrong");
-        return;
       }
-      token_guard_.succeeded(s->address);
-      for (const auto& other : sessions_)
-        if (other != s && other->role == v1::CONTROLLER && !other->closed) {
-          fatal(s, v1::Error::CONTROLLER_BUSY, "another controller is connected");
-          return;
-        }
-    }
-    if (h.role() != v1::CONTROLLER) {  // observers fill max_clients; the controller's slot stays
-      std::size_t observers = 0;
-      for (const auto& other : sessions_)
-        if (other != s && other->welcomed && !other->closing && !other->closed &&
-            other->role != v1::CONTROLLER)
-          ++observers;
-      if (observers >= config_.max_clients) {
-        fatal(s, v1::Error::TOO_MANY_CLIENTS,
-              "the server is full (" + std::to_string(config_.max_clients) + " clients)");
-        return;
-      }
+      return fatal(s, no->code, no->reason);
     }
     s->welcomed = true;
     s->role = h.role();
@@ -360,7 +293,8 @@ class Server::Impl {
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
-    plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(), h.volume_deflate()});
+    plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(),
+                     h.volume_deflate()});
     if (s->volume.chunks == 0) s->ready = true;
     log_client(who(*s) + " joined");
     pump(s);
