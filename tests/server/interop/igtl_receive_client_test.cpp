@@ -102,13 +102,17 @@ void check_storage(const std::string& orientation) {
   std::size_t missing = 0;  // ticks absent from the recording (its ring dropped them)
   for (std::size_t i = 1; i < recording.records.size(); ++i)
     missing += recording.records[i].seq - recording.records[i - 1].seq - 1;
-  // Printed with 6 digits, a slow tool matches several neighbouring ticks: each sample is given
-  // the earliest matching tick whose deadline is at least 1/60 s less one 1 ms tick after the
-  // previous sample's (palpd keeps the first tick at or after each 1/60 s step of loop time),
-  // which exists exactly when the samples can be palpd's ticks at no more than the rate.
-  constexpr std::int64_t kMinGapNs = 1'000'000'000 / 60 - 1'000'000;
-  std::size_t unmatched = 0, spaced = 0, close_pairs = 0;
-  std::int64_t last_t = std::numeric_limits<std::int64_t>::min() / 2;
+  // palpd keeps the first tick it is offered at or after each 1/60 s step of loop time (steps
+  // phase-locked to the first). A tick whose snapshot the network ring dropped (a loaded
+  // machine) is never offered, so a kept tick can come late in its step and the next one early
+  // in the following step: neighbours may be closer than 1/60 s, but any two samples two apart
+  // are more than 1/60 s apart (t[k+2] >= step[k+2] >= step[k+1] + 1/60 > t[k] + 1/60).
+  // Printed with 6 digits, a slow tool matches several ticks (and the sim's trajectory repeats):
+  // each sample is given the earliest matching tick after the previous sample's and more than
+  // 1/60 s after the one before that, which exists exactly when the samples obey that bound.
+  constexpr std::int64_t kStepNs = 1'000'000'000 / 60;
+  std::size_t unmatched = 0, spaced = 0, too_close = 0;
+  std::int64_t last_t = std::numeric_limits<std::int64_t>::min() / 2, before_last_t = last_t;
   for (std::size_t i = 0; i + 3 <= printed.size(); i += 3) {
     bool any = false;
     std::int64_t found = -1;
@@ -117,19 +121,21 @@ void check_storage(const std::string& orientation) {
           matches(printed[i + 1], translation(ras_vector(frame, r.force))) &&
           matches(printed[i + 2], translation(ras_vector(frame, r.u)))) {
         any = true;
-        if (r.t_ns >= last_t + kMinGapNs) {
+        if (r.t_ns > last_t && r.t_ns > before_last_t + kStepNs) {
           found = r.t_ns;
           break;
         }
       }
     if (!any) ++unmatched;
-    if (any && found < 0) ++close_pairs;
-    if (found >= 0) ++spaced, last_t = found;
+    if (any && found < 0) ++too_close;
+    if (found >= 0) ++spaced, before_last_t = last_t, last_t = found;
   }
-  // Since merging main's loop changes, some samples match only ticks closer than 1/60 s to the
-  // previous one (cause not found yet: see the issue 17 report); the rate is bounded by count.
   EXPECT_GE(spaced, 5u);
-  EXPECT_LE(printed.size() / 3, 3u * 60u + 2u) << close_pairs << " samples closer than 1/60 s";
+  EXPECT_LE(printed.size() / 3, 3u * 60u + 2u);
+  // A tick missing from the recording can make a later copy of its values (the repeating
+  // trajectory) the earliest match, after which the earlier ones cannot follow: only then may
+  // samples fail the bound.
+  if (missing == 0) EXPECT_EQ(too_close, 0u) << "of " << printed.size() / 3 << " samples";
   EXPECT_LE(unmatched, missing) << "of " << printed.size() / 3 << " samples";
   EXPECT_LT(unmatched, printed.size() / 3 / 10 + 1);
 }
