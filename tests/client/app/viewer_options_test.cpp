@@ -1,0 +1,92 @@
+// palpview's command line without a display: defaults, what each option sets, and the mistakes
+// refused before a window opens; the frame-time summary's quantiles.
+#include "app/viewer_options.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "app/frame_times.hpp"
+#include "base/errors.hpp"
+
+namespace palp::view {
+namespace {
+
+std::optional<Options> parse(std::vector<std::string> args) {
+  args.insert(args.begin(), "palpview");
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  return parse_options(static_cast<int>(argv.size()), argv.data());
+}
+
+std::string refusal(std::vector<std::string> args) {
+  try {
+    parse(std::move(args));
+  } catch (const UsageError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ViewerOptions, DefaultsFollowTheToolFromTheAnteriorSide) {
+  const auto o = parse({"--connect", "127.0.0.1:7700"});
+  ASSERT_TRUE(o);
+  EXPECT_EQ(o->host, "127.0.0.1");
+  EXPECT_EQ(o->port, 7700);
+  EXPECT_FALSE(o->controller);
+  EXPECT_EQ(o->view, Anatomy::Anterior);
+  EXPECT_EQ(o->follow_mm, 150.0);  // --follow 150 unless --camera
+  EXPECT_EQ(o->volume_max_dim, 256u);
+  EXPECT_TRUE(o->ct);
+  EXPECT_TRUE(o->deformation);
+  EXPECT_EQ(o->chart_s, 30.0);
+}
+
+TEST(ViewerOptions, ACameraTurnsFollowingOffUnlessAsked) {
+  auto o = parse({"--connect", "h:1", "--camera", "30,10,400"});
+  ASSERT_TRUE(o);
+  EXPECT_EQ(o->follow_mm, 0.0);
+  EXPECT_EQ(o->az, 30.0);
+  EXPECT_EQ(o->el, 10.0);
+  EXPECT_EQ(o->dist, 400.0);
+  o = parse({"--connect", "h:1", "--camera", "30,10,400", "--follow", "120"});
+  ASSERT_TRUE(o);
+  EXPECT_EQ(o->follow_mm, 120.0);
+}
+
+TEST(ViewerOptions, HelpGivesNoOptionsAndTheUsageNamesEveryOption) {
+  EXPECT_FALSE(parse({"--help"}));
+  EXPECT_FALSE(parse({"-h"}));
+  for (const char* option : {"--connect", "--controller", "--tls-ca", "--preset", "--follow",
+                             "--chart-seconds", "--screenshot", "--stats-json"})
+    EXPECT_NE(std::string(kUsage).find(option), std::string::npos) << option;
+}
+
+TEST(ViewerOptions, MistakesAreRefusedWithWhatIsWrong) {
+  EXPECT_EQ(refusal({}), "--connect HOST:PORT is required");
+  EXPECT_EQ(refusal({"--connect", "h:1", "--frames", "3"}), "--frames needs --screenshot FILE");
+  EXPECT_EQ(refusal({"--connect", "h:1", "--script", "a.csv"}), "--script needs --controller");
+  EXPECT_EQ(refusal({"--connect", "h:1", "--rate", "-1"}), "--rate: 0 to 100000 Hz");
+  EXPECT_NE(refusal({"--connect", "h:1", "--bogus"}), "");
+  EXPECT_NE(refusal({"--connect", "h:1", "--preset", "lungs"}), "");
+  EXPECT_NE(refusal({"--connect", "h:1", "--width"}), "");  // value missing
+}
+
+TEST(FrameTimes, SummaryGivesMeanAndQuantilesOfTheSortedTimes) {
+  std::vector<double> v;
+  for (int i = 20; i >= 1; --i) v.push_back(i);  // 20 .. 1
+  const nlohmann::json j = summary(v);
+  EXPECT_EQ(j["n"], 20);
+  EXPECT_EQ(j["mean"], 10.5);
+  EXPECT_EQ(j["p50"], 11.0);  // element 10 of 1..20
+  EXPECT_EQ(j["p95"], 20.0);  // element 19
+  EXPECT_EQ(j["max"], 20.0);
+  EXPECT_EQ(summary({})["n"], 0);
+  EXPECT_FALSE(summary({}).contains("mean"));
+  EXPECT_EQ(mean_of({}), 0.0);
+  EXPECT_EQ(mean_of({1.0, 2.0}), 1.5);
+}
+
+}  // namespace
+}  // namespace palp::view
