@@ -28,6 +28,7 @@
 #include "cli/device_placement.hpp"
 #include "cli/falcon_options.hpp"
 #include "cli/model_setup.hpp"
+#include "cli/palpd_control.hpp"
 #include "cli/palpd_stats.hpp"
 #include "cli/rt_options.hpp"
 #include "cli/tls_options.hpp"
@@ -151,154 +152,40 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
 
 const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits",
                                          "allow-truncated"};
-const std::vector<std::string> kValued = {
-    "device",        "tool",           "device-profile", "rate",
-    "port",          "bind",           "token",          "max-clients",
-    "queue",         "idle-timeout",   "hello-timeout",  "write-timeout",
-    "record",        "record-dir",     "watchdog-ms",    "device-timeout-ms",
-    "priority",      "duration",       "config",         "poll-us",
-    "stats-json",    "device-axes",    "device-scale",   "home",
-    "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes",
-    "falcon-firmware", "falcon-tool-from",
-    "tls-cert", "tls-key", "tls-client-ca"};
+const std::vector<std::string> kValued = {"device",
+                                          "tool",
+                                          "device-profile",
+                                          "rate",
+                                          "port",
+                                          "bind",
+                                          "token",
+                                          "max-clients",
+                                          "queue",
+                                          "idle-timeout",
+                                          "hello-timeout",
+                                          "write-timeout",
+                                          "record",
+                                          "record-dir",
+                                          "watchdog-ms",
+                                          "device-timeout-ms",
+                                          "priority",
+                                          "duration",
+                                          "config",
+                                          "poll-us",
+                                          "stats-json",
+                                          "device-axes",
+                                          "device-scale",
+                                          "home",
+                                          "engage-ramp-s",
+                                          "home-clearance",
+                                          "workspace-mm",
+                                          "queue-bytes",
+                                          "falcon-firmware",
+                                          "falcon-tool-from",
+                                          "tls-cert",
+                                          "tls-key",
+                                          "tls-client-ca"};
 const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
-
-// Now, as 2026-11-24T12:00:00Z.
-std::string utc_now_text() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return text;
-}
-
-std::vector<std::string> param_assignments(const ForceParams& p) {
-  return {"c=" + number_text(p.c),
-          "k=" + number_text(p.k),
-          "bone_fmax=" + number_text(p.bone_fmax),
-          "bone_flip=" + number_text(p.bone_flip),
-          std::string("bone_enabled=") + (p.bone_enabled ? "1" : "0"),
-          "grad_epsilon=" + number_text(p.grad_epsilon),
-          "direction_epsilon=" + number_text(p.direction_epsilon),
-          std::string("bone_mode=") + (p.bone_mode == BoneMode::Robust ? "1" : "0"),
-          "bone_k=" + number_text(p.bone_k),
-          std::string("model=") + (p.model == ModelKind::Palp ? "1" : "0"),
-          "mu=" + number_text(p.mu),
-          "skin_fmax=" + number_text(p.skin_fmax),
-          "bone_fade_mm=" + number_text(p.bone_fade_mm),
-          "bone_reach_mm=" + number_text(p.bone_reach_mm),
-          std::string("bone_along_normal=") + (p.bone_along_normal ? "1" : "0")};
-}
-
-// Commands from the controller, wired to the loop, the recorder and the remote device.
-class App final : public net::ControlTarget {
- public:
-  App(rt::HapticLoop& loop, std::shared_ptr<const FieldSampler> fields, rt::Device& device,
-      rt::RecordingMetadata metadata, std::string record_dir)
-      : loop_(loop),
-        fields_(std::move(fields)),
-        remote_(dynamic_cast<rt::RemoteDevice*>(&device)),
-        metadata_(std::move(metadata)),
-        record_dir_(std::move(record_dir)) {}
-
-  // A recording holds one tool and one parameter set (in its metadata), which is what lets a
-  // replay reproduce every force; so they cannot change while one runs.
-  static constexpr const char* kLockedWhileRecording =
-      "stop the recording first: tool and parameters are fixed while recording, so that its "
-      "replay reproduces every force";
-
-  std::string set_tool(const std::string& name) override {
-    if (recording()) return kLockedWhileRecording;
-    const Tool tool = parse_tool(name);
-    const auto current = loop_.model();
-    const ForceParams params = tool.kind == current->tool().kind
-                                   ? current->params()
-                                   : model_params(current->params().model, tool.kind);
-    loop_.swap_model(std::make_shared<const Model>(fields_, tool, params));
-    return {};
-  }
-  std::string set_parameter(const std::string& name, double value) override {
-    if (recording()) return kLockedWhileRecording;
-    const auto current = loop_.model();
-    ForceParams params = current->params();
-    set_param(params, name, value);
-    validate(params);
-    loop_.swap_model(std::make_shared<const Model>(fields_, current->tool(), params));
-    return {};
-  }
-  std::string set_paused(bool paused) override {
-    loop_.set_paused(paused);
-    return {};
-  }
-  std::string recentre() override {
-    if (loop_.config().registration.is_identity())
-      return "this device moves in the scene frame (no registration): nothing to re-centre";
-    loop_.request_recentre();
-    return {};
-  }
-  std::string start_recording(const std::string& name, const std::string& requested_by) override {
-    if (name.empty() || name.size() > 128 || name.find('/') != std::string::npos ||
-        name.front() == '.')
-      return "recording name must be a plain file name (no '/', not starting with '.')";
-    for (const char ch : name)
-      if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
-        return "recording name must not hold control characters";
-    return start(std::filesystem::path(record_dir_) / name, requested_by);
-  }
-  std::string start(const std::filesystem::path& path, const std::string& requested_by) {
-    const std::lock_guard lock(mutex_);
-    if (recorder_) return "already recording to " + recorder_->path();
-    rt::RecordingMetadata meta = metadata_;
-    const auto model = loop_.model();
-    meta["tool"] = model->tool().name;
-    meta["started-by"] = requested_by;
-    meta["started-at"] = utc_now_text();
-    const std::vector<std::string> params = param_assignments(model->params());
-    for (const std::string& a : params) {
-      const auto eq = a.find('=');
-      meta["param." + a.substr(0, eq)] = a.substr(eq + 1);
-    }
-    const std::uint64_t first = loop_.stats().ticks;
-    recorder_ = std::make_unique<rt::Recorder>(loop_.record_ring(), path.string(), meta, first);
-    loop_.set_recording(true);
-    return {};
-  }
-  std::string stop_recording() override {
-    std::unique_ptr<rt::Recorder> done;
-    {
-      const std::lock_guard lock(mutex_);
-      if (!recorder_) return "not recording";
-      loop_.set_recording(false);
-      done = std::move(recorder_);
-    }
-    done->stop();
-    return {};
-  }
-  bool recording() const override {
-    const std::lock_guard lock(mutex_);
-    return recorder_ != nullptr;
-  }
-  std::uint64_t record_lost() const override { return loop_.stats().record_dropped; }
-  bool set_device_pose(const Pose& pose, std::int64_t received_ns) override {
-    if (!remote_) return false;
-    remote_->submit(pose, received_ns);
-    return true;
-  }
-  std::uint64_t recorded() const {
-    const std::lock_guard lock(mutex_);
-    return recorder_ ? recorder_->count() : 0;
-  }
-
- private:
-  rt::HapticLoop& loop_;
-  std::shared_ptr<const FieldSampler> fields_;
-  rt::RemoteDevice* remote_;
-  rt::RecordingMetadata metadata_;
-  std::string record_dir_;
-  mutable std::mutex mutex_;
-  std::unique_ptr<rt::Recorder> recorder_;
-};
 
 double positive(const cli::Args& args, const std::string& key, double fallback) {
   const double v = args.number(key, fallback);
@@ -523,7 +410,7 @@ int run_configured(cli::Arguments argv) {
       {"storage", to_string(scene.fields->config().storage)},
       {"palp_version", PALP_VERSION},
   };
-  App app(loop, scene.fields, *device, metadata, record_dir);
+  cli::PalpdControl app(loop, scene.fields, *device, metadata, record_dir);
   net::SceneDescription description;
   description.source = *args.get("scene");
   description.grid = scene.grid;
