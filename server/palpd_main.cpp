@@ -31,6 +31,7 @@
 #include "cli/palpd_stats.hpp"
 #include "cli/rt_options.hpp"
 #include "cli/tls_options.hpp"
+#include "cli/tune_at_start.hpp"
 #include "devices/device.hpp"
 #include "interop/igtl_options.hpp"
 #include "io/gzip.hpp"
@@ -150,7 +151,7 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
 )";
 
 const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits",
-                                         "allow-truncated"};
+                                         "allow-truncated", "tune"};
 const std::vector<std::string> kValued = {
     "device",        "tool",           "device-profile", "rate",
     "port",          "bind",           "token",          "max-clients",
@@ -160,7 +161,7 @@ const std::vector<std::string> kValued = {
     "stats-json",    "device-axes",    "device-scale",   "home",
     "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes",
     "falcon-firmware", "falcon-tool-from",
-    "tls-cert", "tls-key", "tls-client-ca"};
+    "tls-cert", "tls-key", "tls-client-ca", "tune-budget-s"};
 const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
 
 // Now, as 2026-11-24T12:00:00Z.
@@ -326,8 +327,8 @@ int run(const cli::Arguments& argv_in) {
   // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
-      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
-                << interop::kIgtlOptionsHelp;
+      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
+                << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
@@ -351,8 +352,8 @@ int run_configured(cli::Arguments argv) {
   valued.insert(valued.end(), kValuedAll.begin(), kValuedAll.end());
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
-    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
-              << interop::kIgtlOptionsHelp;
+    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
+              << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -400,7 +401,7 @@ int run_configured(cli::Arguments argv) {
     args = cli::Args(defaults, kFlags, valued);
   }
 
-  const Tool tool = parse_tool(args.get("tool").value_or("finger:37"));
+  Tool tool = parse_tool(args.get("tool").value_or("finger:37"));
   const ForceParams params = cli::force_params(cli::model_kind(args), tool, params_in);
   const DeviceProfile* profile = nullptr;
   if (const auto name = args.get("device-profile")) profile = &device_profile(*name);
@@ -478,7 +479,8 @@ int run_configured(cli::Arguments argv) {
   }
   // the port first: a port in use is told before minutes of scene preparation
   net::check_listen_address(server_config.bind, server_config.port);
-  const Scene scene = cli::load_scene_for(args, "palpd", quiet);
+  Scene scene = cli::load_scene_for(args, "palpd", quiet);
+  const auto tuning = cli::tune_at_start(args, scene, tool, params, loop_config.rate_hz, quiet);
   auto model = std::make_shared<const Model>(scene.fields, tool, params);
 
   rt::DeviceConfig device_config;
@@ -529,7 +531,8 @@ int run_configured(cli::Arguments argv) {
   description.grid = scene.grid;
   description.metadata = {{"prep_dir", scene.prep_dir},
                           {"scheme", to_string(scene.fields->config().gradient)},
-                          {"storage", to_string(scene.fields->config().storage)}};
+                          {"storage", to_string(scene.fields->config().storage)},
+                          {"tuning", tuning.choice}, {"tuning_note", tuning.note}};
   description.device = *device_spec;
   description.device_profile = profile ? std::string(profile->name) : "";
   description.fields = scene.fields;
