@@ -27,6 +27,7 @@
 #include "cli/config_file.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/falcon_options.hpp"
+#include "cli/maps_at_start.hpp"
 #include "cli/model_setup.hpp"
 #include "cli/palpd_stats.hpp"
 #include "cli/rt_options.hpp"
@@ -161,7 +162,7 @@ const std::vector<std::string> kValued = {
     "stats-json",    "device-axes",    "device-scale",   "home",
     "engage-ramp-s", "home-clearance", "workspace-mm",   "queue-bytes",
     "falcon-firmware", "falcon-tool-from",
-    "tls-cert", "tls-key", "tls-client-ca", "tune-budget-s"};
+    "tls-cert", "tls-key", "tls-client-ca", "tune-budget-s", "map-window"};
 const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
 
 // Now, as 2026-11-24T12:00:00Z.
@@ -328,7 +329,7 @@ int run(const cli::Arguments& argv_in) {
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
       std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
-                << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
+                << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
@@ -353,7 +354,7 @@ int run_configured(cli::Arguments argv) {
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
     std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
-              << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
+              << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -506,6 +507,9 @@ int run_configured(cli::Arguments argv) {
     throw InputError("device " + *device_spec + ": " + device->last_error());
   if (device->activate() != rt::DeviceStatus::Ok)
     throw InputError("device " + *device_spec + ": " + device->last_error());
+  auto maps = cli::maps_at_start(args, *device_spec, device->kind(), scene, placement, tool, quiet);
+  if (maps.windowed) model = std::make_shared<const Model>(maps.haptic, tool, params);
+  device_config.fields.reset();  // the whole maps' gradient fields go with the last holder
 
   // Signals are taken by sigtimedwait below, in this thread only: block them before any thread.
   sigset_t signals;
@@ -521,18 +525,19 @@ int run_configured(cli::Arguments argv) {
       {"rate", number_text(loop_config.rate_hz)},
       {"device", *device_spec},
       {"device-profile", profile ? std::string(profile->name) : ""},
-      {"scheme", to_string(scene.fields->config().gradient)},
-      {"storage", to_string(scene.fields->config().storage)},
+      {"scheme", to_string(maps.haptic->config().gradient)},
+      {"storage", to_string(maps.haptic->config().storage)},
       {"palp_version", PALP_VERSION},
   };
-  App app(loop, scene.fields, *device, metadata, record_dir);
+  App app(loop, maps.haptic, *device, metadata, record_dir);
   net::SceneDescription description;
   description.source = *args.get("scene");
   description.grid = scene.grid;
   description.metadata = {{"prep_dir", scene.prep_dir},
-                          {"scheme", to_string(scene.fields->config().gradient)},
-                          {"storage", to_string(scene.fields->config().storage)},
-                          {"tuning", tuning.choice}, {"tuning_note", tuning.note}};
+                          {"scheme", to_string(maps.haptic->config().gradient)},
+                          {"storage", to_string(maps.haptic->config().storage)},
+                          {"tuning", tuning.choice}, {"tuning_note", tuning.note},
+                          {"maps", maps.note}};
   description.device = *device_spec;
   description.device_profile = profile ? std::string(profile->name) : "";
   description.fields = scene.fields;
@@ -584,6 +589,7 @@ int run_configured(cli::Arguments argv) {
       if (!quiet || loop.device_state() == rt::DeviceState::Fault)
         std::fprintf(stderr, "palpd: %s\n", report.c_str());
     }
+    cli::warn_if_home_left_window(maps, loop.registration_home());
     timespec wait{0, 100'000'000};
     const int sig = sigtimedwait(&signals, nullptr, &wait);
     if (sig == SIGINT || sig == SIGTERM) {

@@ -217,6 +217,8 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
     st->set_tuning(it->second);
   if (const auto it = scene.metadata.find("tuning_note"); it != scene.metadata.end())
     st->set_tuning_note(it->second);
+  if (const auto it = scene.metadata.find("maps"); it != scene.metadata.end())
+    st->set_maps(it->second);
 }
 
 }  // namespace palp::net
