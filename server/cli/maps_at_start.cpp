@@ -92,12 +92,13 @@ MapsAtStart maps_at_start(const Args& args, const std::string& device_spec, std:
     return out;
   }
   const Box box = grow(reach, margin + tool_reach(tool));
-  const std::size_t whole_bytes = haptic_map_bytes(*scene.fields);
   out.window = window_for_box(scene.fields->grid(), box.lo, box.hi);
   const fs::path dir(scene.prep_dir);
   DistanceMap surf = read_nifti_float((dir / kSurfaceDistanceFile).string());
   DistanceMap bone = read_nifti_float((dir / kBoneDistanceFile).string());
   out.haptic = window_sampler(surf, bone, *scene.fields, out.window, scene.fields->config());
+  // (after it: the whole maps' bone-beneath map is traced by now, as the window's)
+  const std::size_t whole_bytes = haptic_map_bytes(*scene.fields);
   // The window's sampler is complete (bone-beneath included) before the whole one goes.
   out.haptic->prepare_bone_beneath();
   out.windowed = true;
