@@ -212,9 +212,9 @@ Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setu
     if (setup.budget_s <= 0.0) return;
     const double spent = std::chrono::duration<double>(Clock::now() - start).count();
     if (spent > setup.budget_s)
-      throw OverBudget(format("tune: over the time budget of %g s (%.1f s spent, ", setup.budget_s,
-                              spent) +
-                       where + ")");
+      throw OverBudget(
+          format("tune: over the time budget of %g s (%.1f s spent, ", setup.budget_s, spent) +
+          where + ")");
   };
 
   // One sampler per (scheme, storage); the reference's first.
