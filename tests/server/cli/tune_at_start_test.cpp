@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "support/cli_test_util.hpp"
@@ -53,6 +54,17 @@ TEST(TuneAtStart, TunesOnceCachesReportsAndKeepsItsBudget) {
   EXPECT_NE(second.output.find("palpd: --tune: finger:1 "), std::string::npos) << second.output;
   EXPECT_NE(second.output.find(", cached ("), std::string::npos) << second.output;
   EXPECT_EQ(second.output.find("tuning finger:1 at"), std::string::npos) << second.output;
+  // A damaged entry is ignored, tuned again and rewritten.
+  fs::path entry;
+  for (const auto& e : fs::directory_iterator(tune_cache))
+    if (e.path().extension() == ".toml") entry = e.path();
+  { std::ofstream(entry) << "tool = [not toml"; }
+  const auto damaged = run_palpd(base + "--tool finger:1 --tune --duration 0.2");
+  EXPECT_EQ(damaged.exit_code, 0) << damaged.output;
+  EXPECT_NE(damaged.output.find("ignoring the unreadable cache"), std::string::npos)
+      << damaged.output;
+  EXPECT_NE(damaged.output.find("tuning finger:1 at 1000 Hz"), std::string::npos) << damaged.output;
+  EXPECT_NE(read_text(entry).find("tool = \"finger:1\""), std::string::npos) << read_text(entry);
   // Another rate is another entry (tuned, not taken from the 1 kHz one).
   const auto other = run_palpd(base + "--tool finger:1 --rate 2000 --tune --duration 0.2");
   EXPECT_EQ(other.exit_code, 0) << other.output;
