@@ -27,11 +27,13 @@
 #include "cli/config_file.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/falcon_options.hpp"
+#include "cli/maps_at_start.hpp"
 #include "cli/model_setup.hpp"
 #include "cli/palpd_control.hpp"
 #include "cli/palpd_stats.hpp"
 #include "cli/rt_options.hpp"
 #include "cli/tls_options.hpp"
+#include "cli/tune_at_start.hpp"
 #include "devices/device.hpp"
 #include "interop/igtl_options.hpp"
 #include "io/gzip.hpp"
@@ -150,8 +152,8 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   -h, --help              show this help
 )";
 
-const std::vector<std::string> kFlags = {"help", "quiet", "no-realtime", "no-force-limits",
-                                         "allow-truncated"};
+const std::vector<std::string> kFlags = {
+    "help", "quiet", "no-realtime", "no-force-limits", "allow-truncated", "tune"};
 const std::vector<std::string> kValued = {"device",
                                           "tool",
                                           "device-profile",
@@ -184,7 +186,9 @@ const std::vector<std::string> kValued = {"device",
                                           "falcon-tool-from",
                                           "tls-cert",
                                           "tls-key",
-                                          "tls-client-ca"};
+                                          "tls-client-ca",
+                                          "tune-budget-s",
+                                          "map-window"};
 const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
 
 double positive(const cli::Args& args, const std::string& key, double fallback) {
@@ -213,8 +217,8 @@ int run(const cli::Arguments& argv_in) {
   // --help whatever the config file holds (it is the first thing to reach for when it is wrong)
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
-      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
-                << interop::kIgtlOptionsHelp;
+      std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
+                << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
@@ -238,8 +242,8 @@ int run_configured(cli::Arguments argv) {
   valued.insert(valued.end(), kValuedAll.begin(), kValuedAll.end());
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
-    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kRtOptionsHelp
-              << interop::kIgtlOptionsHelp;
+    std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
+              << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -287,7 +291,7 @@ int run_configured(cli::Arguments argv) {
     args = cli::Args(defaults, kFlags, valued);
   }
 
-  const Tool tool = parse_tool(args.get("tool").value_or("finger:37"));
+  Tool tool = parse_tool(args.get("tool").value_or("finger:37"));
   const ForceParams params = cli::force_params(cli::model_kind(args), tool, params_in);
   const DeviceProfile* profile = nullptr;
   if (const auto name = args.get("device-profile")) profile = &device_profile(*name);
@@ -365,7 +369,8 @@ int run_configured(cli::Arguments argv) {
   }
   // the port first: a port in use is told before minutes of scene preparation
   net::check_listen_address(server_config.bind, server_config.port);
-  const Scene scene = cli::load_scene_for(args, "palpd", quiet);
+  Scene scene = cli::load_scene_for(args, "palpd", quiet);
+  const auto tuning = cli::tune_at_start(args, scene, tool, params, loop_config.rate_hz, quiet);
   auto model = std::make_shared<const Model>(scene.fields, tool, params);
 
   rt::DeviceConfig device_config;
@@ -391,6 +396,9 @@ int run_configured(cli::Arguments argv) {
     throw InputError("device " + *device_spec + ": " + device->last_error());
   if (device->activate() != rt::DeviceStatus::Ok)
     throw InputError("device " + *device_spec + ": " + device->last_error());
+  auto maps = cli::maps_at_start(args, *device_spec, device->kind(), scene, placement, tool, quiet);
+  if (maps.windowed) model = std::make_shared<const Model>(maps.haptic, tool, params);
+  device_config.fields.reset();  // the whole maps' gradient fields go with the last holder
 
   // Signals are taken by sigtimedwait below, in this thread only: block them before any thread.
   sigset_t signals;
@@ -406,17 +414,20 @@ int run_configured(cli::Arguments argv) {
       {"rate", number_text(loop_config.rate_hz)},
       {"device", *device_spec},
       {"device-profile", profile ? std::string(profile->name) : ""},
-      {"scheme", to_string(scene.fields->config().gradient)},
-      {"storage", to_string(scene.fields->config().storage)},
+      {"scheme", to_string(maps.haptic->config().gradient)},
+      {"storage", to_string(maps.haptic->config().storage)},
       {"palp_version", PALP_VERSION},
   };
-  cli::PalpdControl app(loop, scene.fields, *device, metadata, record_dir);
+  cli::PalpdControl app(loop, maps.haptic, *device, metadata, record_dir);
   net::SceneDescription description;
   description.source = *args.get("scene");
   description.grid = scene.grid;
   description.metadata = {{"prep_dir", scene.prep_dir},
-                          {"scheme", to_string(scene.fields->config().gradient)},
-                          {"storage", to_string(scene.fields->config().storage)}};
+                          {"scheme", to_string(maps.haptic->config().gradient)},
+                          {"storage", to_string(maps.haptic->config().storage)},
+                          {"tuning", tuning.choice},
+                          {"tuning_note", tuning.note},
+                          {"maps", maps.note}};
   description.device = *device_spec;
   description.device_profile = profile ? std::string(profile->name) : "";
   description.fields = scene.fields;
@@ -468,6 +479,7 @@ int run_configured(cli::Arguments argv) {
       if (!quiet || loop.device_state() == rt::DeviceState::Fault)
         std::fprintf(stderr, "palpd: %s\n", report.c_str());
     }
+    cli::warn_if_home_left_window(maps, loop.registration_home());
     timespec wait{0, 100'000'000};
     const int sig = sigtimedwait(&signals, nullptr, &wait);
     if (sig == SIGINT || sig == SIGTERM) {

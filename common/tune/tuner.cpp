@@ -207,6 +207,15 @@ Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setu
   if (setup.repeats < 1) throw UsageError("tune: at least one timing repeat");
   const Tool given = parse_tool(setup.tool);
   const std::vector<std::string> tools = footprint_tools(given);
+  const Clock::time_point start = Clock::now();
+  const auto check_budget = [&](const char* where) {
+    if (setup.budget_s <= 0.0) return;
+    const double spent = std::chrono::duration<double>(Clock::now() - start).count();
+    if (spent > setup.budget_s)
+      throw OverBudget(
+          format("tune: over the time budget of %g s (%.1f s spent, ", setup.budget_s, spent) +
+          where + ")");
+  };
 
   // One sampler per (scheme, storage); the reference's first.
   const GradientScheme schemes[] = {GradientScheme::PrecomputedField,
@@ -218,6 +227,7 @@ Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setu
     for (Storage s : storages) {
       const SamplerConfig config{g, s};
       samplers.emplace_back(config, std::make_shared<const FieldSampler>(surf, bone, config));
+      check_budget("building the maps");
     }
 
   Outcome out;
@@ -279,6 +289,7 @@ Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setu
       out.results.push_back(std::move(j));
       if (progress) progress(out.results.back(), index, count);
       ++index;
+      if (index < count) check_budget("measuring the candidates");
     }
   }
   out.chosen = judge(out.results, setup.tolerance, out.tolerance_n, out.period_us);

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.hpp"
 #include "base/volume.hpp"
 #include "model/field_sampler.hpp"
 #include "model/force_model.hpp"
@@ -96,6 +97,14 @@ struct Setup {
   ForceParams params;  // the model and its parameters for the tool's kind
   int repeats = 5;     // timing repeats (medians reported)
   Tolerance tolerance;
+  double budget_s = 0.0;  // > 0: tune throws OverBudget once this much time has passed
+};
+
+// The time budget ran out before every candidate was measured (checked after each sampler is
+// built and after each candidate: the overshoot is at most one of those steps).
+class OverBudget : public Error {
+ public:
+  using Error::Error;
 };
 
 struct NamedTrajectory {

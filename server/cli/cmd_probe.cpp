@@ -424,6 +424,10 @@ int cmd_probe(const Arguments& argv) {
                     static_cast<unsigned long long>(s.device_short_frames()),
                     static_cast<unsigned long long>(s.device_lost_replies()));
       std::printf("\n");
+      if (!s.tuning().empty() || !s.tuning_note().empty())
+        std::printf("  tuning    %s%s%s\n", s.tuning().empty() ? "defaults" : s.tuning().c_str(),
+                    s.tuning_note().empty() ? "" : ": ", s.tuning_note().c_str());
+      if (!s.maps().empty()) std::printf("  maps      %s\n", s.maps().c_str());
       std::printf("  jitter   ");
       for (int b = 0; b < s.jitter_counts_size(); ++b) {
         if (b < s.jitter_bucket_upper_us_size())

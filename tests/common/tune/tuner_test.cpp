@@ -128,5 +128,25 @@ TEST(Tuner, EndToEndOnABall) {
   }
 }
 
+// A budget smaller than building the first maps stops the tuning with OverBudget (palpd --tune
+// then runs the defaults); none (0) lets it finish.
+TEST(Tuner, ABudgetTooSmallStopsWithOverBudget) {
+  palp::tune::Setup setup;
+  setup.tool = "finger:1";
+  setup.rate_hz = 1000.0;
+  setup.params = palp_params(ToolKind::Finger);
+  setup.repeats = 1;
+  setup.budget_s = 1e-9;
+  const DistanceMap skin = ball(25.0), bone = ball(12.0);
+  EXPECT_THROW(tune(skin, bone, setup), OverBudget);
+  try {
+    tune(skin, bone, setup);
+  } catch (const OverBudget& e) {
+    EXPECT_NE(std::string(e.what()).find("over the time budget"), std::string::npos) << e.what();
+  }
+  setup.budget_s = 0.0;
+  EXPECT_EQ(tune(skin, bone, setup).results.size(), 9u);
+}
+
 }  // namespace
 }  // namespace palp::tune
