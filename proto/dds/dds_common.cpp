@@ -48,6 +48,24 @@ std::uint32_t parse_domain(const std::string& text) {
   return v;
 }
 
+std::vector<std::string> split_dds_domain(std::vector<std::string> argv) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    const std::string& a = argv[i];
+    if (a.rfind("--dds=", 0) == 0) {
+      out.push_back("--dds");
+      out.push_back("--dds-domain=" + a.substr(6));
+    } else if (a == "--dds" && i + 1 < argv.size() && !argv[i + 1].empty() &&
+               std::isdigit(static_cast<unsigned char>(argv[i + 1][0]))) {
+      out.push_back("--dds");
+      out.push_back("--dds-domain=" + argv[++i]);
+    } else {
+      out.push_back(a);
+    }
+  }
+  return out;
+}
+
 QosPtr make_qos(QosKind kind, std::int32_t depth) {
   QosPtr q(dds_create_qos());
   if (!q) throw ResourceError("DDS: no memory for a QoS");

@@ -36,6 +36,10 @@ std::string default_rig();
 // A DDS domain id from text: 0..232 (UsageError otherwise).
 std::uint32_t parse_domain(const std::string& text);
 
+// `--dds [DOMAIN]` on a command line as "--dds" and "--dds-domain=DOMAIN" (also "--dds=DOMAIN"):
+// the domain is optional, so the option parser sees a flag and a valued option.
+std::vector<std::string> split_dds_domain(std::vector<std::string> argv);
+
 // QoS of each kind of topic (docs/dds.md):
 //   Stream    best-effort, keep-last(depth), volatile: haptic frames, pose, wrench
 //   Latched   reliable, keep-last(depth) per instance, transient-local: scene, volume, stats,
