@@ -47,7 +47,8 @@ RigSubscriber::RigSubscriber(const SubscriberOptions& options) : options_(option
   waitset_ = checked(dds_create_waitset(p), "wait-set");
   const std::string& rig = options_.rig;
   if (options_.frames)
-    frames_ = reader(p, waitset_, &palp_dds_HapticFrame_desc, topic_name(rig, kFrames),
+    frames_ = reader(p, waitset_, &palp_dds_HapticFrame_desc,
+                     topic_name(rig, options_.contacts ? kFramesContacts : kFrames),
                      QosKind::Stream, options_.frame_depth);
   if (options_.ros) {
     pose_ = reader(p, waitset_, &geometry_msgs_msg_dds__PoseStamped__desc,

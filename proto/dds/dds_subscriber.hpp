@@ -18,6 +18,7 @@ struct SubscriberOptions {
   std::uint32_t domain = 0;
   std::string rig = "palp";
   bool frames = true;               // rt/palp/<rig>/frames
+  bool contacts = false;            // frames_contacts instead (each frame with its contacts)
   bool ros = false;                 // tool_pose and wrench
   bool scene = true, stats = true;  // scene and stats
   bool volume = false;              // volume (the render volume, chunk by chunk)

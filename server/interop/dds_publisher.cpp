@@ -46,6 +46,7 @@ class DdsPublisher::Impl {
         loop_(loop),
         control_(control),
         ring_(config_.queue, loop.net_ring().contact_capacity()),
+        indices_(ring_.capacity()),
         contacts_(loop.net_ring().contact_capacity()) {
     using namespace palp::dds;
     check_rig(config_.rig);
@@ -60,6 +61,8 @@ class DdsPublisher::Impl {
     const std::string& rig = config_.rig;
     frames_ = writer(&palp_dds_HapticFrame_desc, topic_name(rig, kFrames), QosKind::Stream,
                      config_.depth);
+    full_ = writer(&palp_dds_HapticFrame_desc, topic_name(rig, kFramesContacts), QosKind::Stream,
+                   config_.depth);
     pose_ = writer(&geometry_msgs_msg_dds__PoseStamped__desc, topic_name(rig, kToolPose),
                    QosKind::Stream, config_.depth);
     wrench_ = writer(&geometry_msgs_msg_dds__WrenchStamped__desc, topic_name(rig, kWrench),
@@ -136,9 +139,12 @@ class DdsPublisher::Impl {
       next_ns_ = std::max(next_ns_ + interval_ns_, t);
       if (next_ns_ <= t) next_ns_ = t + interval_ns_;
     }
-    offered_.fetch_add(1, std::memory_order_relaxed);
+    // Every kept snapshot gets the next frame index, published or not: a snapshot dropped here
+    // shows as a gap to subscribers, like one lost on the network.
+    const std::uint64_t index = offered_.fetch_add(1, std::memory_order_relaxed);
     rt::Snapshot* slot = ring_.claim();
     if (!slot) return;  // counted by the ring
+    indices_[claimed_++ & (indices_.size() - 1)] = index;
     slot->tick = s.tick;
     slot->device_state = s.device_state;
     slot->contact_points = s.contact_points;
@@ -161,6 +167,7 @@ class DdsPublisher::Impl {
     c.poses_refused = poses_refused_.load(std::memory_order_relaxed);
     dds_publication_matched_status_t st{};
     if (dds_get_publication_matched_status(frames_, &st) >= 0) c.subscribers = st.current_count;
+    if (dds_get_publication_matched_status(full_, &st) >= 0) c.subscribers += st.current_count;
     return c;
   }
 
@@ -192,12 +199,15 @@ class DdsPublisher::Impl {
     using namespace palp::dds;
     // The tick's deadline on CLOCK_REALTIME: the offset between the two clocks, once a batch.
     const std::int64_t offset = realtime_ns() - rt::monotonic_ns();
+    // A topic nobody reads is not written (serialising a frame costs even without readers).
+    const bool want_frames = matched(frames_), want_full = matched(full_);
+    const bool want_pose = matched(pose_), want_wrench = matched(wrench_);
     while (const rt::Snapshot* s = ring_.front()) {
       const rt::TickRecord& t = s->tick;
       const auto stamp = to_time(t.t_ns + offset);
       palp_dds_HapticFrame f{};
       std::snprintf(f.rig, sizeof f.rig, "%s", config_.rig.c_str());
-      f.frame_index = frame_index_++;
+      f.frame_index = indices_[popped_++ & (indices_.size() - 1)];
       f.seq = t.seq;
       f.server_time_ns = t.t_ns;
       f.stamp = stamp;
@@ -209,14 +219,17 @@ class DdsPublisher::Impl {
       f.contact_points = s->contact_points;
       f.tick_status = t.tick_status, f.safety_status = t.safety_status, f.fault = t.fault;
       f.device_state = static_cast<std::uint8_t>(s->device_state);
-      for (std::uint32_t i = 0; i < s->contact_count; ++i) {
-        const rt::ContactSnapshot& c = s->contacts[i];
-        contacts_[i] = {vec(c.x), vec(c.s), vec(c.p), vec(c.f), c.in_contact != 0};
+      if (want_frames) count(dds_write(frames_, &f));
+      if (want_full) {
+        for (std::uint32_t i = 0; i < s->contact_count; ++i) {
+          const rt::ContactSnapshot& c = s->contacts[i];
+          contacts_[i] = {vec(c.x), vec(c.s), vec(c.p), vec(c.f), c.in_contact != 0};
+        }
+        f.contacts._length = f.contacts._maximum = s->contact_count;
+        f.contacts._buffer = contacts_.data();
+        f.contacts._release = false;
+        count(dds_write(full_, &f));
       }
-      f.contacts._length = f.contacts._maximum = s->contact_count;
-      f.contacts._buffer = contacts_.data();
-      f.contacts._release = false;
-      count(dds_write(frames_, &f));
       published_.fetch_add(1, std::memory_order_relaxed);
 
       // ROS 2: metres, newtons, newton-metres.
@@ -229,14 +242,19 @@ class DdsPublisher::Impl {
                             t.pose.position.z * 1e-3};
       pose.pose.orientation = {t.pose.orientation.x, t.pose.orientation.y, t.pose.orientation.z,
                                t.pose.orientation.w};
-      count(dds_write(pose_, &pose));
+      if (want_pose) count(dds_write(pose_, &pose));
       geometry_msgs_msg_dds__WrenchStamped_ wrench{};
       wrench.header = pose.header;
       wrench.wrench.force = {t.force.x, t.force.y, t.force.z};
       wrench.wrench.torque = {t.torque.x * 1e-3, t.torque.y * 1e-3, t.torque.z * 1e-3};
-      count(dds_write(wrench_, &wrench));
+      if (want_wrench) count(dds_write(wrench_, &wrench));
       ring_.pop();
     }
+  }
+
+  static bool matched(dds_entity_t writer) {
+    dds_publication_matched_status_t st{};
+    return dds_get_publication_matched_status(writer, &st) >= 0 && st.current_count > 0;
   }
 
   void count(dds_return_t rc) {
@@ -338,10 +356,11 @@ class DdsPublisher::Impl {
   net::ControlTarget* control_;
   rt::SnapshotRing ring_;
   rt::WakeSignal signal_;
+  std::vector<std::uint64_t> indices_;  // frame index of each ring slot (same size, same order)
   std::vector<palp_dds_Contact> contacts_;
   palp::dds::Entity participant_;
-  dds_entity_t frames_ = 0, pose_ = 0, wrench_ = 0, scene_w_ = 0, stats_w_ = 0, rigs_w_ = 0,
-               volume_w_ = 0, control_r_ = 0;
+  dds_entity_t frames_ = 0, full_ = 0, pose_ = 0, wrench_ = 0, scene_w_ = 0, stats_w_ = 0,
+               rigs_w_ = 0, volume_w_ = 0, control_r_ = 0;
   std::string host_, tool_, scene_bytes_;
   std::vector<std::vector<std::uint8_t>> volume_;
   std::int64_t started_ns_ = 0;
@@ -351,9 +370,10 @@ class DdsPublisher::Impl {
   std::int64_t interval_ns_ = config_.rate_hz > 0 ? static_cast<std::int64_t>(1e9 / config_.rate_hz)
                                                   : 0;
   std::int64_t next_ns_ = 0;
+  std::uint64_t claimed_ = 0;
   std::atomic<std::uint64_t> offered_{0};
   // DDS thread
-  std::uint64_t frame_index_ = 0, stats_version_ = 0, last_ticks_ = 0;
+  std::uint64_t popped_ = 0, stats_version_ = 0, last_ticks_ = 0;
   std::int64_t last_stats_ns_ = 0, last_refusal_log_ns_ = 0;
   std::atomic<std::uint64_t> published_{0}, write_errors_{0}, scene_version_{0};
   std::atomic<std::uint64_t> poses_accepted_{0}, poses_refused_{0};

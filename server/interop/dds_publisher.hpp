@@ -4,11 +4,13 @@
 //   io thread: offer(snapshot)  keeps one snapshot per 1/rate of loop time (every tick with rate
 //                               0), copies it into a preallocated ring (full: dropped, counted)
 //                               and signals an eventfd; never waits, never allocates
-//   DDS thread                  drains the ring: HapticFrame, PoseStamped and WrenchStamped per
-//                               snapshot (best-effort, keep-last); Stats every stats interval
-//                               and SceneInfo again when it changed (reliable, transient-local);
-//                               with control, the device poses of rt/palp/<rig>/device_pose
-//                               whose token matches (compared in constant time)
+//   DDS thread                  drains the ring: HapticFrame (without and with contacts),
+//                               PoseStamped and WrenchStamped per snapshot (best-effort,
+//                               keep-last; a topic without readers is skipped); Stats every stats
+//                               interval and SceneInfo again when it changed (reliable,
+//                               transient-local); with control, the device poses of
+//                               rt/palp/<rig>/device_pose whose token matches (compared in constant
+//                               time)
 //
 // The rig announcement, SceneInfo and the render volume are prepared in the constructor (before
 // the loop starts) and written by start(); the writers keep them for late joiners.
@@ -32,10 +34,10 @@ struct DdsConfig {
   std::int32_t depth = 4;              // keep-last depth of the frame, pose and wrench writers
   double stats_interval_s = 1.0;       // Stats (and a look for a changed scene) this often
   std::uint32_t volume_max_dim = 128;  // render volume: voxels per axis at most (0: none)
-  std::size_t queue = 1024;            // snapshots between the io thread and the DDS thread
-  bool control = false;                // read rt/palp/<rig>/device_pose
-  std::string token;                   // with control: the token a DevicePose must carry
-  bool report = true;                  // a line of counters on stdout when it stops
+  std::size_t queue = 256;  // snapshots between the io thread and the DDS thread (256 ms at 1 kHz)
+  bool control = false;     // read rt/palp/<rig>/device_pose
+  std::string token;        // with control: the token a DevicePose must carry
+  bool report = true;       // a line of counters on stdout when it stops
 };
 
 struct DdsCounters {
@@ -47,7 +49,7 @@ struct DdsCounters {
   std::uint64_t volume_chunks = 0;
   std::uint64_t poses_accepted = 0;
   std::uint64_t poses_refused = 0;  // wrong token, wrong rig, or a device that is not remote
-  std::uint32_t subscribers = 0;    // readers matched on the frames topic now
+  std::uint32_t subscribers = 0;    // readers matched on the two frames topics now
 };
 
 class DdsPublisher {

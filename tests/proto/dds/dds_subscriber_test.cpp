@@ -59,10 +59,11 @@ TEST_F(DdsSubscriber, EveryTypeRoundTrips) {
   o.rig = "rig_a";
   o.ros = true;
   o.volume = true;
+  o.contacts = true;
   RigSubscriber sub(o);
   Entity pub = make_participant(domain);
   const dds_entity_t wf = writer(pub.get(), &palp_dds_HapticFrame_desc,
-                                 topic_name("rig_a", kFrames), QosKind::Stream, 1);
+                                 topic_name("rig_a", kFramesContacts), QosKind::Stream, 1);
   const dds_entity_t wp = writer(pub.get(), &geometry_msgs_msg_dds__PoseStamped__desc,
                                  topic_name("rig_a", kToolPose), QosKind::Stream, 1);
   const dds_entity_t ww = writer(pub.get(), &geometry_msgs_msg_dds__WrenchStamped__desc,
