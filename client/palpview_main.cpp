@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -31,6 +32,7 @@
 #include <vector>
 
 #include "base/errors.hpp"
+#include "dds_common.hpp"
 #include "render/patient_view.hpp"
 #include "render/render_scene.hpp"
 #include "scene/trajectory.hpp"
@@ -46,7 +48,9 @@ constexpr const char* kUsage = R"(usage: palpview --connect HOST:PORT [options]
 The render client: connects to palpd, shows the volume, the tool, contacts, proxies and force,
 and deforms the skin where the tool presses.
 
-  --connect HOST:PORT     palpd's address (required)
+  --connect HOST:PORT     palpd's address (or --dds)
+  --dds [DOMAIN]          watch a palpd --dds on DDS domain DOMAIN (0) instead (observer only;
+                          docs/dds.md); --rig NAME: which rig (the host name, as palpd's default)
   --observer              only watch (default); the mouse moves this view's camera
   --controller            drive palpd's `remote` device (palpd --device remote) with mouse
                           and keyboard
@@ -100,6 +104,9 @@ pose. The HUD shows RECORDING and PAUSED, and palpd's answer to the last command
 struct Options {
   std::string host;
   std::uint16_t port = 0;
+  bool dds = false;  // --dds [DOMAIN] --rig NAME instead of --connect
+  std::uint32_t dds_domain = 0;
+  std::string dds_rig;
   bool controller = false;
   std::string token;
   std::string tls_ca, tls_pin, tls_cert, tls_key;
@@ -149,6 +156,7 @@ int parse_int(const std::string& option, const std::string& text, int lo, int hi
 std::optional<Options> parse_options(int argc, char** argv) {
   Options o;
   bool have_connect = false, have_frames = false;
+  std::optional<std::string> rig;
   for (int n = 1; n < argc; ++n) {
     const std::string arg = argv[n];
     const auto value = [&]() -> std::string {
@@ -159,6 +167,12 @@ std::optional<Options> parse_options(int argc, char** argv) {
     if (arg == "--connect") {
       parse_host_port(value(), o.host, o.port);
       have_connect = true;
+    } else if (arg == "--dds") {  // [DOMAIN]
+      o.dds = true;
+      if (n + 1 < argc && std::isdigit(static_cast<unsigned char>(argv[n + 1][0])))
+        o.dds_domain = palp::dds::parse_domain(argv[++n]);
+    } else if (arg == "--rig") {
+      rig = value();
     } else if (arg == "--observer") {
       o.controller = false;
     } else if (arg == "--controller") {
@@ -238,7 +252,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
       throw UsageError("unknown option '" + arg + "'");
     }
   }
-  if (!have_connect) throw UsageError("--connect HOST:PORT is required");
+  if (have_connect == o.dds) throw UsageError("palpview needs --connect HOST:PORT or --dds");
+  if (rig && !o.dds) throw UsageError("--rig needs --dds");
+  if (o.dds) palp::dds::check_rig(o.dds_rig = rig.value_or(palp::dds::default_rig()));
   if (have_frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");
   if (o.follow_mm < 0) o.follow_mm = o.have_camera ? 0.0 : 150.0;
   if (!o.script.empty() && !o.controller) throw UsageError("--script needs --controller");
@@ -287,6 +303,7 @@ int run(const Options& o) {
   StreamOptions stream;
   stream.host = o.host;
   stream.port = o.port;
+  stream.dds = o.dds, stream.dds_domain = o.dds_domain, stream.dds_rig = o.dds_rig;
   stream.controller = o.controller;
   stream.token = o.token;
   stream.tls_ca = o.tls_ca;

@@ -76,6 +76,14 @@ bool RigSubscriber::wait(double timeout_s) {
 std::size_t RigSubscriber::take(const Handlers& h) {
   const std::int64_t now = realtime_ns();
   std::size_t n = 0;
+  // The scene (and the volume) before the frames that need them.
+  const std::pair<dds_entity_t, const char*> encoded[] = {
+      {scene_, kScene}, {stats_, kStats}, {volume_, kVolume}};
+  for (const auto& [r, leaf] : encoded)
+    if (r)
+      n += take_all<palp_dds_Encoded>(r, [&, leaf = leaf](const palp_dds_Encoded& s) {
+        if (h.encoded) h.encoded(leaf, s);
+      });
   if (frames_)
     n += take_all<palp_dds_HapticFrame>(frames_, [&](const palp_dds_HapticFrame& s) {
       if (h.frame) h.frame(s, now);
@@ -90,13 +98,6 @@ std::size_t RigSubscriber::take(const Handlers& h) {
         wrench_, [&](const geometry_msgs_msg_dds__WrenchStamped_& s) {
           if (h.wrench) h.wrench(s, now);
         });
-  const std::pair<dds_entity_t, const char*> encoded[] = {
-      {scene_, kScene}, {stats_, kStats}, {volume_, kVolume}};
-  for (const auto& [r, leaf] : encoded)
-    if (r)
-      n += take_all<palp_dds_Encoded>(r, [&, leaf = leaf](const palp_dds_Encoded& s) {
-        if (h.encoded) h.encoded(leaf, s);
-      });
   return n;
 }
 
