@@ -50,7 +50,8 @@ and deforms the skin where the tool presses.
 
   --connect HOST:PORT     palpd's address (or --dds)
   --dds [DOMAIN]          watch a palpd --dds on DDS domain DOMAIN (0) instead (observer only;
-                          docs/dds.md); --rig NAME: which rig (the host name, as palpd's default)
+                          docs/dds.md)
+  --rig NAME              with --dds: which rig (default: the host name, as palpd's)
   --observer              only watch (default); the mouse moves this view's camera
   --controller            drive palpd's `remote` device (palpd --device remote) with mouse
                           and keyboard
