@@ -253,7 +253,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
       throw UsageError("unknown option '" + arg + "'");
     }
   }
-  if (have_connect == o.dds) throw UsageError("palpview needs --connect HOST:PORT or --dds");
+  if (!have_connect && !o.dds) throw UsageError("--connect HOST:PORT is required (or --dds)");
+  if (have_connect && o.dds) throw UsageError("--connect and --dds: one or the other");
   if (rig && !o.dds) throw UsageError("--rig needs --dds");
   if (o.dds) palp::dds::check_rig(o.dds_rig = rig.value_or(palp::dds::default_rig()));
   if (have_frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");

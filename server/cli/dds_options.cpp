@@ -78,7 +78,8 @@ std::shared_ptr<interop::DdsPublisher> dds_beside(const Args& args,
   publisher->start();
   if (!quiet) {
     std::printf(
-        "palpd: DDS domain %u, rig %s: rt/palp/%s/{frames,tool_pose,wrench,scene,stats%s}"
+        "palpd: DDS domain %u, rig %s: "
+        "rt/palp/%s/{frames,frames_contacts,tool_pose,wrench,scene,stats%s}"
         "%s at %s\n",
         config->domain, config->rig.c_str(), config->rig.c_str(),
         config->volume_max_dim ? ",volume" : "", config->control ? ", reading device_pose" : "",
