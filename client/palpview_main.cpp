@@ -58,6 +58,7 @@ int run(const Options& o) {
   StreamOptions stream;
   stream.host = o.host;
   stream.port = o.port;
+  stream.dds = o.dds, stream.dds_domain = o.dds_domain, stream.dds_rig = o.dds_rig;
   stream.controller = o.controller;
   stream.token = o.token;
   stream.tls_ca = o.tls_ca;

@@ -25,6 +25,7 @@
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/config_file.hpp"
+#include "cli/dds_options.hpp"
 #include "cli/device_placement.hpp"
 #include "cli/falcon_options.hpp"
 #include "cli/maps_at_start.hpp"
@@ -34,6 +35,7 @@
 #include "cli/rt_options.hpp"
 #include "cli/tls_options.hpp"
 #include "cli/tune_at_start.hpp"
+#include "dds_common.hpp"
 #include "devices/device.hpp"
 #include "interop/igtl_options.hpp"
 #include "io/gzip.hpp"
@@ -152,8 +154,8 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   -h, --help              show this help
 )";
 
-const std::vector<std::string> kFlags = {
-    "help", "quiet", "no-realtime", "no-force-limits", "allow-truncated", "tune"};
+const std::vector<std::string> kFlags = cli::with_dds_flags(
+    {"help", "quiet", "no-realtime", "no-force-limits", "allow-truncated", "tune"});
 const std::vector<std::string> kValued = {"device",
                                           "tool",
                                           "device-profile",
@@ -189,7 +191,8 @@ const std::vector<std::string> kValued = {"device",
                                           "tls-client-ca",
                                           "tune-budget-s",
                                           "map-window"};
-const std::vector<std::string> kValuedAll = interop::with_igtl_options(kValued);
+const std::vector<std::string> kValuedAll =
+    interop::with_igtl_options(cli::with_dds_options(kValued));
 
 double positive(const cli::Args& args, const std::string& key, double fallback) {
   const double v = args.number(key, fallback);
@@ -218,7 +221,8 @@ int run(const cli::Arguments& argv_in) {
   for (const std::string& a : argv_in)
     if (a == "--help" || a == "-h") {
       std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
-                << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
+                << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp
+                << cli::kDdsOptionsHelp;
       return 0;
     }
   const auto config = cli::config_path(argv_in);
@@ -236,6 +240,7 @@ int run(const cli::Arguments& argv_in) {
 }
 
 int run_configured(cli::Arguments argv) {
+  argv = palp::dds::split_dds_domain(std::move(argv));  // --dds [DOMAIN]
   const std::vector<std::string> assignments = cli::take_repeated(argv, "param");
   std::vector<std::string> valued = cli::kSceneOptions;
   valued = cli::with_rt_options(std::move(valued));
@@ -243,7 +248,8 @@ int run_configured(cli::Arguments argv) {
   cli::Args args(argv, kFlags, valued);
   if (args.has("help")) {
     std::cout << kUsage << cli::kSceneOptionsHelp << kOptions << cli::kTuneAtStartHelp
-              << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp;
+              << cli::kMapWindowHelp << cli::kRtOptionsHelp << interop::kIgtlOptionsHelp
+              << cli::kDdsOptionsHelp;
     return 0;
   }
   if (!args.positional().empty())
@@ -434,8 +440,10 @@ int run_configured(cli::Arguments argv) {
   description.ct = scene.ct;
   description.body = scene.body;
   description.placement = placement;
-  net::Server server(server_config, description, loop, &app);
+  cli::DdsControlGate control(app);  // palp.v1's and DDS's device poses, one at a time
+  net::Server server(server_config, description, loop, &control);
   const auto igtl = interop::igtl_beside(args, scene.grid, loop_config.rate_hz, server, quiet);
+  const auto dds = cli::dds_beside(args, description, loop, control, server, tool.name, quiet);
 
   if (const auto record = args.get("record")) {
     const std::string failure = app.start(*record, "palpd --record");

@@ -1,12 +1,14 @@
 // palpview's command line: see viewer_options.hpp.
 #include "app/viewer_options.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <exception>
 #include <stdexcept>
 #include <string>
 
 #include "base/errors.hpp"
+#include "dds_common.hpp"
 #include "stream/stream_client.hpp"
 
 namespace palp::view {
@@ -16,7 +18,10 @@ const char* const kUsage = R"(usage: palpview --connect HOST:PORT [options]
 The render client: connects to palpd, shows the volume, the tool, contacts, proxies and force,
 and deforms the skin where the tool presses.
 
-  --connect HOST:PORT     palpd's address (required)
+  --connect HOST:PORT     palpd's address (or --dds)
+  --dds [DOMAIN]          watch a palpd --dds on DDS domain DOMAIN (0) instead (observer only;
+                          docs/dds.md)
+  --rig NAME              with --dds: which rig (default: the host name, as palpd's)
   --observer              only watch (default); the mouse moves this view's camera
   --controller            drive palpd's `remote` device (palpd --device remote) with mouse
                           and keyboard
@@ -95,6 +100,7 @@ int parse_int(const std::string& option, const std::string& text, int lo, int hi
 std::optional<Options> parse_options(int argc, char** argv) {
   Options o;
   bool have_connect = false, have_frames = false;
+  std::optional<std::string> rig;
   for (int n = 1; n < argc; ++n) {
     const std::string arg = argv[n];
     const auto value = [&]() -> std::string {
@@ -105,6 +111,12 @@ std::optional<Options> parse_options(int argc, char** argv) {
     if (arg == "--connect") {
       parse_host_port(value(), o.host, o.port);
       have_connect = true;
+    } else if (arg == "--dds") {  // [DOMAIN]
+      o.dds = true;
+      if (n + 1 < argc && std::isdigit(static_cast<unsigned char>(argv[n + 1][0])))
+        o.dds_domain = palp::dds::parse_domain(argv[++n]);
+    } else if (arg == "--rig") {
+      rig = value();
     } else if (arg == "--observer") {
       o.controller = false;
     } else if (arg == "--controller") {
@@ -184,7 +196,10 @@ std::optional<Options> parse_options(int argc, char** argv) {
       throw UsageError("unknown option '" + arg + "'");
     }
   }
-  if (!have_connect) throw UsageError("--connect HOST:PORT is required");
+  if (!have_connect && !o.dds) throw UsageError("--connect HOST:PORT is required (or --dds)");
+  if (have_connect && o.dds) throw UsageError("--connect and --dds: one or the other");
+  if (rig && !o.dds) throw UsageError("--rig needs --dds");
+  if (o.dds) palp::dds::check_rig(o.dds_rig = rig.value_or(palp::dds::default_rig()));
   if (have_frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");
   if (o.follow_mm < 0) o.follow_mm = o.have_camera ? 0.0 : 150.0;
   if (!o.script.empty() && !o.controller) throw UsageError("--script needs --controller");

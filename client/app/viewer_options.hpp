@@ -17,6 +17,9 @@ extern const char* const kUsage;
 struct Options {
   std::string host;
   std::uint16_t port = 0;
+  bool dds = false;  // --dds [DOMAIN] --rig NAME instead of --connect
+  std::uint32_t dds_domain = 0;
+  std::string dds_rig;
   bool controller = false;
   std::string token;
   std::string tls_ca, tls_pin, tls_cert, tls_key;

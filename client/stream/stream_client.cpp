@@ -60,8 +60,9 @@ std::string seconds_text(double s) {
 }
 
 void check_options(const StreamOptions& o) {
-  if (o.host.empty()) throw UsageError("stream client: empty host");
-  if (o.port == 0) throw UsageError("stream client: port 0");
+  if (o.dds && o.controller) throw UsageError("stream client: over DDS only as an observer");
+  if (o.host.empty() && !o.dds) throw UsageError("stream client: empty host");
+  if (o.port == 0 && !o.dds) throw UsageError("stream client: port 0");
   if (o.client_name.size() > kMaxNameBytes || o.token.size() > kMaxNameBytes)
     throw UsageError("stream client: client name or token longer than 256 bytes");
   if (!std::isfinite(o.frame_rate_hz) || o.frame_rate_hz < 0)
@@ -88,6 +89,11 @@ std::int64_t StreamClient::Impl::house_period_ns(const StreamOptions& o) {
 
 void StreamClient::Impl::start() {
   if (thread.joinable()) return;
+  if (opts.dds) {
+    dds_stop = false;
+    thread = std::thread([this] { run_dds(); });
+    return;
+  }
   io.restart();
   stopping = false;
   refused = false;
@@ -110,6 +116,11 @@ void StreamClient::Impl::start() {
 
 void StreamClient::Impl::stop() {
   if (!thread.joinable()) return;
+  if (opts.dds) {
+    dds_stop = true;
+    thread.join();
+    return;
+  }
   asio::post(io, [this] {
     stopping = true;
     if (conn) close(*conn);

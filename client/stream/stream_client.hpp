@@ -75,6 +75,11 @@ struct StreamOptions {
   double force_history_s = 10.0;    // how much force history latest() keeps
   std::size_t force_history_max_samples = 4096;  // thinned to this many (fast servers)
   std::size_t max_queued_commands = 64;          // commands beyond this are refused locally
+  // Over DDS instead of palp.v1 (palpd --dds; docs/dds.md): an observer of rig `dds_rig` on
+  // domain `dds_domain` (host, port, TLS and the controller role are not used).
+  bool dds = false;
+  std::uint32_t dds_domain = 0;
+  std::string dds_rig = "palp";
 };
 
 struct SceneDescription {
@@ -110,10 +115,10 @@ struct RenderVolume {
   std::array<std::int64_t, 3> dims{};
   std::array<double, 3> spacing{};  // mm between samples (scene spacing * step)
   std::uint32_t step = 1;
-  std::vector<float> d_surf;  // mm, positive inside the body
-  std::vector<float> d_bone;  // mm, positive inside bone; empty when the scene has none
-  std::vector<std::int16_t> hu;      // the CT's HU; empty unless asked for and the scene has it
-  std::vector<std::uint8_t> body;    // 0/1 body mask (with hu)
+  std::vector<float> d_surf;       // mm, positive inside the body
+  std::vector<float> d_bone;       // mm, positive inside bone; empty when the scene has none
+  std::vector<std::int16_t> hu;    // the CT's HU; empty unless asked for and the scene has it
+  std::vector<std::uint8_t> body;  // 0/1 body mask (with hu)
 };
 
 struct ContactState {

@@ -117,6 +117,10 @@ struct StreamClient::Impl {
   void record_result(std::uint64_t id, bool ok, const std::string& message);
   void fail_queued_commands(const std::string& why);
 
+  // dds_source.cpp: with opts.dds, the thread's body instead of the Asio loop (until dds_stop).
+  void run_dds();
+  std::atomic<bool> dds_stop{false};
+
   // ------------------------------------------------------------------ housekeeping
   void schedule_house();
   void housekeeping(std::int64_t now);

@@ -22,6 +22,7 @@
 #include "cli/check_rate.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli/probe_dds.hpp"
 #include "cli/server_link.hpp"
 #include "cli/tls_options.hpp"
 #include "loop/haptic_loop.hpp"
@@ -260,11 +261,12 @@ std::string json_number(double v) {
 
 int cmd_probe(const Arguments& argv) {
   if (wants_check_rate(argv)) return cmd_check_rate(argv);
+  if (wants_dds(argv)) return cmd_probe_dds(argv);
   const Args args(argv, {"help", "quiet", "contacts", "same-host"},
                   {"duration", "rate", "stall", "volume-max-dim", "role", "token", "name", "tls-ca",
                    "tls-pin", "tls-cert", "tls-key"});
   if (args.has("help")) {
-    std::cout << kProbeUsage << kCheckRateHelp;
+    std::cout << kProbeUsage << kCheckRateHelp << kProbeDdsHelp;
     return 0;
   }
   if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT (or --check-rate HZ)");

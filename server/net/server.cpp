@@ -89,7 +89,7 @@ class Server::Impl {
   void scene_changed() {
     asio::post(io_, [this] { scene_dirty_ = true; });
   }
-  std::function<void(const rt::Snapshot&)> tap_;  // set before start()
+  std::vector<std::function<void(const rt::Snapshot&)>> taps_;  // added before start()
 
   std::uint16_t port() const { return port_; }
   std::size_t client_count() const { return client_count_.load(); }
@@ -475,7 +475,7 @@ class Server::Impl {
         counted(*s, true);
         if (std::find(touched.begin(), touched.end(), s) == touched.end()) touched.push_back(s);
       }
-      if (tap_) tap_(*snap);
+      for (const auto& tap : taps_) tap(*snap);
       ring.pop();
     }
     for (const SessionPtr& s : touched) pump(s);
@@ -593,8 +593,8 @@ std::size_t Server::client_count() const {
 ServerCounters Server::counters() const {
   return impl_->counters();
 }
-void Server::set_snapshot_tap(std::function<void(const rt::Snapshot&)> tap) {
-  impl_->tap_ = std::move(tap);
+void Server::add_snapshot_tap(std::function<void(const rt::Snapshot&)> tap) {
+  impl_->taps_.push_back(std::move(tap));
 }
 void Server::scene_changed() {
   impl_->scene_changed();

@@ -121,9 +121,9 @@ class Server {
   ServerCounters counters() const;
   // Sends SceneInfo again to every client (after the tool or parameters changed).
   void scene_changed();
-  // Called on the io thread with every snapshot it drains (the OpenIGTLink bridge reads the same
-  // snapshots as palp.v1); set before start(), never blocks.
-  void set_snapshot_tap(std::function<void(const rt::Snapshot&)> tap);
+  // Called on the io thread with every snapshot it drains (the OpenIGTLink and DDS bridges read
+  // the same snapshots as palp.v1); added before start(), in order, never blocks.
+  void add_snapshot_tap(std::function<void(const rt::Snapshot&)> tap);
 
  private:
   class Impl;

@@ -34,38 +34,7 @@ variants=${PALP_WAKE_VARIANTS:-before after pinned}
 out=${PALP_WAKE_OUT:-/tmp/palp-wake}
 palpd=$build/server/palpd
 palp=$build/server/palp
-py=/usr/bin/python3
-helper=tests/bench/palpd_bench.py
-export PYTHONDONTWRITEBYTECODE=1
-export PALP_SCENE_CACHE=${PALP_SCENE_CACHE:-$out/cache}
-mkdir -p "$out"
-: >"$out/results.jsonl"
-
-pids=()
-cleanup() {
-  local pid
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
-  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
-}
-trap cleanup EXIT
-trap 'exit 130' INT TERM
-
-start_palpd() {
-  local log=$1; shift
-  "$palpd" "$@" >"$log" 2>&1 </dev/null &
-  pids+=($!)
-  local i
-  for ((i = 0; i < 1200; i++)); do
-    if grep -qs "listening on" "$log"; then
-      port=$(sed -n 's/.*listening on [^ ]*:\([0-9]*\),.*/\1/p' "$log" | head -1)
-      return 0
-    fi
-    kill -0 "${pids[-1]}" 2>/dev/null || { cat "$log" >&2; return 1; }
-    sleep 0.1
-  done
-  echo "palpd did not start" >&2
-  return 1
-}
+source tests/bench/palpd_bench_lib.sh  # helper, cleanup, child_cpu, start_palpd
 
 variant_args() {
   case $1 in

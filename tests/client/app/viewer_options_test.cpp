@@ -55,6 +55,18 @@ TEST(ViewerOptions, ACameraTurnsFollowingOffUnlessAsked) {
   EXPECT_EQ(o->follow_mm, 120.0);
 }
 
+TEST(ViewerOptions, DdsWatchesARigOnADomainInsteadOfConnecting) {
+  const auto o = parse({"--dds", "7", "--rig", "bay_2"});
+  ASSERT_TRUE(o);
+  EXPECT_TRUE(o->dds);
+  EXPECT_EQ(o->dds_domain, 7u);
+  EXPECT_EQ(o->dds_rig, "bay_2");
+  const auto d = parse({"--dds"});
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->dds_domain, 0u);
+  EXPECT_FALSE(d->dds_rig.empty());  // the host name, as palpd's default
+}
+
 TEST(ViewerOptions, HelpGivesNoOptionsAndTheUsageNamesEveryOption) {
   EXPECT_FALSE(parse({"--help"}));
   EXPECT_FALSE(parse({"-h"}));
@@ -64,7 +76,9 @@ TEST(ViewerOptions, HelpGivesNoOptionsAndTheUsageNamesEveryOption) {
 }
 
 TEST(ViewerOptions, MistakesAreRefusedWithWhatIsWrong) {
-  EXPECT_EQ(refusal({}), "--connect HOST:PORT is required");
+  EXPECT_EQ(refusal({}), "--connect HOST:PORT is required (or --dds)");
+  EXPECT_EQ(refusal({"--connect", "h:1", "--dds"}), "--connect and --dds: one or the other");
+  EXPECT_EQ(refusal({"--connect", "h:1", "--rig", "a"}), "--rig needs --dds");
   EXPECT_EQ(refusal({"--connect", "h:1", "--frames", "3"}), "--frames needs --screenshot FILE");
   EXPECT_EQ(refusal({"--connect", "h:1", "--script", "a.csv"}), "--script needs --controller");
   EXPECT_EQ(refusal({"--connect", "h:1", "--rate", "-1"}), "--rate: 0 to 100000 Hz");

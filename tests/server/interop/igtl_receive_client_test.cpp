@@ -135,7 +135,9 @@ void check_storage(const std::string& orientation) {
   // A tick missing from the recording can make a later copy of its values (the repeating
   // trajectory) the earliest match, after which the earlier ones cannot follow: only then may
   // samples fail the bound.
-  if (missing == 0) EXPECT_EQ(too_close, 0u) << "of " << printed.size() / 3 << " samples";
+  if (missing == 0) {
+    EXPECT_EQ(too_close, 0u) << "of " << printed.size() / 3 << " samples";
+  }
   EXPECT_LE(unmatched, missing) << "of " << printed.size() / 3 << " samples";
   EXPECT_LT(unmatched, printed.size() / 3 / 10 + 1);
 }
