@@ -1,0 +1,182 @@
+// Marrow filling by votes of the three orthogonal slice planes (see bone_marrow.hpp).
+//
+// Experts label whole bones: cortex, cancellous bone and marrow, whose HU (fatty marrow near
+// 0 HU in older patients) overlaps soft tissue's, so no level tells marrow from the spinal canal's
+// CSF and fat. Shape does: marrow is enclosed by cortex in every plane through it, the canal only
+// in axial slices (in coronal and sagittal ones it runs the length of the spine, opening between
+// the laminae, at the foramina and across the discs). A voxel is filled when at least two planes
+// call it enclosed. The same 3x3 closing that bridges a cortex thinner than a voxel also adds the
+// partial-volume rim of thin bone (ribs at 3 mm), where two planes agree.
+#include "prep/bone_marrow.hpp"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include "base/parallel.hpp"
+#include "prep/components.hpp"
+#include "prep/slice_planes.hpp"
+
+namespace palp::segmentation {
+namespace {
+
+// 3-wide dilation (or erosion) of a 0/1 image of nu x nv, along rows or along columns. Outside the
+// image counts as 0 when dilating and as 1 when eroding, so a closing contains its input.
+void widen_rows(const std::uint8_t* in, std::uint8_t* out, std::int64_t nu, std::int64_t nv,
+                bool dilate) {
+  for (std::int64_t v = 0; v < nv; ++v) {
+    const std::uint8_t* a = in + v * nu;
+    std::uint8_t* o = out + v * nu;
+    if (nu == 1) {
+      o[0] = a[0];
+      continue;
+    }
+    if (dilate) {
+      o[0] = a[0] | a[1];
+      for (std::int64_t u = 1; u + 1 < nu; ++u) o[u] = a[u - 1] | a[u] | a[u + 1];
+      o[nu - 1] = a[nu - 2] | a[nu - 1];
+    } else {
+      o[0] = a[0] & a[1];
+      for (std::int64_t u = 1; u + 1 < nu; ++u) o[u] = a[u - 1] & a[u] & a[u + 1];
+      o[nu - 1] = a[nu - 2] & a[nu - 1];
+    }
+  }
+}
+
+void widen_columns(const std::uint8_t* in, std::uint8_t* out, std::int64_t nu, std::int64_t nv,
+                   bool dilate) {
+  for (std::int64_t v = 0; v < nv; ++v) {
+    const std::uint8_t* mid = in + v * nu;
+    std::uint8_t* o = out + v * nu;
+    std::copy(mid, mid + nu, o);
+    for (const std::int64_t w : {v - 1, v + 1}) {
+      if (w < 0 || w >= nv) continue;
+      const std::uint8_t* other = in + w * nu;
+      if (dilate) {
+        for (std::int64_t u = 0; u < nu; ++u) o[u] |= other[u];
+      } else {
+        for (std::int64_t u = 0; u < nu; ++u) o[u] &= other[u];
+      }
+    }
+  }
+}
+
+void close_3x3(PlaneScratch& s, std::int64_t nu, std::int64_t nv) {
+  s.tmp.resize(s.cells.size());
+  s.closed.resize(s.cells.size());
+  widen_rows(s.cells.data(), s.tmp.data(), nu, nv, true);
+  widen_columns(s.tmp.data(), s.closed.data(), nu, nv, true);
+  widen_rows(s.closed.data(), s.tmp.data(), nu, nv, false);
+  widen_columns(s.tmp.data(), s.closed.data(), nu, nv, false);
+}
+
+// The box [u0, u1] x [v0, v1] of a plane that holds its nonzero voxels plus a margin; false if
+// the plane has none.
+struct Box2 {
+  std::int64_t u0, u1, v0, v1;
+};
+
+bool nonzero_box(const Plane& p, const std::uint8_t* mask, std::int64_t margin, Box2& box) {
+  box = {p.nu, -1, p.nv, -1};
+  for (std::int64_t v = 0; v < p.nv; ++v) {
+    std::int64_t first = -1, last = -1;
+    if (p.su == 1) {
+      const std::uint8_t* row = mask + p.at(0, v);
+      first = next_byte(row, 0, p.nu, true);
+      if (first == p.nu) continue;
+      last = first;
+      for (std::int64_t u = next_byte(row, first, p.nu, true); u < p.nu;
+           u = next_byte(row, u + 1, p.nu, true))
+        last = u;
+    } else {
+      for (std::int64_t u = 0; u < p.nu; ++u) {
+        if (!mask[p.at(u, v)]) continue;
+        if (first < 0) first = u;
+        last = u;
+      }
+      if (first < 0) continue;
+    }
+    box = {std::min(box.u0, first), std::max(box.u1, last), std::min(box.v0, v), v};
+  }
+  if (box.u1 < 0) return false;
+  box = {std::max<std::int64_t>(0, box.u0 - margin), std::min(p.nu - 1, box.u1 + margin),
+         std::max<std::int64_t>(0, box.v0 - margin), std::min(p.nv - 1, box.v1 + margin)};
+  return true;
+}
+
+// One plane's votes, worked on a copy of the bone's box: +1 for each voxel of a hole of the
+// closed bone (at most max_hole_mm2) and for each voxel the closing adds. With ends_open false, a
+// hole may reach the plane's first or last row (the scan's first or last slice: a bone the scan
+// cuts) but not both (a tube through the whole scan is a canal).
+void vote_plane(const Plane& p, const std::uint8_t* bone, bool ends_open, double max_hole_mm2,
+                std::uint8_t* votes, PlaneScratch& s) {
+  Box2 box{};
+  if (!nonzero_box(p, bone, 2, box)) return;
+  const std::int64_t nu = box.u1 - box.u0 + 1, nv = box.v1 - box.v0 + 1;
+  const auto at = [&](std::int64_t u, std::int64_t v) { return p.at(box.u0 + u, box.v0 + v); };
+  s.cells.resize(static_cast<std::size_t>(nu * nv));
+  for (std::int64_t v = 0; v < nv; ++v)
+    for (std::int64_t u = 0; u < nu; ++u) s.cells[u + nu * v] = bone[at(u, v)] != 0;
+  close_3x3(s, nu, nv);
+  for (std::size_t c = 0; c < s.cells.size(); ++c)
+    if (s.closed[c] && !s.cells[c])
+      ++votes[at(static_cast<std::int64_t>(c) % nu, static_cast<std::int64_t>(c) / nu)];
+  const Plane local{nu, nv, 0, 1, nu, p.u_mm, p.v_mm};
+  label_plane_background(local, s.closed.data(), s);
+  // Which regions reach the sides (bit 0), the first row (bit 1) or the last row (bit 2).
+  s.counts.assign(s.flags.size(), 0);
+  const bool first_is_end = box.v0 == 0, last_is_end = box.v1 == p.nv - 1;
+  for (std::int64_t v = 0; v < nv; ++v)
+    for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
+      auto& reach = s.counts[s.sets.find(r)];
+      const Run& run = s.runs.runs[r];
+      if (run.begin == 0 || run.end == nu || (v == 0 && !first_is_end) ||
+          (v == nv - 1 && !last_is_end))
+        reach |= 1;
+      if (v == 0 && first_is_end) reach |= 2;
+      if (v == nv - 1 && last_is_end) reach |= 4;
+    }
+  const double max_pixels = max_hole_mm2 / (p.u_mm * p.v_mm);
+  for (std::int64_t v = 0; v < nv; ++v)
+    for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
+      const std::int64_t root = s.sets.find(r);
+      const std::int64_t reach = s.counts[root];
+      const bool open = ends_open ? reach != 0 : (reach & 1) != 0 || reach == 6;
+      if (open || static_cast<double>(s.area[root]) > max_pixels) continue;
+      for (std::int64_t u = s.runs.runs[r].begin; u < s.runs.runs[r].end; ++u) ++votes[at(u, v)];
+    }
+}
+
+template <class PlaneOf>
+void vote_planes(std::int64_t count, PlaneOf plane_of, bool ends_open, const Mask& bone,
+                 double max_hole_mm2, Mask& votes) {
+  parallel_for_chunks(count, 2, [&](std::int64_t s0, std::int64_t s1) {
+    PlaneScratch scratch;
+    for (std::int64_t s = s0; s < s1; ++s)
+      vote_plane(plane_of(s), bone.data.data(), ends_open, max_hole_mm2, votes.data.data(),
+                 scratch);
+  });
+}
+
+}  // namespace
+
+void fill_marrow_by_votes(const PatientAxes& axes, const SegmentationParams& params, Mask& bone) {
+  const Grid& g = bone.grid;
+  Mask votes(g, 0, "bone marrow votes");
+  const double max_hole = params.bone_max_hole_mm2;
+  vote_planes(
+      g.dims[axes.slice], [&](std::int64_t s) { return axial_plane(g, axes, s); }, true, bone,
+      max_hole, votes);
+  vote_planes(
+      g.dims[axes.posterior], [&](std::int64_t s) { return coronal_plane(g, axes, s); }, false,
+      bone, max_hole, votes);
+  vote_planes(
+      g.dims[axes.lateral], [&](std::int64_t s) { return sagittal_plane(g, axes, s); }, false, bone,
+      max_hole, votes);
+  const auto needed = static_cast<std::uint8_t>(params.bone_marrow_votes);
+  for_each_nonzero(votes, [&](std::size_t n) {
+    if (votes.data[n] >= needed) bone.data[n] = 1;
+  });
+}
+
+}  // namespace palp::segmentation
