@@ -61,9 +61,15 @@ void widen_columns(const std::uint8_t* in, std::uint8_t* out, std::int64_t nu, s
   }
 }
 
-void close_3x3(PlaneScratch& s, std::int64_t nu, std::int64_t nv) {
+// A 3x3 closing of s.cells into s.closed, or 3x1 (along u only) when across_rows is false.
+void close_plane(PlaneScratch& s, std::int64_t nu, std::int64_t nv, bool across_rows) {
   s.tmp.resize(s.cells.size());
   s.closed.resize(s.cells.size());
+  if (!across_rows) {
+    widen_rows(s.cells.data(), s.tmp.data(), nu, nv, true);
+    widen_rows(s.tmp.data(), s.closed.data(), nu, nv, false);
+    return;
+  }
   widen_rows(s.cells.data(), s.tmp.data(), nu, nv, true);
   widen_columns(s.tmp.data(), s.closed.data(), nu, nv, true);
   widen_rows(s.closed.data(), s.tmp.data(), nu, nv, false);
@@ -105,10 +111,12 @@ bool nonzero_box(const Plane& p, const std::uint8_t* mask, std::int64_t margin, 
 }
 
 // One plane's votes, worked on a copy of the bone's box: +1 for each voxel of a hole of the
-// closed bone (at most max_hole_mm2) and for each voxel the closing adds. With ends_open false, a
-// hole may reach the plane's first or last row (the scan's first or last slice: a bone the scan
-// cuts) but not both (a tube through the whole scan is a canal).
-void vote_plane(const Plane& p, const std::uint8_t* bone, bool ends_open, double max_hole_mm2,
+// closed bone (at most max_hole_mm2) and for each voxel the closing adds. An axial plane is closed
+// 3x3 and its edges open a hole. A coronal or sagittal plane (rows = slices) is closed along its
+// rows only, so no gap between slices is bridged (a disc or an interlaminar space two thick slices
+// high stays open), and its first and last rows (the scan's first and last slices) do not open a
+// hole: there the scan cuts a bone, whose marrow runs on beyond it.
+void vote_plane(const Plane& p, const std::uint8_t* bone, bool axial, double max_hole_mm2,
                 std::uint8_t* votes, PlaneScratch& s) {
   Box2 box{};
   if (!nonzero_box(p, bone, 2, box)) return;
@@ -117,44 +125,38 @@ void vote_plane(const Plane& p, const std::uint8_t* bone, bool ends_open, double
   s.cells.resize(static_cast<std::size_t>(nu * nv));
   for (std::int64_t v = 0; v < nv; ++v)
     for (std::int64_t u = 0; u < nu; ++u) s.cells[u + nu * v] = bone[at(u, v)] != 0;
-  close_3x3(s, nu, nv);
+  close_plane(s, nu, nv, axial);
   for (std::size_t c = 0; c < s.cells.size(); ++c)
     if (s.closed[c] && !s.cells[c])
       ++votes[at(static_cast<std::int64_t>(c) % nu, static_cast<std::int64_t>(c) / nu)];
   const Plane local{nu, nv, 0, 1, nu, p.u_mm, p.v_mm};
   label_plane_background(local, s.closed.data(), s);
-  // Which regions reach the sides (bit 0), the first row (bit 1) or the last row (bit 2).
+  // Regions that reach an edge that opens them: the sides, and the first or last row unless it is
+  // the scan's end in a coronal or sagittal plane.
   s.counts.assign(s.flags.size(), 0);
-  const bool first_is_end = box.v0 == 0, last_is_end = box.v1 == p.nv - 1;
+  const bool first_opens = axial || box.v0 > 0, last_opens = axial || box.v1 < p.nv - 1;
   for (std::int64_t v = 0; v < nv; ++v)
     for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
-      auto& reach = s.counts[s.sets.find(r)];
       const Run& run = s.runs.runs[r];
-      if (run.begin == 0 || run.end == nu || (v == 0 && !first_is_end) ||
-          (v == nv - 1 && !last_is_end))
-        reach |= 1;
-      if (v == 0 && first_is_end) reach |= 2;
-      if (v == nv - 1 && last_is_end) reach |= 4;
+      if (run.begin == 0 || run.end == nu || (v == 0 && first_opens) || (v == nv - 1 && last_opens))
+        s.counts[s.sets.find(r)] = 1;
     }
   const double max_pixels = max_hole_mm2 / (p.u_mm * p.v_mm);
   for (std::int64_t v = 0; v < nv; ++v)
     for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
       const std::int64_t root = s.sets.find(r);
-      const std::int64_t reach = s.counts[root];
-      const bool open = ends_open ? reach != 0 : (reach & 1) != 0 || reach == 6;
-      if (open || static_cast<double>(s.area[root]) > max_pixels) continue;
+      if (s.counts[root] || static_cast<double>(s.area[root]) > max_pixels) continue;
       for (std::int64_t u = s.runs.runs[r].begin; u < s.runs.runs[r].end; ++u) ++votes[at(u, v)];
     }
 }
 
 template <class PlaneOf>
-void vote_planes(std::int64_t count, PlaneOf plane_of, bool ends_open, const Mask& bone,
+void vote_planes(std::int64_t count, PlaneOf plane_of, bool axial, const Mask& bone,
                  double max_hole_mm2, Mask& votes) {
   parallel_for_chunks(count, 2, [&](std::int64_t s0, std::int64_t s1) {
     PlaneScratch scratch;
     for (std::int64_t s = s0; s < s1; ++s)
-      vote_plane(plane_of(s), bone.data.data(), ends_open, max_hole_mm2, votes.data.data(),
-                 scratch);
+      vote_plane(plane_of(s), bone.data.data(), axial, max_hole_mm2, votes.data.data(), scratch);
   });
 }
 

@@ -44,10 +44,11 @@ struct SegmentationParams {
   // the spinal canal only in axial slices (common/prep/bone_marrow.hpp).
   int bone_marrow_votes = 2;
   double bone_max_hole_mm2 = 3000.0;
-  // Edge: a bone voxel beside non-bone, next to a thicker bone voxel, is dropped when its HU is
-  // below this fraction of the way from its outside neighbours' mean to its brightest bone
-  // neighbour (0: no trim). The half-maximum (0.5) cut ribs and cortex at 3 mm, where the
-  // brightest neighbour is itself partial volume; 0.3 was chosen on the shared CT (docs/prep.md).
+  // Edge trim: a bone voxel beside non-bone, next to a thicker bone voxel, is dropped when its HU
+  // is below this fraction of the way from its outside neighbours' mean to its brightest bone
+  // neighbour; 0: no trim. The half-maximum (0.5) fits sharp phantom edges but cuts ribs and
+  // cortex the experts label on the shared CT (0 fits those best); 0.3 is the compromise that
+  // still drops the one-voxel rim a contrast-filled vessel leaves on a bone (docs/prep.md).
   double bone_edge_fraction = 0.3;
   // Regions outside the bone that the bone encloses in 3D and that hold at most this are filled.
   double bone_max_cavity_ml = 30.0;

@@ -57,7 +57,7 @@ TEST(HuLevels, APeakFarFromSoftTissueIsNotFollowed) {
   std::fill(fat.data.begin(), fat.data.end(), std::int16_t{-100});
   const HuLevels none = estimate_hu_levels(fat, body);
   EXPECT_FALSE(none.peak_found);
-  EXPECT_EQ(none.levels.grow_hu, 100.0);
+  EXPECT_EQ(none.levels.grow_hu, 150.0);
   EXPECT_NE(none.note.find("no soft-tissue peak"), std::string::npos);
   Grid small;
   small.dims = {2, 2, 2};
