@@ -10,6 +10,7 @@
 #include "prep/bone_marrow.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -131,21 +132,32 @@ void vote_plane(const Plane& p, const std::uint8_t* bone, bool axial, double max
       ++votes[at(static_cast<std::int64_t>(c) % nu, static_cast<std::int64_t>(c) / nu)];
   const Plane local{nu, nv, 0, 1, nu, p.u_mm, p.v_mm};
   label_plane_background(local, s.closed.data(), s);
-  // Regions that reach an edge that opens them: the sides, and the first or last row unless it is
-  // the scan's end in a coronal or sagittal plane.
+  // Per region: -1 if it reaches an edge that opens it (the sides, and the first or last row
+  // unless it is the scan's end in a coronal or sagittal plane), else its widest run along u.
   s.counts.assign(s.flags.size(), 0);
   const bool first_opens = axial || box.v0 > 0, last_opens = axial || box.v1 < p.nv - 1;
   for (std::int64_t v = 0; v < nv; ++v)
     for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
       const Run& run = s.runs.runs[r];
+      auto& c = s.counts[s.sets.find(r)];
       if (run.begin == 0 || run.end == nu || (v == 0 && first_opens) || (v == nv - 1 && last_opens))
-        s.counts[s.sets.find(r)] = 1;
+        c = -1;
+      else if (c >= 0)
+        c = std::max(c, run.end - run.begin);
     }
+  // Size: an axial hole holds at most max_hole_mm2 (a marrow cavity's cross-section). In coronal
+  // and sagittal planes a long bone's cavity runs along the slices as far as the scan does, so
+  // only its width across them is bounded, by the side of a square of that area.
   const double max_pixels = max_hole_mm2 / (p.u_mm * p.v_mm);
+  const double max_width = std::sqrt(max_hole_mm2) / p.u_mm;
+  const auto fits = [&](std::int64_t root) {
+    return axial ? static_cast<double>(s.area[root]) <= max_pixels
+                 : static_cast<double>(s.counts[root]) <= max_width;
+  };
   for (std::int64_t v = 0; v < nv; ++v)
     for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
       const std::int64_t root = s.sets.find(r);
-      if (s.counts[root] || static_cast<double>(s.area[root]) > max_pixels) continue;
+      if (s.counts[root] < 0 || !fits(root)) continue;
       for (std::int64_t u = s.runs.runs[r].begin; u < s.runs.runs[r].end; ++u) ++votes[at(u, v)];
     }
 }

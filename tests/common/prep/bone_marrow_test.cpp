@@ -87,8 +87,11 @@ TEST(BoneMarrow, ACanalBehindFilledBodiesStaysOpen) {
 
 TEST(BoneMarrow, ALongBoneTheScanCutsAtBothEndsKeepsItsMarrow) {
   // An arm's long bone beside the torso runs through the whole scan: its marrow cavity reaches the
-  // first and last slices, which do not open it.
+  // first and last slices, which do not open it. Slices 4 mm apart: in a coronal plane the cavity
+  // (15 x 240 mm) is larger than any axial hole may be; only its width is bounded there.
   CtVolume ct = tissue_scene();
+  ct.grid.spacing[2] = 4.0;
+  ASSERT_GT(15.0 * 240.0, SegmentationParams{}.bone_max_hole_mm2);
   cylinder(ct, 50, 50, 10, 0, 60, 800);
   cylinder(ct, 50, 50, 7, 0, 60, 0);  // fatty marrow
   const Mask bone = bone_of(ct);
