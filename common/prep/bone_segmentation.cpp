@@ -11,9 +11,9 @@
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
+#include "prep/bone_marrow.hpp"
 #include "prep/components.hpp"
 #include "prep/segmentation_shared.hpp"
-#include "prep/slice_planes.hpp"
 
 namespace palp {
 namespace segmentation {
@@ -89,153 +89,6 @@ void remove_leaks(double fraction, Mask& bone) {
   });
 }
 
-// 3-wide dilation (or erosion) of a 0/1 image of nu x nv, along rows or along columns. Outside the
-// image counts as 0 when dilating and as 1 when eroding, so a closing contains its input.
-void widen_rows(const std::uint8_t* in, std::uint8_t* out, std::int64_t nu, std::int64_t nv,
-                bool dilate) {
-  for (std::int64_t v = 0; v < nv; ++v) {
-    const std::uint8_t* a = in + v * nu;
-    std::uint8_t* o = out + v * nu;
-    if (nu == 1) {
-      o[0] = a[0];
-      continue;
-    }
-    if (dilate) {
-      o[0] = a[0] | a[1];
-      for (std::int64_t u = 1; u + 1 < nu; ++u) o[u] = a[u - 1] | a[u] | a[u + 1];
-      o[nu - 1] = a[nu - 2] | a[nu - 1];
-    } else {
-      o[0] = a[0] & a[1];
-      for (std::int64_t u = 1; u + 1 < nu; ++u) o[u] = a[u - 1] & a[u] & a[u + 1];
-      o[nu - 1] = a[nu - 2] & a[nu - 1];
-    }
-  }
-}
-
-void widen_columns(const std::uint8_t* in, std::uint8_t* out, std::int64_t nu, std::int64_t nv,
-                   bool dilate) {
-  for (std::int64_t v = 0; v < nv; ++v) {
-    const std::uint8_t* mid = in + v * nu;
-    std::uint8_t* o = out + v * nu;
-    std::copy(mid, mid + nu, o);
-    for (const std::int64_t w : {v - 1, v + 1}) {
-      if (w < 0 || w >= nv) continue;
-      const std::uint8_t* other = in + w * nu;
-      if (dilate) {
-        for (std::int64_t u = 0; u < nu; ++u) o[u] |= other[u];
-      } else {
-        for (std::int64_t u = 0; u < nu; ++u) o[u] &= other[u];
-      }
-    }
-  }
-}
-
-void close_3x3(PlaneScratch& s, std::int64_t nu, std::int64_t nv) {
-  s.tmp.resize(s.cells.size());
-  s.closed.resize(s.cells.size());
-  widen_rows(s.cells.data(), s.tmp.data(), nu, nv, true);
-  widen_columns(s.tmp.data(), s.closed.data(), nu, nv, true);
-  widen_rows(s.closed.data(), s.tmp.data(), nu, nv, false);
-  widen_columns(s.tmp.data(), s.closed.data(), nu, nv, false);
-}
-
-// The box [u0, u1] x [v0, v1] of a plane that holds its nonzero voxels plus a margin; false if
-// the plane has none.
-struct Box2 {
-  std::int64_t u0, u1, v0, v1;
-};
-
-bool nonzero_box(const Plane& p, const std::uint8_t* mask, std::int64_t margin, Box2& box) {
-  box = {p.nu, -1, p.nv, -1};
-  for (std::int64_t v = 0; v < p.nv; ++v) {
-    std::int64_t first = -1, last = -1;
-    if (p.su == 1) {
-      const std::uint8_t* row = mask + p.at(0, v);
-      first = next_byte(row, 0, p.nu, true);
-      if (first == p.nu) continue;
-      last = first;
-      for (std::int64_t u = next_byte(row, first, p.nu, true); u < p.nu;
-           u = next_byte(row, u + 1, p.nu, true))
-        last = u;
-    } else {
-      for (std::int64_t u = 0; u < p.nu; ++u) {
-        if (!mask[p.at(u, v)]) continue;
-        if (first < 0) first = u;
-        last = u;
-      }
-      if (first < 0) continue;
-    }
-    box = {std::min(box.u0, first), std::max(box.u1, last), std::min(box.v0, v), v};
-  }
-  if (box.u1 < 0) return false;
-  box = {std::max<std::int64_t>(0, box.u0 - margin), std::min(p.nu - 1, box.u1 + margin),
-         std::max<std::int64_t>(0, box.v0 - margin), std::min(p.nv - 1, box.v1 + margin)};
-  return true;
-}
-
-// Marrow in one slice, worked on a copy of the bone's box. The bone is closed 3x3 (bridging the
-// gaps of thin cortices); in each hole of the closed bone the voxels at or above marrow_min_hu are
-// marrow (all of a small hole), so a canal the closing merges with a vertebral body stays open;
-// the closing's own voxels join where they border marrow; small holes left inside are filled.
-void fill_plane_marrow(const Plane& p, std::uint8_t* bone, const std::int16_t* hu,
-                       const SegmentationParams& params, PlaneScratch& s) {
-  Box2 box{};
-  if (!nonzero_box(p, bone, 2, box)) return;
-  const std::int64_t nu = box.u1 - box.u0 + 1, nv = box.v1 - box.v0 + 1;
-  const auto at = [&](std::int64_t u, std::int64_t v) { return p.at(box.u0 + u, box.v0 + v); };
-  const double pixel_mm2 = p.u_mm * p.v_mm;
-  const auto small = [&](std::int64_t area) {
-    return static_cast<double>(area) * pixel_mm2 <= params.bone_small_hole_mm2;
-  };
-  s.cells.resize(static_cast<std::size_t>(nu * nv));
-  for (std::int64_t v = 0; v < nv; ++v)
-    for (std::int64_t u = 0; u < nu; ++u) s.cells[u + nu * v] = bone[at(u, v)] != 0;
-  close_3x3(s, nu, nv);
-  const Plane local{nu, nv, 0, 1, nu, p.u_mm, p.v_mm};
-  label_plane_background(local, s.closed.data(), s);
-  s.marrow.assign(s.cells.size(), 0);
-  for (std::int64_t v = 0; v < nv; ++v)
-    for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
-      const std::int64_t root = s.sets.find(r);
-      if (s.flags[root]) continue;
-      const bool whole = small(s.area[root]);
-      for (std::int64_t u = s.runs.runs[r].begin; u < s.runs.runs[r].end; ++u)
-        if (whole || hu[at(u, v)] >= params.marrow_min_hu) s.marrow[u + nu * v] = 1;
-    }
-  const auto marrow = [&](std::int64_t u, std::int64_t v) {
-    return u >= 0 && v >= 0 && u < nu && v < nv && s.marrow[u + nu * v];
-  };
-  for (std::int64_t v = 0; v < nv; ++v)
-    for (std::int64_t u = 0; u < nu; ++u) {
-      auto& c = s.cells[u + nu * v];
-      if (s.marrow[u + nu * v]) c = 1;
-      if (!s.closed[u + nu * v] || c) continue;
-      if (marrow(u - 1, v) || marrow(u + 1, v) || marrow(u, v - 1) || marrow(u, v + 1)) c = 1;
-    }
-  fill_plane_holes(local, s.cells.data(), small, s);
-  for (std::int64_t v = 0; v < nv; ++v)
-    for (std::int64_t u = 0; u < nu; ++u)
-      if (s.cells[u + nu * v]) bone[at(u, v)] = 1;
-}
-
-// Marrow filling in axial slices, then in coronal ones (where a vertebral body is a ring of
-// endplates and lateral walls even when its posterior wall is open at the basivertebral foramen).
-void fill_marrow(const CtVolume& ct, const PatientAxes& axes, const SegmentationParams& params,
-                 Mask& bone) {
-  const Grid& g = bone.grid;
-  parallel_for_chunks(g.dims[axes.slice], 2, [&](std::int64_t s0, std::int64_t s1) {
-    PlaneScratch scratch;
-    for (std::int64_t s = s0; s < s1; ++s)
-      fill_plane_marrow(axial_plane(g, axes, s), bone.data.data(), ct.data.data(), params, scratch);
-  });
-  parallel_for_chunks(g.dims[axes.posterior], 2, [&](std::int64_t s0, std::int64_t s1) {
-    PlaneScratch scratch;
-    for (std::int64_t s = s0; s < s1; ++s)
-      fill_plane_marrow(coronal_plane(g, axes, s), bone.data.data(), ct.data.data(), params,
-                        scratch);
-  });
-}
-
 // Cavities: regions outside the bone (6-connected) that do not reach the volume's border and hold
 // at most max_ml are enclosed marrow and are filled.
 void fill_enclosed_cavities(double max_ml, Mask& bone) {
@@ -261,12 +114,14 @@ void fill_enclosed_cavities(double max_ml, Mask& bone) {
 }
 
 // Surface refinement: a bone voxel with a face neighbour outside the bone stays bone only if its
-// HU reaches halfway between its brightest bone neighbour and the mean of its outside neighbours —
-// the half-maximum edge, where partial volume puts the true surface. Only where the bone is thick
+// HU reaches `fraction` of the way from the mean of its outside neighbours to its brightest bone
+// neighbour — a partial-volume edge (0.5 would be the half-maximum; see SegmentationParams for
+// why less). Nothing is trimmed with fraction 0. Only where the bone is thick
 // enough to hold an interior voxel (one with no face neighbour outside) next to it: in a rib or
 // cortex one or two voxels across every voxel is partial volume, no neighbour gives the bone's
 // full HU, and the rule would erode the structure instead of placing its edge.
-void refine_surface(const CtVolume& ct, Mask& bone) {
+void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
+  if (fraction <= 0.0) return;
   const Grid& g = bone.grid;
   Mask trim(g, 0, "bone surface");
   Mask surface(g, 0, "bone surface voxels");
@@ -296,7 +151,8 @@ void refine_surface(const CtVolume& ct, Mask& bone) {
       }
     }
     if (outside == 0 || bright < -1e8) return;
-    if (ct.data[n] < (bright + outside_sum / outside) / 2.0) trim.data[n] = 1;
+    const double out_hu = outside_sum / outside;
+    if (ct.data[n] < out_hu + fraction * (bright - out_hu)) trim.data[n] = 1;
   });
   for_each_nonzero(trim, [&](std::size_t n) { bone.data[n] = 0; });
 }
@@ -326,9 +182,9 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   keep_seeded_regions(bone);                              // region growing from the seeds
   remove_leaks(params.bone_leak_contact_fraction, bone);  // vessels resting on bone
   for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });
-  fill_marrow(ct, axes, params, bone);                      // marrow, slice by slice
+  fill_marrow_by_votes(axes, params, bone);                 // marrow: enclosed in 2 of 3 planes
   fill_enclosed_cavities(params.bone_max_cavity_ml, bone);  // marrow enclosed in 3D
-  refine_surface(ct, bone);                                 // half-maximum surface
+  refine_surface(ct, params.bone_edge_fraction, bone);      // partial-volume edge
   remove_small_islands(params.min_bone_island_ml, bone);    // islands
   if (stats) stats->bone_voxels = count_nonzero(bone);
   return bone;

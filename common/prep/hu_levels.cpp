@@ -55,7 +55,6 @@ HuLevels estimate_hu_levels(const CtVolume& ct, const Mask& body, const BoneLeve
   out.offset_hu = offset;
   out.levels.seed_hu = nominal.seed_hu + offset;
   out.levels.grow_hu = nominal.grow_hu + offset;
-  out.levels.marrow_min_hu = nominal.marrow_min_hu + offset;
   out.levels.iso_hu = nominal.iso_hu + offset;
   return out;
 }

@@ -12,7 +12,7 @@
 //               bone above); none when that range holds under 1 % of the body
 //   offset      peak - 50 HU, limited to +-40 HU (a scan off by more is not a calibration error
 //               this should follow: the levels stay at the nominal ones and prep.json says so)
-//   levels      bone_seed, bone_grow, marrow_min and the bone iso level, each nominal + offset
+//   levels      bone_seed, bone_grow and the bone iso level, each nominal + offset
 #pragma once
 
 #include <string>
@@ -23,8 +23,7 @@ namespace palp {
 
 struct BoneLevels {
   double seed_hu = 300.0;
-  double grow_hu = 100.0;
-  double marrow_min_hu = 60.0;
+  double grow_hu = 150.0;
   double iso_hu = 200.0;
 };
 

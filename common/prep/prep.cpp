@@ -37,8 +37,9 @@ using Clock = std::chrono::steady_clock;
 
 // Bump when the algorithms change what prep writes, so old caches are not reused.
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
-// bone too thin for an interior voxel
-constexpr int kPrepAlgorithmVersion = 6;
+// bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
+// edge trim at 0.3
+constexpr int kPrepAlgorithmVersion = 7;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
@@ -127,8 +128,9 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_seed_hu", s.bone_seed_hu},
           {"bone_grow_hu", s.bone_grow_hu},
           {"bone_leak_contact_fraction", s.bone_leak_contact_fraction},
-          {"marrow_min_hu", s.marrow_min_hu},
-          {"bone_small_hole_mm2", s.bone_small_hole_mm2},
+          {"bone_marrow_votes", s.bone_marrow_votes},
+          {"bone_max_hole_mm2", s.bone_max_hole_mm2},
+          {"bone_edge_fraction", s.bone_edge_fraction},
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},
           {"distance_band_mm", params.distance.band_mm},
@@ -270,13 +272,11 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   SegmentationParams segmentation = params.segmentation;
   SurfaceParams surface = params.surface;
   stage("HU levels", [&] {
-    result.hu_levels = estimate_hu_levels(ct, body,
-                                          {segmentation.bone_seed_hu, segmentation.bone_grow_hu,
-                                           segmentation.marrow_min_hu, surface.bone_hu});
+    result.hu_levels = estimate_hu_levels(
+        ct, body, {segmentation.bone_seed_hu, segmentation.bone_grow_hu, surface.bone_hu});
     if (params.adapt_bone_levels) {
       segmentation.bone_seed_hu = result.hu_levels.levels.seed_hu;
       segmentation.bone_grow_hu = result.hu_levels.levels.grow_hu;
-      segmentation.marrow_min_hu = result.hu_levels.levels.marrow_min_hu;
       surface.bone_hu = result.hu_levels.levels.iso_hu;
     }
   });
@@ -348,7 +348,6 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
         {"note", h.note},
         {"bone_seed_hu", segmentation.bone_seed_hu},
         {"bone_grow_hu", segmentation.bone_grow_hu},
-        {"marrow_min_hu", segmentation.marrow_min_hu},
         {"bone_iso_hu", surface.bone_hu}};
   }
   if (subvoxel) {

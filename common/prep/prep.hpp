@@ -36,8 +36,8 @@ struct PrepParams {
   SegmentationParams segmentation;
   DistanceParams distance;
   SurfaceParams surface;
-  // The bone levels (segmentation's bone_seed_hu, bone_grow_hu, marrow_min_hu and the surface's
-  // bone_hu) follow the scan's soft-tissue peak (prep/hu_levels.hpp); false: used as given.
+  // The bone levels (segmentation's bone_seed_hu, bone_grow_hu and the surface's bone_hu) follow
+  // the scan's soft-tissue peak (prep/hu_levels.hpp); false: used as given.
   bool adapt_bone_levels = true;
   bool use_cache = true;
   // Prep a volume that does not look like a CT in HU (prep/ct_check.hpp) instead of refusing it.

@@ -9,8 +9,8 @@
 // slice (lungs and bowel gas that reach the first or last slice stay inside).
 // Bone: seeds at high HU grown into lower-HU bone inside the body; medium-HU regions that touch
 // bone only across a narrow contact (contrast-filled vessels, enhancing organs) are dropped;
-// marrow filled in axial and coronal slices and in small cavities enclosed in 3D; the surface set
-// at the half-maximum edge between bone and its surroundings; small islands removed.
+// marrow filled where two of the three orthogonal slice planes find it enclosed, and in small
+// cavities enclosed in 3D; the edge trimmed to a partial-volume level; small islands removed.
 #pragma once
 
 #include <cstdint>
@@ -34,15 +34,22 @@ struct SegmentationParams {
 
   // Bone: seeds at or above bone_seed_hu, grown into neighbours at or above bone_grow_hu.
   double bone_seed_hu = 300.0;
-  double bone_grow_hu = 100.0;
+  double bone_grow_hu = 150.0;
   // A grown region below bone_seed_hu that touches the seeds' rim with fewer than this fraction of
   // its voxels is a leak (a contrast-filled vessel or organ resting on bone) and is dropped.
   double bone_leak_contact_fraction = 0.05;
-  // Marrow: in the holes of the bone (axial and coronal slices, after a 3x3 closing that bridges
-  // thin cortices) the voxels at or above marrow_min_hu are filled, so the spinal canal (CSF, fat)
-  // stays open; holes of at most bone_small_hole_mm2 are filled whole.
-  double marrow_min_hu = 60.0;
-  double bone_small_hole_mm2 = 40.0;
+  // Marrow: a voxel is filled when at least bone_marrow_votes of the three orthogonal slice planes
+  // through it (axial, coronal, sagittal) find it enclosed by the bone after a 3x3 closing (a hole
+  // of at most bone_max_hole_mm2, or a voxel the closing adds). Marrow is enclosed in all three,
+  // the spinal canal only in axial slices (common/prep/bone_marrow.hpp).
+  int bone_marrow_votes = 2;
+  double bone_max_hole_mm2 = 3000.0;
+  // Edge trim: a bone voxel beside non-bone, next to a thicker bone voxel, is dropped when its HU
+  // is below this fraction of the way from its outside neighbours' mean to its brightest bone
+  // neighbour; 0: no trim. The half-maximum (0.5) fits sharp phantom edges but cuts ribs and
+  // cortex the experts label on the shared CT (0 fits those best); 0.3 is the compromise that
+  // still drops the one-voxel rim a contrast-filled vessel leaves on a bone (docs/prep.md).
+  double bone_edge_fraction = 0.3;
   // Regions outside the bone that the bone encloses in 3D and that hold at most this are filled.
   double bone_max_cavity_ml = 30.0;
   // Bone islands smaller than this are removed.

@@ -68,6 +68,18 @@ Plane coronal_plane(const Grid& g, const PatientAxes& axes, std::int64_t s) {
   return p;
 }
 
+Plane sagittal_plane(const Grid& g, const PatientAxes& axes, std::int64_t s) {
+  Plane p;
+  p.nu = g.dims[axes.posterior];
+  p.nv = g.dims[axes.slice];
+  p.su = axis_stride(g, axes.posterior);
+  p.sv = axis_stride(g, axes.slice);
+  p.u_mm = g.spacing[axes.posterior];
+  p.v_mm = g.spacing[axes.slice];
+  p.base = s * axis_stride(g, axes.lateral);
+  return p;
+}
+
 void label_plane_background(const Plane& p, const std::uint8_t* mask, PlaneScratch& s) {
   scan_plane(p, mask, true, s.runs);
   const auto& runs = s.runs.runs;

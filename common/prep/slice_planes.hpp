@@ -28,6 +28,10 @@ Plane axial_plane(const Grid& g, const PatientAxes& axes, std::int64_t s);
 // Coronal slice `s` (across the posterior axis): u runs across the patient, v along the slices.
 Plane coronal_plane(const Grid& g, const PatientAxes& axes, std::int64_t s);
 
+// Sagittal slice `s` (across the lateral axis): u runs along the posterior axis, v along the
+// slices.
+Plane sagittal_plane(const Grid& g, const PatientAxes& axes, std::int64_t s);
+
 // Runs of one plane along u, row by row in v.
 struct PlaneRuns {
   std::vector<Run> runs;

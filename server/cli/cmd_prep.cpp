@@ -47,8 +47,8 @@ Options:
   --max-table-thickness MM  thicker horizontal bands below the patient are kept (default %g)
   --bone-seed HU          bone region-growing seeds at or above (default %g)
   --bone-grow HU          bone grows into voxels at or above (default %g)
-  --bone-levels adapt|given  adapt (default): the bone levels (--bone-seed, --bone-grow,
-                          --bone-hu and the marrow level) move with the scan's soft-tissue peak,
+  --bone-levels adapt|given  adapt (default): the bone levels (--bone-seed, --bone-grow and
+                          --bone-hu) move with the scan's soft-tissue peak,
                           measured inside the body, by its offset from 50 HU (at most 40 HU);
                           given: used as written. prep.json records both ("hu_levels")
   --min-bone-island ML    drop bone islands smaller than this (default %g)

@@ -40,8 +40,7 @@ TEST(HuLevels, FindsThePeakAndShiftsTheLevelsByItsOffset) {
   EXPECT_EQ(at80.soft_peak_hu - at50.soft_peak_hu, 30.0);
   EXPECT_EQ(at80.offset_hu, at80.soft_peak_hu - 50.0);
   EXPECT_EQ(at80.levels.seed_hu, 300.0 + at80.offset_hu);
-  EXPECT_EQ(at80.levels.grow_hu, 100.0 + at80.offset_hu);
-  EXPECT_EQ(at80.levels.marrow_min_hu, 60.0 + at80.offset_hu);
+  EXPECT_EQ(at80.levels.grow_hu, 150.0 + at80.offset_hu);
   EXPECT_EQ(at80.levels.iso_hu, 200.0 + at80.offset_hu);
   EXPECT_TRUE(at80.note.empty());
 }
@@ -58,7 +57,7 @@ TEST(HuLevels, APeakFarFromSoftTissueIsNotFollowed) {
   std::fill(fat.data.begin(), fat.data.end(), std::int16_t{-100});
   const HuLevels none = estimate_hu_levels(fat, body);
   EXPECT_FALSE(none.peak_found);
-  EXPECT_EQ(none.levels.grow_hu, 100.0);
+  EXPECT_EQ(none.levels.grow_hu, 150.0);
   EXPECT_NE(none.note.find("no soft-tissue peak"), std::string::npos);
   Grid small;
   small.dims = {2, 2, 2};
@@ -72,7 +71,6 @@ Mask bone_of(const CtVolume& ct, const Mask& body, bool adapt) {
     const HuLevels h = estimate_hu_levels(ct, body);
     p.bone_seed_hu = h.levels.seed_hu;
     p.bone_grow_hu = h.levels.grow_hu;
-    p.marrow_min_hu = h.levels.marrow_min_hu;
   }
   return segment_bone(ct, body, p);
 }

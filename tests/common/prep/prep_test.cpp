@@ -119,7 +119,7 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   const double offset = json["hu_levels"]["offset_hu"];
   EXPECT_EQ(json["surface_iso_hu"]["bone"], 200.0 + offset);
   EXPECT_EQ(json["hu_levels"]["bone_iso_hu"], 200.0 + offset);
-  EXPECT_EQ(json["hu_levels"]["bone_grow_hu"], 100.0 + offset);
+  EXPECT_EQ(json["hu_levels"]["bone_grow_hu"], 150.0 + offset);
   EXPECT_EQ(json["subvoxel_band_mm_used"], band);
   const SurfacePoints skin = surface_points(ct, body, -400.0);
   EXPECT_EQ(json["surface_points"]["skin"][0], skin.points.size());

@@ -1,0 +1,87 @@
+#!/bin/bash
+# Whole `palp prep` speed and peak memory on the two benchmark phantoms (issue 13 "Speed"):
+#   A  384x384x160 at 0.8x0.8x1.5 mm: target >= 10x faster than scipy's two signed EDTs (the
+#      scipy figure is read from docs/bench/prep_vs_scipy.json, or given with --scipy-s)
+#   B  512x512x400 at 0.8x0.8x1.0 mm: target <= 3 s and <= 1.5 GB peak RSS
+# Each run is `/usr/bin/time -v palp prep FILE --out DIR --no-cache [--surface S]`; the load
+# average (uptime) is recorded before every run, because timings on a shared machine are noisy.
+# Prints one Markdown row per run and a median per case; never fails on a time (exit 0 unless
+# a run fails).
+#
+# Usage: tests/bench/prep_speed.sh [--palp build/server/palp] [--runs 3] [--surface subvoxel|mask]
+#                                  [--cases AB] [--work DIR] [--scipy-s SECONDS]
+set -euo pipefail
+
+palp=build/server/palp
+runs=3
+surface=subvoxel
+cases=AB
+work=${TMPDIR:-/tmp}/palp_prep_speed
+scipy_s=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --palp) palp=$2; shift 2 ;;
+    --runs) runs=$2; shift 2 ;;
+    --surface) surface=$2; shift 2 ;;
+    --cases) cases=$2; shift 2 ;;
+    --work) work=$2; shift 2 ;;
+    --scipy-s) scipy_s=$2; shift 2 ;;
+    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    *) echo "prep_speed.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
+  esac
+done
+[ -x "$palp" ] || { echo "prep_speed.sh: $palp is not an executable (build first)" >&2; exit 2; }
+[ -x /usr/bin/time ] || { echo "prep_speed.sh: needs /usr/bin/time (Debian package: time)" >&2; exit 2; }
+here=$(cd "$(dirname "$0")/../.." && pwd)
+if [ -z "$scipy_s" ] && [ -f "$here/docs/bench/prep_vs_scipy.json" ]; then
+  scipy_s=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['case_a']['scipy_two_maps_median_s'])" \
+    "$here/docs/bench/prep_vs_scipy.json")
+fi
+mkdir -p "$work"
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(uname -sr)"
+echo "palp: $palp, surface: $surface, runs per case: $runs, scipy two maps (case A): ${scipy_s:-unknown} s"
+echo
+echo "| case | run | load (1 min) before | wall s | peak RSS MiB | bone mask s | d_surf + d_bone s | vs scipy |"
+echo "|---|---|---|---|---|---|---|---|"
+
+run_case() {
+  local name=$1 dims=$2 spacing=$3
+  local ct="$work/torso_${dims}.nii.gz"
+  [ -f "$ct" ] || "$palp" phantom torso --dims "$dims" --spacing "$spacing" --out "$ct" >/dev/null
+  local walls=()
+  for r in $(seq 1 "$runs"); do
+    local out="$work/out_${name}_$r"
+    rm -rf "$out"
+    local load
+    load=$(cut -d' ' -f1 /proc/loadavg)
+    if ! /usr/bin/time -v -o "$work/time.txt" "$palp" prep "$ct" --out "$out" --no-cache \
+      --surface "$surface" >"$work/prep.log" 2>&1; then
+      cat "$work/prep.log" >&2
+      exit 1
+    fi
+    local wall rss
+    wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,t,":"); s=0; for(i=1;i<=n;i++) s=s*60+t[i]; print s}' "$work/time.txt")
+    rss=$(awk -F': ' '/Maximum resident set size/ {printf "%.0f", $2/1024}' "$work/time.txt")
+    local stages
+    stages=$(python3 -c "
+import json,sys
+t=json.load(open(sys.argv[1]))['timings_s']
+print('%.3f %.3f' % (t.get('bone mask',0), t.get('d_surf',0)+t.get('d_bone',0)))" "$out/prep.json")
+    local ratio="—"
+    if [ "$name" = A ] && [ -n "$scipy_s" ]; then
+      ratio=$(python3 -c "print('%.1fx' % ($scipy_s / $wall))")
+    fi
+    echo "| $name $dims | $r | $load | $wall | $rss | ${stages% *} | ${stages#* } | $ratio |"
+    walls+=("$wall")
+    rm -rf "$out"
+  done
+  local median
+  median=$(printf '%s\n' "${walls[@]}" | sort -n | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}')
+  echo "| $name median | | | $median | | | | $( [ "$name" = A ] && [ -n "$scipy_s" ] && python3 -c "print('%.1fx' % ($scipy_s / $median))" || echo —) |"
+}
+
+case "$cases" in *A*) run_case A 384x384x160 0.8x0.8x1.5 ;; esac
+case "$cases" in *B*) run_case B 512x512x400 0.8x0.8x1.0 ;; esac
+echo
+echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
