@@ -182,7 +182,9 @@ DeviceStatus FalconDevice::deactivate() {
   return DeviceStatus::Ok;
 }
 
-// A probe frame (zero efforts, homing asked) answered within `tries` x 20 ms: firmware running.
+// A probe frame (zero efforts, homing asked) answered within `tries` x 50 ms: firmware running.
+// A Falcon answers within a few ms; the margin is for a busy host (and the test emulator), and
+// costs only a device without firmware, once, before its upload.
 bool FalconDevice::answers_frames(libusb_device_handle* handle, int tries) {
   Port port{handle, {}};
   fp::FrameParser parser;
@@ -191,7 +193,7 @@ bool FalconDevice::answers_frames(libusb_device_handle* handle, int tries) {
   for (int i = 0; i < tries; ++i) {
     if (!port.write(frame, sizeof frame)) return false;
     std::uint8_t reply[2 * fp::kFrameSize];
-    const std::size_t got = port.read(reply, sizeof reply, 20);
+    const std::size_t got = port.read(reply, sizeof reply, 50);
     bool answered = false;
     parser.feed(reply, got, [&](const fp::DeviceFrame&) { answered = true; });
     if (answered) return true;
@@ -258,7 +260,7 @@ std::string FalconDevice::upload(libusb_device_handle* handle) {
 std::string FalconDevice::setup(libusb_device_handle* handle) {
   Port port{handle, {}};
   if (!port.control(fp::kSioReset, 0, "reset") || !port.runtime_mode()) return port.error;
-  bool running = answers_frames(handle, 3);
+  bool running = answers_frames(handle, 5);
   std::string why;
   if (running) {
     already_running_.fetch_add(1, std::memory_order_relaxed);
