@@ -94,6 +94,7 @@ struct Site {
 // Rib crests and intercostal spaces along the ribs path, in path order.
 std::vector<Site> find_sites(const FieldSampler& f, const RibsSpec& spec, const BodyAxis& axis) {
   constexpr double kRay = 40.0;
+  constexpr double kProminence = 5.0;  // mm: half a rib's height
   std::vector<Site> prof;
   const double step = 0.5 / axis.extent;
   for (double a = spec.from; a <= spec.to; a += step) {
@@ -130,7 +131,12 @@ std::vector<Site> find_sites(const FieldSampler& f, const RibsSpec& spec, const 
       if (prof[j].below > prof[best].below) best = best_end = j;
       if (prof[j].below == prof[best].below) best_end = j;
     }
-    out.push_back(prof[(best + best_end) / 2]);
+    // A space lies kProminence deeper than the crests either side (or over no bone within the
+    // ray); else the two crests are one bony surface (a rib seen obliquely, two ribs touching)
+    // and what lies between them is no space.
+    const Site& space = prof[(best + best_end) / 2];
+    if (space.below >= std::max(prof[crests[c]].below, prof[crests[c + 1]].below) + kProminence)
+      out.push_back(space);
   }
   return out;
 }
@@ -174,60 +180,83 @@ void contrast(const std::string& scene_name, const std::string& scene,
   for (const char* tool_name : {"finger:1", "finger:37"}) {
     const Tool tool = parse_tool(tool_name);
     const double offset = pad_offset(tool);
+    // Each model's own set; beside palp's, palp measured with one parameter changed.
+    struct Series {
+      const Variant* v;
+      ForceParams prm;
+      std::string name, model;
+    };
+    std::vector<Series> series;
     for (const Variant& v : vars) {
-      const std::string model_name = to_string(v.model);
       const ForceParams prm = model_params(v.model, tool.kind);
-      ForceParams skin_only = prm;
+      series.push_back(
+          {&v, prm, std::string(to_string(v.model)) + ", " + tool_name, to_string(v.model)});
+      if (v.model != ModelKind::Palp) continue;
+      ForceParams flat = prm;
+      flat.layer_radius_mm = 0.0;
+      series.push_back(
+          {&v, flat, std::string("palp, no layer correction, ") + tool_name, "palp variant"});
+      for (double r : {5.0, 6.0, 10.0}) {
+        ForceParams reach = prm;
+        reach.bone_reach_mm = r;
+        char name[96];
+        std::snprintf(name, sizeof name, "palp, bone reach %g mm, %s", r, tool_name);
+        series.push_back({&v, reach, name, "palp variant"});
+      }
+    }
+    for (const Series& se : series) {
+      ForceParams skin_only = se.prm;
       skin_only.bone_enabled = false;
-      const Model model(v.fields, tool, prm), skin_model(v.fields, tool, skin_only);
+      const Model model(se.v->fields, tool, se.prm), skin_model(se.v->fields, tool, skin_only);
       State st = make_state(model), st_skin = make_state(skin_model);
-      const std::string series = model_name + ", " + tool_name;
-      std::printf("  %-46s", series.c_str());
-      // The bone law's reach r (f_b = 20 (x / r)^-3; printed r = 5 mm, palp's bone_reach_mm)
-      // only scales palp's bone term by (r / bone_reach_mm)^3 below the cap (same distances, same
-      // fade): other reaches are projected from the terms. The first is the one measured.
-      const double kReach[] = {prm.bone_reach_mm, 5.0, 6.0, 10.0};
-      std::vector<std::vector<double>> projected(std::size(kReach));
+      std::printf("  %-46s", se.name.c_str());
       for (double d : depths) {
-        std::vector<std::vector<double>> ratios(std::size(kReach));
+        std::vector<double> ratios;
         for (std::size_t pi = 0; pi < paths.size(); ++pi) {
           const std::vector<Site>& sites = paths[pi];
-          std::vector<double> force, skin;
+          std::vector<double> force;
           for (const Site& s : sites) {
             force.push_back(press_force(model, st, s.frame, d, offset));
-            skin.push_back(press_force(skin_model, st_skin, s.frame, d, offset));
-            csv.row({scene_name, std::string(tool_name), model_name, specs[pi].azimuth_deg, d,
-                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin.back()});
-          }
-          for (std::size_t r = 0; r < std::size(kReach); ++r) {
-            const double scale = std::pow(kReach[r] / prm.bone_reach_mm, 3.0);
-            auto at = [&](std::size_t i) { return skin[i] + scale * (force[i] - skin[i]); };
-            for (std::size_t i = 0; i < sites.size(); ++i) {
-              if (sites[i].rib) continue;
-              if (i > 0) ratios[r].push_back(at(i - 1) / at(i));
-              if (i + 1 < sites.size()) ratios[r].push_back(at(i + 1) / at(i));
+            if (std::getenv("XDIAG") && d == 6.0 && se.name == "palp, finger:1") {
+              const FieldSampler& f = *se.v->fields;
+              const Vec3d pad = pad_centre_at_depth(f, s.frame, d);
+              const double bn = f.dispatch([&](const auto& a) { return a.beneath_at(pad); });
+              const FieldSample sk = f.sample_surf(pad);
+              const Vec3d in = normalized(sk.grad);
+              const double exact = ray_to_bone(f, pad, in, 80.0);
+              const double along_frame = ray_to_bone(f, pad, -1.0 * s.frame.normal, 80.0);
+              const double ang =
+                  std::acos(std::clamp(dot(in, -1.0 * s.frame.normal), -1.0, 1.0)) * 57.3;
+              std::printf(
+                  "\nDIAG %s %.1f below %.2f: map %.2f, exact along v_s %.2f, along frame %.2f, "
+                  "angle %.1f deg, D_bone %.2f, force %.2f",
+                  s.rib ? "R" : "i", s.pos_mm, s.below, bn, exact, along_frame, ang,
+                  f.bone_value(pad), force.back());
             }
+            if (se.model == "palp variant") continue;
+            const double skin = press_force(skin_model, st_skin, s.frame, d, offset);
+            csv.row({scene_name, std::string(tool_name), se.model, specs[pi].azimuth_deg, d,
+                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin});
+          }
+          for (std::size_t i = 0; i < sites.size(); ++i) {
+            if (sites[i].rib) continue;
+            if (i > 0 && sites[i - 1].rib) ratios.push_back(force[i - 1] / force[i]);
+            if (i + 1 < sites.size() && sites[i + 1].rib) ratios.push_back(force[i + 1] / force[i]);
           }
         }
-        const double med = median(ratios[0]), lo = percentile(ratios[0], 0.0);
-        ratio_csv.row({scene_name, std::string(tool_name), model_name, series, d, med, lo,
-                       static_cast<double>(ratios[0].size())});
+        const double med = median(ratios), lo = percentile(ratios, 0.0);
+        ratio_csv.row({scene_name, std::string(tool_name), se.model, se.name, d, med, lo,
+                       static_cast<double>(ratios.size())});
         std::printf(" %g:%.2f(%.2f)", d, med, lo);
-        for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r)
-          projected[r].push_back(median(ratios[r]));
       }
-      for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r) {
-        char name[96];
-        std::snprintf(name, sizeof name, "palp, bone reach %g mm (projected), %s", kReach[r],
-                      tool_name);
-        std::printf("\n  %-46s", name);
-        for (std::size_t k = 0; k < depths.size(); ++k) {
-          std::printf(" %g:%.2f", depths[k], projected[r][k]);
-          ratio_csv.row({scene_name, std::string(tool_name), "palp projected", std::string(name),
-                         depths[k], projected[r][k], std::nan(""), std::nan("")});
-        }
-      }
-      std::printf("   [depth mm: median (smallest) rib / space]\n");
+      std::printf("   [depth mm: median (smallest) rib / space, %zu pairs]\n", [&] {
+        std::size_t n = 0;
+        for (const auto& sites : paths)
+          for (std::size_t i = 0; i < sites.size(); ++i)
+            if (!sites[i].rib)
+              n += (i > 0 && sites[i - 1].rib) + (i + 1 < sites.size() && sites[i + 1].rib);
+        return n;
+      }());
     }
   }
 }
@@ -564,10 +593,10 @@ int main(int argc, char** argv) {
   contrast("torso", "phantom:torso", torso_paths, depths, c_csv, r_csv);
   if (have_ct) {
     std::vector<RibsSpec> ct_paths;
-    for (double az : {-20.0, 0.0, 20.0, 40.0}) {
+    for (double az = -50.0; az <= 20.0; az += 10.0) {
       ct_paths.emplace_back();
-      ct_paths.back().from = 0.72;
-      ct_paths.back().to = 0.97;
+      ct_paths.back().from = 0.55;
+      ct_paths.back().to = 0.99;
       ct_paths.back().azimuth_deg = az;
     }
     contrast("ct", ct, ct_paths, depths, c_csv, r_csv);
