@@ -148,8 +148,7 @@ inline double value_at_u(const Geometry& g, const MapView<T>& m, const double u[
 // Interpolated value at x (mm) alone, kOutsideValue outside the box.
 template <class T>
 inline double value(const Geometry& g, const MapView<T>& m, const Vec3d& x) {
-  const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0],
-                       (x.y - g.origin[1]) * g.inv_spacing[1],
+  const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0], (x.y - g.origin[1]) * g.inv_spacing[1],
                        (x.z - g.origin[2]) * g.inv_spacing[2]};
   return in_box(g, u) ? value_at_u(g, m, u) : kOutsideValue;
 }
@@ -157,8 +156,7 @@ inline double value(const Geometry& g, const MapView<T>& m, const Vec3d& x) {
 template <GradientScheme G, class T>
 inline FieldSample sample(const Geometry& g, const MapView<T>& m, const Vec3d& x) {
   FieldSample out;
-  const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0],
-                       (x.y - g.origin[1]) * g.inv_spacing[1],
+  const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0], (x.y - g.origin[1]) * g.inv_spacing[1],
                        (x.z - g.origin[2]) * g.inv_spacing[2]};
   if (!in_box(g, u)) return out;
   out.inside = true;
@@ -226,25 +224,6 @@ struct FieldAccess {
   double bone_value_at(const Vec3d& x) const { return sampling::value(*geometry, bone, x); }
   // Distance along the skin's inward normal to bone (mm), kOutsideValue outside the box.
   double beneath_at(const Vec3d& x) const { return sampling::value(*geometry, beneath, x); }
-  // The cell of the bone-beneath map holding x: its 8 corner values (mm, ordered as
-  // sampling::corners), their trilinear weights, and x's fractions in the cell. False (nothing
-  // written) outside the box.
-  bool beneath_cell(const Vec3d& x, double value[8], double weight[8], double frac[3]) const {
-    const sampling::Geometry& g = *geometry;
-    const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0],
-                         (x.y - g.origin[1]) * g.inv_spacing[1],
-                         (x.z - g.origin[2]) * g.inv_spacing[2]};
-    if (!sampling::in_box(g, u)) return false;
-    const sampling::Cell cell = sampling::cell_at(g, u);
-    sampling::corners(g, beneath, cell.base, value);
-    const double* t = cell.t;
-    const double x0[2] = {1.0 - t[0], t[0]}, y0[2] = {1.0 - t[1], t[1]}, z0[2] = {1.0 - t[2], t[2]};
-    for (int c = 0; c < 8; ++c) weight[c] = x0[c & 1] * y0[(c >> 1) & 1] * z0[c >> 2];
-    frac[0] = t[0];
-    frac[1] = t[1];
-    frac[2] = t[2];
-    return true;
-  }
 };
 
 // The distance maps in the chosen storage. Built once (may take seconds and memory); constant

@@ -79,94 +79,6 @@ inline Vec3d printed_bone_force(const ForceParams& prm, const FieldSample& bone,
 // sphere-tracing steps in the tick (the previous version: one after |D_bone(x)|) still stopped
 // far short of the true distance on the CT, where the nearest bone over a space is a rib beside.
 
-// palp's terms from the bone-beneath map at x (outside bone, skin normal v_s, at least `dist` from
-// any bone): the bone law along -v_s and the thin-layer factor, each taken at the 8 corners of the
-// map's cell, at that corner's distance moved to x along the normal (t_c + (x - c) . v_s, at
-// least dist), and interpolated with the trilinear weights. Exact where the bone beneath is flat;
-// where a rib's edge passes through the cell (rays that hit it beside rays that miss) the pad
-// feels that share of the rib, not the law at the average of a hit and a miss (80 mm: nothing).
-// One division per corner: 1/r serves both laws.
-constexpr float kBeneathSpread = 3.0f;  // mm (see beneath_terms)
-struct BeneathTerms {
-  double fb = 0.0, kb = 0.0;          // bone law (N) and |d fb / d depth| (N/mm), unfaded
-  double layer = 1.0, layer_k = 0.0;  // thin-layer factor and d layer / d depth (1/mm)
-};
-
-template <class Access>
-BeneathTerms beneath_terms(const Access& fields, const ForceParams& prm, const Vec3d& x,
-                           const Vec3d& v_s, double dist) {
-  BeneathTerms out;
-  double t[8], w[8], frac[3] = {0.0, 0.0, 0.0};
-  if (!prm.bone_corner_law) {
-    // the laws at the map's interpolated distance (one sample, one division)
-    const double d = fields.beneath_at(x);
-    if (!(d > kOutsideValue)) return out;
-    t[0] = std::max(dist, d);
-    w[0] = 1.0;
-  } else if (!fields.beneath_cell(x, t, w, frac)) {
-    return out;
-  }
-  const int n = prm.bone_corner_law ? 8 : 1;
-  float r[8];
-  const float df = static_cast<float>(dist);
-  float rbar = static_cast<float>(t[0]), rmin = rbar, rmax = rbar;
-  r[0] = rbar;
-  if (n == 8) {
-    // (x - c) . v_s = sum over axes of (frac_a - bit_a) spacing_a v_s,a
-    const double* sp = fields.geometry->spacing;
-    const double e[3] = {sp[0] * v_s.x, sp[1] * v_s.y, sp[2] * v_s.z};
-    const double base = frac[0] * e[0] + frac[1] * e[1] + frac[2] * e[2];
-    const double ex[2] = {0.0, e[0]}, ey[2] = {0.0, e[1]}, ez[2] = {0.0, e[2]};
-    rbar = 0.0f;
-    rmin = 1e30f;
-    rmax = 0.0f;
-    for (int c = 0; c < 8; ++c) {
-      const float rc = static_cast<float>(t[c] + base - ex[c & 1] - ey[(c >> 1) & 1] - ez[c >> 2]);
-      r[c] = rc > df ? rc : df;
-      rbar += static_cast<float>(w[c]) * r[c];
-      rmin = std::min(rmin, r[c]);
-      rmax = std::max(rmax, r[c]);
-    }
-  }
-  // the printed law f_b = 20 (x / 5)^-3 = 2500 / x^3 with its 5 mm scaled to bone_reach_mm
-  const float kb_law =
-      static_cast<float>(20.0 * prm.bone_reach_mm * prm.bone_reach_mm * prm.bone_reach_mm);
-  const float fmax = static_cast<float>(prm.bone_fmax);
-  const double a = prm.layer_radius_mm;
-  const float k_layer = static_cast<float>(kLayerThin * a * a * a);
-  const float inv_max = a > 0.0 ? static_cast<float>(kLayerMaxRatio / a) : 0.0f;
-  // Both laws at distance r, weighted by wc, added into the sums.
-  float fb = 0.0f, kb = 0.0f, layer = 0.0f, layer_k = 0.0f;
-  const auto add = [&](float rc, float wc) {
-    const float inv = 1.0f / rc;
-    const float g = kb_law * inv * inv * inv;
-    const bool below = g < fmax;
-    fb += wc * (below ? g : fmax);
-    kb += below ? wc * 3.0f * g * inv : 0.0f;
-    const bool thick = inv < inv_max;
-    const float il = thick ? inv : inv_max;
-    const float thin = k_layer * il * il * il;
-    layer += wc * thin;
-    layer_k += thick ? wc * 3.0f * thin * inv : 0.0f;
-  };
-  // Where the corners agree (the bone beneath flat or gently curved across the cell) the laws at
-  // the interpolated distance (one division, as exact); where they spread by more than
-  // kBeneathSpread (a rib's edge in the cell) the per-corner laws, blended in over one more
-  // kBeneathSpread so the switch leaves no step.
-  const float spread = (rmax - rmin) / kBeneathSpread - 1.0f;
-  const float beta = spread <= 0.0f   ? 0.0f
-                     : spread >= 1.0f ? 1.0f
-                                      : spread * spread * (3.0f - 2.0f * spread);
-  if (beta < 1.0f) add(rbar, 1.0f - beta);
-  if (beta > 0.0f)
-    for (int c = 0; c < n; ++c) add(r[c], beta * static_cast<float>(w[c]));
-  out.fb = fb;
-  out.kb = kb;
-  out.layer = 1.0 + layer;
-  out.layer_k = layer_k;
-  return out;
-}
-
 // palp's bone proxy: steps pushing a held point that its entry plane left inside bone out along
 // the plane's normal.
 constexpr int kHoldSteps = 8;
@@ -183,9 +95,9 @@ struct TickSums {
 // felt along the skin normal and faded in with depth, the saturated skin law, the last normal
 // past the band, and Coulomb friction placed from positions.
 template <class Access>
-[[gnu::noinline]] void palp_point(const Access& fields, const ForceParams& prm, State& st,
-                                  std::size_t i, const Vec3d& x, const Vec3d& xd, bool bone_on,
-                                  double bone_step, std::uint32_t& status, TickSums& sums) {
+void palp_point(const Access& fields, const ForceParams& prm, State& st, std::size_t i,
+                const Vec3d& x, const Vec3d& xd, bool bone_on, double bone_step,
+                std::uint32_t& status, TickSums& sums) {
   const FieldSample skin_x = fields.surf_at(x);
   if (!skin_x.inside) status |= kTickOutsideGrid;
   if (!(skin_x.value > 0.0)) {
@@ -213,7 +125,6 @@ template <class Access>
   Vec3d f_struct{};
   double k_struct = 0.0;
   bool latched = false, inside_x = false;
-  double layer = 1.0, layer_slope = 0.0;  // thin-layer factor of the skin law and its slope
   if (bone_on) {
     const FieldSample bone = fields.bone_at(x);
     const double bone_grad_norm = norm(bone.grad);
@@ -267,24 +178,17 @@ template <class Access>
       // Bone along the skin normal: the distance to bone along -v_s.
       const double dist = -bone.value;
       const double cos_b = has_vb && has_dir ? dot(v_b, v_s) : 0.0;
-      const bool map = prm.bone_along_normal && fields.beneath.value != nullptr;
-      if (!inside_bone && dist > 0.0 && cos_b > 0.0 && map) {
-        const BeneathTerms bt = beneath_terms(fields, prm, x, v_s, dist);
-        layer = bt.layer;
-        layer_slope = bt.layer_k;
-        if (cos_b > 0.0) {
-          const double fade =
-              prm.bone_fade_mm > 0.0 ? smoothstep(skin_x.value / prm.bone_fade_mm) : 1.0;
-          f_struct = (bt.fb * fade) * v_s;
-          k_struct = bt.kb * fade;
-        }
-      } else if (!inside_bone && dist > 0.0 && cos_b > 0.0) {
-        // without the map: the law at the nearest bone's distance
-        const double scale = 5.0 / prm.bone_reach_mm;
+      if (!inside_bone && dist > 0.0 && cos_b > 0.0) {
+        // Along -v_s the bone is at least `dist` away; the map (prepared by Model) says how far.
+        double reach = dist;
+        if (prm.bone_along_normal && fields.beneath.value != nullptr)
+          reach = std::max(dist, fields.beneath_at(x));
         const double fade =
             prm.bone_fade_mm > 0.0 ? smoothstep(skin_x.value / prm.bone_fade_mm) : 1.0;
-        f_struct = (bone_force(dist * scale, prm.bone_fmax) * fade) * v_s;
-        k_struct = bone_force_slope(dist * scale, prm.bone_fmax) * scale * fade;
+        // the printed law f_b = 20 (x / 5)^-3 with its 5 mm scaled to bone_reach_mm
+        const double scale = 5.0 / prm.bone_reach_mm;
+        f_struct = (bone_force(reach * scale, prm.bone_fmax) * fade) * v_s;
+        k_struct = bone_force_slope(reach * scale, prm.bone_fmax) * scale * fade;
       }
       if (!inside_bone && has_vb && cos_b > 0.0) {
         anchor = x + bone.value * v_b;
@@ -305,18 +209,8 @@ template <class Access>
   }
   if (!has_dir) status |= kTickNoSkinDirection;
   const double depth = std::max(0.0, skin.value);
-  // Thin-layer correction (beneath_terms) at the held point, on the bone's surface.
-  if (latched && has_dir && prm.layer_radius_mm > 0.0 && prm.bone_along_normal &&
-      fields.beneath.value != nullptr) {
-    const BeneathTerms bt = beneath_terms(fields, prm, xc, v_s, 0.0);
-    layer = bt.layer;
-    layer_slope = bt.layer_k;
-  }
-  const double f_law = surface_force(depth);
-  double sat_slope = 0.0;
-  const double f_skin = saturate(f_law * layer, prm.skin_fmax, &sat_slope);
-  const double skin_slope = sat_slope * (surface_force_slope(depth) * layer + f_law * layer_slope);
-  const Vec3d f_surf = f_skin * v_s;
+  double skin_slope = 0.0;
+  const Vec3d f_surf = saturated_surface_force(depth, prm.skin_fmax, &skin_slope) * v_s;
   if (has_dir) st.normal[i] = v_s;
 
   // Surface point and Coulomb friction: the proxy on the tangent plane at s, at most
@@ -536,6 +430,129 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
 }
 
 }  // namespace
+
+BoneMode parse_bone_mode(std::string_view name) {
+  if (name == "printed") return BoneMode::Printed;
+  if (name == "robust") return BoneMode::Robust;
+  throw UsageError("bone mode '" + std::string(name) + "' is not printed or robust");
+}
+
+const char* to_string(BoneMode mode) {
+  return mode == BoneMode::Robust ? "robust" : "printed";
+}
+
+ModelKind parse_model_kind(std::string_view name) {
+  if (name == "paper") return ModelKind::Paper;
+  if (name == "palp") return ModelKind::Palp;
+  throw UsageError("force model '" + std::string(name) + "' is not paper or palp");
+}
+
+const char* to_string(ModelKind kind) {
+  return kind == ModelKind::Palp ? "palp" : "paper";
+}
+
+ForceParams default_params(ToolKind kind) {
+  ForceParams p;
+  if (kind == ToolKind::Probe) {
+    p.c = 0.4;
+    p.k = 0.3;
+  } else {
+    p.c = 2.0;
+    p.k = 0.4;
+  }
+  return p;
+}
+
+ForceParams palp_params(ToolKind kind) {
+  ForceParams p = default_params(kind);
+  p.model = ModelKind::Palp;
+  p.bone_mode = BoneMode::Robust;
+  p.mu = kind == ToolKind::Probe ? 0.2 : 0.5;
+  return p;
+}
+
+ForceParams model_params(ModelKind kind, ToolKind tool) {
+  return kind == ModelKind::Palp ? palp_params(tool) : default_params(tool);
+}
+
+void validate(const ForceParams& p) {
+  // Physical ranges: every value that shapes the force is bounded, whichever way it comes in
+  // (command line, config file, a controller's SetParameter).
+  auto check = [](bool ok, const char* what) {
+    if (!ok) throw UsageError(std::string("force parameter ") + what);
+  };
+  const auto in = [](double v, double lo, double hi) {
+    return std::isfinite(v) && v >= lo && v <= hi;
+  };
+  check(in(p.c, 0.0, 20.0), "c must be in [0, 20] mm/N (fingertip 2, probe 0.4)");
+  check(in(p.k, 0.0, 5.0), "k must be in [0, 5] N/mm (fingertip 0.4, probe 0.3)");
+  check(in(p.bone_fmax, 0.0, 60.0), "bone_fmax must be in [0, 60] N (paper: 40)");
+  check(in(p.bone_flip, 0.0, 10.0), "bone_flip must be in [0, 10] (paper: 4)");
+  check(in(p.bone_k, 0.0, 100.0), "bone_k must be in [0, 100] N/mm (default 10)");
+  check(p.bone_mode == BoneMode::Printed || p.bone_mode == BoneMode::Robust,
+        "bone_mode must be printed (0) or robust (1)");
+  check(std::isfinite(p.grad_epsilon) && p.grad_epsilon > 0.0 && p.grad_epsilon <= 0.1,
+        "grad_epsilon must be in (0, 0.1]");
+  check(
+      std::isfinite(p.direction_epsilon) && p.direction_epsilon > 0.0 && p.direction_epsilon <= 0.1,
+      "direction_epsilon must be in (0, 0.1]");
+  check(p.model == ModelKind::Paper || p.model == ModelKind::Palp,
+        "model must be paper (0) or palp (1)");
+  check(in(p.mu, 0.0, 2.0), "mu must be in [0, 2] (finger on skin 0.3-0.8)");
+  check(in(p.skin_fmax, 1.0, 200.0), "skin_fmax must be in [1, 200] N (default 30)");
+  check(in(p.bone_fade_mm, 0.0, 30.0), "bone_fade_mm must be in [0, 30] mm (default 4)");
+  check(in(p.bone_reach_mm, 1.0, 20.0), "bone_reach_mm must be in [1, 20] mm (printed law: 5)");
+}
+
+void set_param(ForceParams& params, std::string_view name, double value) {
+  ForceParams p = params;
+  if (name == "c")
+    p.c = value;
+  else if (name == "k")
+    p.k = value;
+  else if (name == "bone_fmax")
+    p.bone_fmax = value;
+  else if (name == "bone_flip")
+    p.bone_flip = value;
+  else if (name == "grad_epsilon")
+    p.grad_epsilon = value;
+  else if (name == "direction_epsilon")
+    p.direction_epsilon = value;
+  else if (name == "bone_k")
+    p.bone_k = value;
+  else if (name == "bone_mode") {
+    if (value != 0.0 && value != 1.0)
+      throw UsageError("force parameter bone_mode must be 0 (printed) or 1 (robust)");
+    p.bone_mode = value != 0.0 ? BoneMode::Robust : BoneMode::Printed;
+  } else if (name == "model") {
+    if (value != 0.0 && value != 1.0)
+      throw UsageError("force parameter model must be 0 (paper) or 1 (palp)");
+    p.model = value != 0.0 ? ModelKind::Palp : ModelKind::Paper;
+  } else if (name == "mu") {
+    p.mu = value;
+  } else if (name == "skin_fmax") {
+    p.skin_fmax = value;
+  } else if (name == "bone_fade_mm") {
+    p.bone_fade_mm = value;
+  } else if (name == "bone_reach_mm") {
+    p.bone_reach_mm = value;
+  } else if (name == "bone_along_normal") {
+    if (value != 0.0 && value != 1.0)
+      throw UsageError("force parameter bone_along_normal must be 0 or 1");
+    p.bone_along_normal = value != 0.0;
+  } else if (name == "bone_enabled") {
+    if (value != 0.0 && value != 1.0)
+      throw UsageError("force parameter bone_enabled must be 0 or 1");
+    p.bone_enabled = value != 0.0;
+  } else {
+    throw UsageError("unknown force parameter '" + std::string(name) +
+                     "' (known: c, k, bone_fmax, bone_flip, bone_enabled, grad_epsilon, "
+                     "direction_epsilon, bone_mode, bone_k, model, mu, skin_fmax, bone_fade_mm, "
+                     "bone_reach_mm, bone_along_normal)");
+  }
+  validate(p);
+  params = p;
+}
 
 Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params)
     : fields_(std::move(fields)), tool_(std::move(tool)), params_(params) {

@@ -96,15 +96,6 @@ struct ForceParams {
   // palp: the printed bone law's 5 mm (f_b = 20 (x / 5)^-3) made this reach, so ribs 15-20 mm
   // under the skin stand out at working depths (docs/force_model.md, "Rib contrast")
   double bone_reach_mm = 8.0;
-  // palp: the contact radius a (mm) of the thin-layer correction: the skin law times
-  // layer_factor(h, a), h the tissue left between the contact point and the bone beneath it
-  // (the bone-beneath map), so tissue pressed thin over a rib is stiffer (0: off; bone on only)
-  double layer_radius_mm = 7.5;
-  // palp: the bone law (and the layer factor) taken at each corner of the bone-beneath map's
-  // cell and interpolated where the corners disagree (a rib's edge in the cell), instead of at
-  // the interpolated distance; off by default: it costs ~1 us per finger:37 tick
-  // (docs/force_model.md, "Rib contrast")
-  bool bone_corner_law = false;
 };
 
 // "paper" | "palp"; UsageError otherwise.
@@ -126,14 +117,14 @@ ForceParams model_params(ModelKind kind, ToolKind tool);
 
 // Overrides one parameter by name: c, k, bone_fmax, bone_flip, bone_enabled (0/1),
 // grad_epsilon, direction_epsilon, bone_mode (0 = printed, 1 = robust), bone_k, model (0 = paper,
-// 1 = palp), mu, skin_fmax, bone_fade_mm, bone_reach_mm, layer_radius_mm,
-// bone_along_normal (0/1), bone_corner_law (0/1).
+// 1 = palp), mu, skin_fmax, bone_fade_mm, bone_reach_mm,
+// bone_along_normal (0/1).
 // UsageError for unknown names or unusable values.
 void set_param(ForceParams& params, std::string_view name, double value);
 
 // UsageError outside the physical ranges: c [0, 20] mm/N, k [0, 5] N/mm, bone_fmax [0, 60] N,
 // bone_flip [0, 10], bone_k [0, 100] N/mm, epsilons (0, 0.1], mu [0, 2], skin_fmax [1, 200] N,
-// bone_fade_mm [0, 30] mm, bone_reach_mm [1, 20] mm, layer_radius_mm [0, 30] mm.
+// bone_fade_mm [0, 30] mm, bone_reach_mm [1, 20] mm.
 void validate(const ForceParams& params);
 
 // f_s(x) = 1.78e-2 x^3 + 3.82e-3 x^2 + 2.28e-4 x for x > 0, else 0 (mm -> N).
@@ -168,39 +159,6 @@ inline double saturated_surface_force_slope(double depth_mm, double fmax) {
   const double r = surface_force(depth_mm) / fmax, r2 = r * r;
   const double q = 1.0 + r2 * r2;
   return surface_force_slope(depth_mm) / (q * std::sqrt(std::sqrt(q)));
-}
-
-// The thin-layer correction of palp's skin law (Hayes et al. 1972: an elastic layer of thickness
-// h bonded to a rigid base, indented by a punch of radius a, is stiffer than a half-space by a
-// factor kappa(a / h)): kappa = 1 + (3 pi / 16) (a / h)^3. Both limits are exact for an
-// incompressible layer: kappa -> 1 on thick tissue (a / h -> 0), and for a thin one (a >> h) the
-// bonded layer's squeeze-film stiffness (3 pi / 2) G a^4 / h^3 over the half-space's 8 G a
-// gives (3 pi / 16) (a / h)^3. In between it stays below Hayes' tabulated values (no linear
-// term), so it understates the effect. h is the tissue left beneath the contact point (it
-// shrinks as the finger presses, so the layer stiffens as the indentation approaches the
-// thickness); a / h is capped at kLayerMaxRatio. d kappa / d depth (h shrinks by what the depth
-// grows) into *slope when given.
-inline constexpr double kLayerMaxRatio = 20.0;
-inline constexpr double kLayerThin = 3.0 * 3.14159265358979323846 / 16.0;
-inline double layer_factor(double tissue_mm, double radius_mm, double* slope = nullptr) {
-  constexpr double kThin = kLayerThin;
-  if (slope) *slope = 0.0;
-  if (!(radius_mm > 0.0)) return 1.0;
-  double rho = kLayerMaxRatio;
-  if (tissue_mm * kLayerMaxRatio > radius_mm) {
-    rho = radius_mm / tissue_mm;
-    if (slope) *slope = 3.0 * kThin * rho * rho * rho / tissue_mm;
-  }
-  return 1.0 + kThin * rho * rho * rho;
-}
-
-// Smooth saturation at fmax, f / (1 + (f / fmax)^4)^(1/4); its derivative in f into *slope.
-inline double saturate(double f, double fmax, double* slope = nullptr) {
-  const double r = f / fmax, r2 = r * r;
-  const double q = 1.0 + r2 * r2;
-  const double root = std::sqrt(std::sqrt(q));
-  if (slope) *slope = 1.0 / (q * root);
-  return f / root;
 }
 
 // |df_b/dx| (N/mm) where the bone law is below its cap, else 0.

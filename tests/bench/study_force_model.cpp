@@ -4,17 +4,16 @@
 //
 // 1. Contrast  ribs against intercostal spaces at equal skin depth. Paths of `palp traj ribs`
 //    (ribs_body_axis / ribs_skin_frame): the torso's right side at 0, 15, 30 and 45 deg anterior
-//    of lateral over 0.25-0.75 of the body axis; the real CT at -20, 0, 20 and 40 deg over
-//    0.72-0.97 (its ribs lie in the top quarter), each scanned every 0.5 mm. A rib crest is a
-//    local minimum (within +-6 mm) of the distance from the skin point along -n to bone (within
-//    40 mm), an intercostal space the farthest point between two crests of a path (no bone within
-//    40 mm counts as farthest). At each site the tool (finger:1, finger:37) is pressed along the
-//    skin normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held
-//    0.1 s; the pressing force is f_device . n over the last 50 ticks, also with the bone off.
-//    Ratio: every crest against each neighbouring space; median and smallest over all paths.
-//    Projected beside palp: the bone law reaching r = 5 (printed), 6 and 10 mm instead of its
-//    bone_reach_mm (f_b = 20 (x / r)^-3 scales palp's bone term, the pressing force less the
-//    bone-off force, by (r / bone_reach_mm)^3).
+//    of lateral over 0.25-0.75 of the body axis; the real CT every 10 deg from -50 to 20 deg over
+//    0.55-0.99 (its ribs lie in the top part), each scanned every 0.5 mm. A rib crest is a local
+//    minimum (within +-6 mm) of the distance from the skin point along -n to bone (within 40 mm),
+//    an intercostal space the farthest point between two crests of a path (no bone within 40 mm
+//    counts as farthest), kept only when it lies 5 mm deeper than both crests (else the two are
+//    one bony surface). At each site the tool (finger:1, finger:37) is pressed along the skin
+//    normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held 0.1 s;
+//    the pressing force is f_device . n over the last 50 ticks, also with the bone off (CSV).
+//    Ratio: every crest against each neighbouring space; median and smallest over all paths. Beside
+//    palp's own set, palp measured with the bone law reaching 5 (printed), 6 and 10 mm.
 // 2. Friction  flat skin (1 mm voxels, bone off), finger:1 at 1 kHz unless said: a slide at 4 mm
 //    at 100..800 mm/s (mean lateral force over the second half of 40 mm); the same at 200 and
 //    800 mm/s at 1..10 kHz; press to 1..8 mm, shift sideways by half the model's breakaway
@@ -192,10 +191,6 @@ void contrast(const std::string& scene_name, const std::string& scene,
       series.push_back(
           {&v, prm, std::string(to_string(v.model)) + ", " + tool_name, to_string(v.model)});
       if (v.model != ModelKind::Palp) continue;
-      ForceParams flat = prm;
-      flat.layer_radius_mm = 0.0;
-      series.push_back(
-          {&v, flat, std::string("palp, no layer correction, ") + tool_name, "palp variant"});
       for (double r : {5.0, 6.0, 10.0}) {
         ForceParams reach = prm;
         reach.bone_reach_mm = r;
@@ -217,22 +212,6 @@ void contrast(const std::string& scene_name, const std::string& scene,
           std::vector<double> force;
           for (const Site& s : sites) {
             force.push_back(press_force(model, st, s.frame, d, offset));
-            if (std::getenv("XDIAG") && d == 6.0 && se.name == "palp, finger:1") {
-              const FieldSampler& f = *se.v->fields;
-              const Vec3d pad = pad_centre_at_depth(f, s.frame, d);
-              const double bn = f.dispatch([&](const auto& a) { return a.beneath_at(pad); });
-              const FieldSample sk = f.sample_surf(pad);
-              const Vec3d in = normalized(sk.grad);
-              const double exact = ray_to_bone(f, pad, in, 80.0);
-              const double along_frame = ray_to_bone(f, pad, -1.0 * s.frame.normal, 80.0);
-              const double ang =
-                  std::acos(std::clamp(dot(in, -1.0 * s.frame.normal), -1.0, 1.0)) * 57.3;
-              std::printf(
-                  "\nDIAG %s %.1f below %.2f: map %.2f, exact along v_s %.2f, along frame %.2f, "
-                  "angle %.1f deg, D_bone %.2f, force %.2f",
-                  s.rib ? "R" : "i", s.pos_mm, s.below, bn, exact, along_frame, ang,
-                  f.bone_value(pad), force.back());
-            }
             if (se.model == "palp variant") continue;
             const double skin = press_force(skin_model, st_skin, s.frame, d, offset);
             csv.row({scene_name, std::string(tool_name), se.model, specs[pi].azimuth_deg, d,
