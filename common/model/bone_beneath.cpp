@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
@@ -14,6 +15,7 @@ std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneat
   const Grid& g = fields.grid();
   check_allocation(g, sizeof(float), "bone-beneath map");
   std::vector<float> out(g.voxel_count(), 0.0f);
+  std::vector<std::uint8_t> traced(opt.pad_widen ? g.voxel_count() : 0, 0);
   const double outside_margin = 2.0 * std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const Vec3d origin = fields.origin();
@@ -41,11 +43,53 @@ std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneat
               t += d;
             }
             beneath = std::min(t, opt.cap_mm);
+            if (opt.pad_widen) traced[g.linear(i, j, k)] = 1;
           }
           out[g.linear(i, j, k)] = static_cast<float>(beneath);
         }
   });
-  return out;
+  if (!opt.pad_widen) return out;
+  // The pad's reach: each traced voxel also takes its neighbours' rays, moved to it along its
+  // normal (t_n + (n - c) . dir: the same value where the bone beneath is flat), and keeps the
+  // nearest. The tick interpolates the map trilinearly, and between a ray that hits a rib and
+  // one that misses it (80 mm) the average reads as no rib at all; a finger's pad, 15 mm across,
+  // feels a rib anywhere under it. So a rib's edge moves out by one voxel at most.
+  std::vector<float> widened = out;
+  parallel_for_chunks(nz, 1, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j)
+        for (std::int64_t i = 0; i < nx; ++i) {
+          const std::size_t at = g.linear(i, j, k);
+          if (!traced[at]) continue;
+          const Vec3d c = origin + Vec3d{static_cast<double>(i) * g.spacing[0],
+                                         static_cast<double>(j) * g.spacing[1],
+                                         static_cast<double>(k) * g.spacing[2]};
+          const FieldSample skin = fields.sample_surf(c);
+          const double gn = norm(skin.grad);
+          if (!(gn > 1e-9) || skin.value > opt.band_mm) continue;
+          const Vec3d dir = skin.grad * (1.0 / gn);
+          double best = out[at];
+          for (int dk = -1; dk <= 1; ++dk)
+            for (int dj = -1; dj <= 1; ++dj)
+              for (int di = -1; di <= 1; ++di) {
+                const std::int64_t a = i + di, b = j + dj, e = k + dk;
+                if (a < 0 || b < 0 || e < 0 || a >= nx || b >= ny || e >= nz) continue;
+                const std::size_t nb = g.linear(a, b, e);
+                const float tn = out[nb];
+                if (!traced[nb] || !(tn < opt.cap_mm)) continue;
+                // The bone plane the neighbour's ray met (normal m at its hit point), reached
+                // from c along dir: t_n + ((n - c) . m) / (dir . m).
+                const Vec3d off{di * g.spacing[0], dj * g.spacing[1], dk * g.spacing[2]};
+                const Vec3d hit = c + off + static_cast<double>(tn) * dir;
+                const Vec3d m = fields.sample_bone(hit).grad;
+                const double dm = dot(dir, m);
+                if (!(dm > 0.5 * norm(m))) continue;  // a grazing plane: no estimate
+                best = std::min(best, std::max(0.0, tn + dot(off, m) / dm));
+              }
+          widened[at] = static_cast<float>(std::max(best, std::max(0.0, -fields.bone_value(c))));
+        }
+  });
+  return widened;
 }
 
 }  // namespace palp

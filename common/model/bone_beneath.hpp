@@ -21,11 +21,14 @@ struct BoneBeneathOptions {
   double cap_mm = 80.0;   // farther bone (or none) reads cap_mm: f_b(80 mm) is ~0.02 N
   double hit_mm = 0.05;   // a ray this close to bone has reached it
   int max_steps = 96;     // bound per voxel (a grazing ray); the sum so far is a lower bound
+  bool pad_widen = true;  // each voxel keeps the nearest of its neighbours' rays (see the .cpp)
 };
 
 // The map on the sampler's grid (one float per voxel, mm): traced where the skin has a
-// direction within the band; elsewhere max(0, -D_bone(c)), the nearest bone, a lower bound of
-// the distance along any direction. Zero inside bone. Needs a bone map (UsageError otherwise).
+// direction within the band (with pad_widen, each traced voxel then keeps the nearest of its own
+// and its neighbours' traced rays, moved to it along the bone plane each met); elsewhere max(0,
+// -D_bone(c)), the nearest bone, a lower bound of the distance along any direction. Zero inside
+// bone. Needs a bone map (UsageError otherwise).
 std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneathOptions& opt = {});
 
 }  // namespace palp

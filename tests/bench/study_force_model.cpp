@@ -4,17 +4,16 @@
 //
 // 1. Contrast  ribs against intercostal spaces at equal skin depth. Paths of `palp traj ribs`
 //    (ribs_body_axis / ribs_skin_frame): the torso's right side at 0, 15, 30 and 45 deg anterior
-//    of lateral over 0.25-0.75 of the body axis; the real CT at -20, 0, 20 and 40 deg over
-//    0.72-0.97 (its ribs lie in the top quarter), each scanned every 0.5 mm. A rib crest is a
-//    local minimum (within +-6 mm) of the distance from the skin point along -n to bone (within
-//    40 mm), an intercostal space the farthest point between two crests of a path (no bone within
-//    40 mm counts as farthest). At each site the tool (finger:1, finger:37) is pressed along the
-//    skin normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held
-//    0.1 s; the pressing force is f_device . n over the last 50 ticks, also with the bone off.
-//    Ratio: every crest against each neighbouring space; median and smallest over all paths.
-//    Projected beside palp: the bone law reaching r = 5 (printed), 6 and 10 mm instead of its
-//    bone_reach_mm (f_b = 20 (x / r)^-3 scales palp's bone term, the pressing force less the
-//    bone-off force, by (r / bone_reach_mm)^3).
+//    of lateral over 0.25-0.75 of the body axis; the real CT every 10 deg from -50 to 20 deg over
+//    0.55-0.99 (its ribs lie in the top part), each scanned every 0.5 mm. A rib crest is a local
+//    minimum (within +-6 mm) of the distance from the skin point along -n to bone (within 40 mm),
+//    an intercostal space the farthest point between two crests of a path (no bone within 40 mm
+//    counts as farthest), kept only when it lies 5 mm deeper than both crests (else the two are
+//    one bony surface). At each site the tool (finger:1, finger:37) is pressed along the skin
+//    normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held 0.1 s;
+//    the pressing force is f_device . n over the last 50 ticks, also with the bone off (CSV).
+//    Ratio: every crest against each neighbouring space; median and smallest over all paths. Beside
+//    palp's own set, palp measured with the bone law reaching 5 (printed), 6 and 10 mm.
 // 2. Friction  flat skin (1 mm voxels, bone off), finger:1 at 1 kHz unless said: a slide at 4 mm
 //    at 100..800 mm/s (mean lateral force over the second half of 40 mm); the same at 200 and
 //    800 mm/s at 1..10 kHz; press to 1..8 mm, shift sideways by half the model's breakaway
@@ -94,6 +93,7 @@ struct Site {
 // Rib crests and intercostal spaces along the ribs path, in path order.
 std::vector<Site> find_sites(const FieldSampler& f, const RibsSpec& spec, const BodyAxis& axis) {
   constexpr double kRay = 40.0;
+  constexpr double kProminence = 5.0;  // mm: half a rib's height
   std::vector<Site> prof;
   const double step = 0.5 / axis.extent;
   for (double a = spec.from; a <= spec.to; a += step) {
@@ -130,7 +130,12 @@ std::vector<Site> find_sites(const FieldSampler& f, const RibsSpec& spec, const 
       if (prof[j].below > prof[best].below) best = best_end = j;
       if (prof[j].below == prof[best].below) best_end = j;
     }
-    out.push_back(prof[(best + best_end) / 2]);
+    // A space lies kProminence deeper than the crests either side (or over no bone within the
+    // ray); else the two crests are one bony surface (a rib seen obliquely, two ribs touching)
+    // and what lies between them is no space.
+    const Site& space = prof[(best + best_end) / 2];
+    if (space.below >= std::max(prof[crests[c]].below, prof[crests[c + 1]].below) + kProminence)
+      out.push_back(space);
   }
   return out;
 }
@@ -174,60 +179,63 @@ void contrast(const std::string& scene_name, const std::string& scene,
   for (const char* tool_name : {"finger:1", "finger:37"}) {
     const Tool tool = parse_tool(tool_name);
     const double offset = pad_offset(tool);
+    // Each model's own set; beside palp's, palp measured with one parameter changed.
+    struct Series {
+      const Variant* v;
+      ForceParams prm;
+      std::string name, model;
+    };
+    std::vector<Series> series;
     for (const Variant& v : vars) {
-      const std::string model_name = to_string(v.model);
       const ForceParams prm = model_params(v.model, tool.kind);
-      ForceParams skin_only = prm;
+      series.push_back(
+          {&v, prm, std::string(to_string(v.model)) + ", " + tool_name, to_string(v.model)});
+      if (v.model != ModelKind::Palp) continue;
+      for (double r : {5.0, 6.0, 10.0}) {
+        ForceParams reach = prm;
+        reach.bone_reach_mm = r;
+        char name[96];
+        std::snprintf(name, sizeof name, "palp, bone reach %g mm, %s", r, tool_name);
+        series.push_back({&v, reach, name, "palp variant"});
+      }
+    }
+    for (const Series& se : series) {
+      ForceParams skin_only = se.prm;
       skin_only.bone_enabled = false;
-      const Model model(v.fields, tool, prm), skin_model(v.fields, tool, skin_only);
+      const Model model(se.v->fields, tool, se.prm), skin_model(se.v->fields, tool, skin_only);
       State st = make_state(model), st_skin = make_state(skin_model);
-      const std::string series = model_name + ", " + tool_name;
-      std::printf("  %-46s", series.c_str());
-      // The bone law's reach r (f_b = 20 (x / r)^-3; printed r = 5 mm, palp's bone_reach_mm)
-      // only scales palp's bone term by (r / bone_reach_mm)^3 below the cap (same distances, same
-      // fade): other reaches are projected from the terms. The first is the one measured.
-      const double kReach[] = {prm.bone_reach_mm, 5.0, 6.0, 10.0};
-      std::vector<std::vector<double>> projected(std::size(kReach));
+      std::printf("  %-46s", se.name.c_str());
       for (double d : depths) {
-        std::vector<std::vector<double>> ratios(std::size(kReach));
+        std::vector<double> ratios;
         for (std::size_t pi = 0; pi < paths.size(); ++pi) {
           const std::vector<Site>& sites = paths[pi];
-          std::vector<double> force, skin;
+          std::vector<double> force;
           for (const Site& s : sites) {
             force.push_back(press_force(model, st, s.frame, d, offset));
-            skin.push_back(press_force(skin_model, st_skin, s.frame, d, offset));
-            csv.row({scene_name, std::string(tool_name), model_name, specs[pi].azimuth_deg, d,
-                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin.back()});
+            if (se.model == "palp variant") continue;
+            const double skin = press_force(skin_model, st_skin, s.frame, d, offset);
+            csv.row({scene_name, std::string(tool_name), se.model, specs[pi].azimuth_deg, d,
+                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin});
           }
-          for (std::size_t r = 0; r < std::size(kReach); ++r) {
-            const double scale = std::pow(kReach[r] / prm.bone_reach_mm, 3.0);
-            auto at = [&](std::size_t i) { return skin[i] + scale * (force[i] - skin[i]); };
-            for (std::size_t i = 0; i < sites.size(); ++i) {
-              if (sites[i].rib) continue;
-              if (i > 0) ratios[r].push_back(at(i - 1) / at(i));
-              if (i + 1 < sites.size()) ratios[r].push_back(at(i + 1) / at(i));
-            }
+          for (std::size_t i = 0; i < sites.size(); ++i) {
+            if (sites[i].rib) continue;
+            if (i > 0 && sites[i - 1].rib) ratios.push_back(force[i - 1] / force[i]);
+            if (i + 1 < sites.size() && sites[i + 1].rib) ratios.push_back(force[i + 1] / force[i]);
           }
         }
-        const double med = median(ratios[0]), lo = percentile(ratios[0], 0.0);
-        ratio_csv.row({scene_name, std::string(tool_name), model_name, series, d, med, lo,
-                       static_cast<double>(ratios[0].size())});
+        const double med = median(ratios), lo = percentile(ratios, 0.0);
+        ratio_csv.row({scene_name, std::string(tool_name), se.model, se.name, d, med, lo,
+                       static_cast<double>(ratios.size())});
         std::printf(" %g:%.2f(%.2f)", d, med, lo);
-        for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r)
-          projected[r].push_back(median(ratios[r]));
       }
-      for (std::size_t r = 1; r < std::size(kReach) && v.model == ModelKind::Palp; ++r) {
-        char name[96];
-        std::snprintf(name, sizeof name, "palp, bone reach %g mm (projected), %s", kReach[r],
-                      tool_name);
-        std::printf("\n  %-46s", name);
-        for (std::size_t k = 0; k < depths.size(); ++k) {
-          std::printf(" %g:%.2f", depths[k], projected[r][k]);
-          ratio_csv.row({scene_name, std::string(tool_name), "palp projected", std::string(name),
-                         depths[k], projected[r][k], std::nan(""), std::nan("")});
-        }
-      }
-      std::printf("   [depth mm: median (smallest) rib / space]\n");
+      std::printf("   [depth mm: median (smallest) rib / space, %zu pairs]\n", [&] {
+        std::size_t n = 0;
+        for (const auto& sites : paths)
+          for (std::size_t i = 0; i < sites.size(); ++i)
+            if (!sites[i].rib)
+              n += (i > 0 && sites[i - 1].rib) + (i + 1 < sites.size() && sites[i + 1].rib);
+        return n;
+      }());
     }
   }
 }
@@ -564,10 +572,10 @@ int main(int argc, char** argv) {
   contrast("torso", "phantom:torso", torso_paths, depths, c_csv, r_csv);
   if (have_ct) {
     std::vector<RibsSpec> ct_paths;
-    for (double az : {-20.0, 0.0, 20.0, 40.0}) {
+    for (double az = -50.0; az <= 20.0; az += 10.0) {
       ct_paths.emplace_back();
-      ct_paths.back().from = 0.72;
-      ct_paths.back().to = 0.97;
+      ct_paths.back().from = 0.55;
+      ct_paths.back().to = 0.99;
       ct_paths.back().azimuth_deg = az;
     }
     contrast("ct", ct, ct_paths, depths, c_csv, r_csv);

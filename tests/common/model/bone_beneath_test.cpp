@@ -85,6 +85,24 @@ TEST(BoneBeneath, BetweenTwoRibsTheRayPassesToTheCap) {
   EXPECT_LT(-fields.bone_value({30, 10, 28}), 9.0);
 }
 
+TEST(BoneBeneath, APadFeelsARibOneVoxelBesideItsEdge) {
+  // Rib x 18..22, rows 20..23 (top face z = 23.5). The ray from x = 23 misses the rib, but its
+  // neighbour's (x = 22) hits it: with pad_widen the voxel takes that distance, moved along the
+  // plane met at the hit (0.5 mm from the rib's corner, where the field's normal tilts: within
+  // 1 mm); two voxels beside the edge (x = 24) the rays miss: the cap. Without it, x = 23 reads
+  // the cap, and between x = 22 and 23 the tick would read the average of a hit and a miss.
+  BoneBeneathOptions opt;
+  const FieldSampler fields(linear_map({0, 0, -1}, kZ0), bone(20, 23, {{18, 22}}));
+  const auto map = bone_beneath_map(fields, opt);
+  EXPECT_GE(at(map, 23, 10, 28), 28 - 23.5 - 1e-5);
+  EXPECT_LE(at(map, 23, 10, 28), 28 - 23.5 + 1.0);
+  EXPECT_EQ(at(map, 24, 10, 28), static_cast<float>(opt.cap_mm));
+  opt.pad_widen = false;
+  const auto narrow = bone_beneath_map(fields, opt);
+  EXPECT_EQ(at(narrow, 23, 10, 28), static_cast<float>(opt.cap_mm));
+  EXPECT_NEAR(at(narrow, 22, 10, 28), 28 - 23.5, 1e-5);
+}
+
 TEST(BoneBeneath, OutsideTheBandTheNearestBoneIsALowerBound) {
   BoneBeneathOptions opt;
   opt.band_mm = 3.0;  // voxel rows z >= 28 (skin depth <= 2.25) are traced
