@@ -60,7 +60,8 @@ and deforms the skin where the tool presses.
   --rate HZ               frames/s asked of the server (default 120)
   --volume-max-dim N      render volume: at most N voxels per axis (default 256)
   --preset skin|bone|soft transfer-function preset (default skin), on the CT's HU
-  --show-outside          show the CT outside the body mask (table, cables; default hidden)
+  --show-outside          show the CT outside the body mask (table, cables; default hidden,
+                          and the volume cropped to the body's box)
   --no-ct                 render the distance maps' pseudo-density, not the CT's HU
   --no-deformation        do not deform the skin
   --width W --height H    window size (default 1280x800)
@@ -297,7 +298,8 @@ int run(const Options& o) {
   stream.frame_rate_hz = o.rate_hz;
   stream.volume_max_dim = o.volume_max_dim;
   stream.volume_hu = o.ct;
-  stream.volume_bone = !o.ct;  // the CT's presets never read d_bone
+  stream.volume_bone = !o.ct;            // the CT's presets never read d_bone
+  stream.volume_crop = !o.show_outside;  // the body's box, unless the outside is wanted
   stream.force_history_s = o.chart_s;
 
   ViewWindow window(
@@ -475,7 +477,8 @@ int run(const Options& o) {
     if (o.controller && state.volume) {
       if (!controller_ready || controller_connection != state.connection) {
         const RenderVolume& v = *state.volume;
-        if (!controller_ready) controller.reset(initial_pose(v.dims, v.spacing, v.d_surf));
+        if (!controller_ready)
+          controller.reset(initial_pose(v.dims, v.spacing, v.d_surf, 20.0, v.origin));
         controller_ready = true;
         controller_connection = state.connection;
       }

@@ -102,8 +102,9 @@ void RenderScene::Impl::place_camera() {
   double bounds[6] = {0, 1, 0, 1, 0, 1};
   if (const RenderVolume* source = volume.source()) {
     for (int a = 0; a < 3; ++a) {
-      bounds[2 * a] = 0;
-      bounds[2 * a + 1] = static_cast<double>(source->dims[a] - 1) * source->spacing[a];
+      bounds[2 * a] = source->origin[a];
+      bounds[2 * a + 1] =
+          source->origin[a] + static_cast<double>(source->dims[a] - 1) * source->spacing[a];
     }
   }
   const bool follow = settings.follow_mm > 0 && tool_known;

@@ -360,7 +360,8 @@ class Server::Impl {
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
-    plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(), h.volume_deflate()});
+    plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(),
+                     h.volume_deflate(), h.volume_crop()});
     if (s->volume.chunks == 0) s->ready = true;
     log_client(who(*s) + " joined");
     pump(s);
@@ -404,7 +405,7 @@ class Server::Impl {
 
   void plan_volume(Session& s, const VolumeRequest& r) {
     if (!scene_.fields || (r.step == 0 && r.max_dim == 0)) return;
-    s.volume = net::plan_volume(scene_, r, config_.volume_chunk_bytes);
+    s.volume = net::plan_volume(scene_, r, config_.volume_chunk_bytes, &crop_);
     s.volume_k = 0;
     s.volume_chunk = 0;
   }
@@ -612,6 +613,7 @@ class Server::Impl {
 
   ServerConfig config_;
   SceneDescription scene_;
+  const VoxelBox crop_ = scene_.body ? body_box(*scene_.body, kCropMarginMm) : VoxelBox{};
   rt::HapticLoop& loop_;
   ControlTarget* control_;
   asio::io_context io_;
