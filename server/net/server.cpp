@@ -20,6 +20,7 @@
 #include "net/scene_messages.hpp"
 #include "net/tls_accept.hpp"
 #include "net/token_guard.hpp"
+#include "net/volume_cache.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::net {
@@ -137,9 +138,10 @@ class Server::Impl {
     std::int64_t connected_ns = 0, last_rx_ns = 0, write_started_ns = 0;
     std::uint64_t frames_sent = 0;
     std::uint64_t frames_dropped_counted = 0;  // of queue.frames_dropped(), in frames_dropped_
-    // Volume streaming.
+    // Volume streaming: the plan's frames (volume_cache.hpp), the next one to send.
     VolumePlan volume;
-    std::uint32_t volume_k = 0, volume_chunk = 0;
+    std::shared_ptr<const VolumeCache::Frames> volume_frames;
+    std::uint32_t volume_chunk = 0;
   };
   using SessionPtr = std::shared_ptr<Session>;
 
@@ -405,18 +407,15 @@ class Server::Impl {
 
   void plan_volume(Session& s, const VolumeRequest& r) {
     if (!scene_.fields || (r.step == 0 && r.max_dim == 0)) return;
-    s.volume = net::plan_volume(scene_, r, config_.volume_chunk_bytes, &crop_);
-    s.volume_k = 0;
-    s.volume_chunk = 0;
+    s.volume = volume_cache_.plan(r);
+    if (s.volume.chunks > 0) s.volume_frames = volume_cache_.get(s.volume);
   }
 
-  Bytes next_volume_chunk(Session& s) {
-    v1::ServerMessage m;
-    s.volume_k +=
-        fill_volume_chunk(scene_, s.volume, s.volume_k, s.volume_chunk, m.mutable_volume());
-    ++s.volume_chunk;
-    if (s.volume_chunk == s.volume.chunks) s.ready = true;
-    return frame_of(m);
+  Bytes next_volume_chunk(Session& s) {  // null: not encoded yet (volume_cache_ wakes us)
+    Bytes b = s.volume_frames->frame(s.volume_chunk);
+    if (b && ++s.volume_chunk == s.volume.chunks) s.ready = true;
+    if (s.ready) s.volume_frames.reset();
+    return b;
   }
 
   // ------------------------------------------------------------------ write
@@ -427,7 +426,7 @@ class Server::Impl {
     std::size_t frames_now = 0;
     s->queue.take(s->inflight, false);
     if (!s->closing && !s->ready && s->volume.chunks > 0 && s->inflight.empty())
-      s->inflight.push_back(next_volume_chunk(*s));
+      if (Bytes b = next_volume_chunk(*s)) s->inflight.push_back(std::move(b));
     if (!s->closing && s->ready) frames_now = s->queue.take(s->inflight, true);
     if (s->inflight.empty()) {
       if (s->closing) close(*s);
@@ -613,7 +612,6 @@ class Server::Impl {
 
   ServerConfig config_;
   SceneDescription scene_;
-  const VoxelBox crop_ = scene_.body ? body_box(*scene_.body, kCropMarginMm) : VoxelBox{};
   rt::HapticLoop& loop_;
   ControlTarget* control_;
   asio::io_context io_;
@@ -637,6 +635,15 @@ class Server::Impl {
       frames_dropped_{0}, timeouts_{0}, overflows_{0};
   // token refusals have a budget of their own, so a flood of other refusals cannot hide them
   ClientLog client_log_, token_log_;
+  // Last: its encoders stop before anything they post to. Wakes the sessions waiting for a chunk.
+  VolumeCache volume_cache_{scene_, config_.volume_chunk_bytes,
+                            [this] {
+                              asio::post(io_, [this] {
+                                for (const SessionPtr& s : sessions_)
+                                  if (!s->ready && s->volume_frames && !s->writing) pump(s);
+                              });
+                            },
+                            true};
 };
 
 Server::Server(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop,

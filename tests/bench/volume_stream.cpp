@@ -56,9 +56,11 @@ int main(int argc, char** argv) {
   const palp::view::net::SceneGrid grid{
       scene.grid.dims, {scene.grid.spacing[0], scene.grid.spacing[1], scene.grid.spacing[2]}};
   std::string json = "{";
-  for (const bool crop : {false, true}) {
+  // whole and cropped deflated (what palpview asks), and cropped raw (the deflate's share).
+  for (const int mode : {0, 1, 2}) {
+    const bool crop = mode > 0, deflate = mode < 2;
     const palp::net::VolumePlan plan =
-        palp::net::plan_volume(desc, {0, max_dim, true, false, true, crop}, chunk_bytes, &box);
+        palp::net::plan_volume(desc, {0, max_dim, true, false, deflate, crop}, chunk_bytes, &box);
     double fill_s = 0, encode_s = 0, parse_s = 0, add_s = 0;
     std::size_t wire_bytes = 0;
     palp::view::net::VolumeAssembly assembly;
@@ -88,7 +90,7 @@ int main(int argc, char** argv) {
     const std::vector<float> scalars =
         palp::view::compose_ct_scalar(volume->hu, volume->body, false);
     const double compose_s = now_s() - t;
-    const char* name = crop ? "cropped" : "whole";
+    const char* name = mode == 0 ? "whole" : mode == 1 ? "cropped" : "raw";
     std::printf(
         "%-8s step %u dims %lld x %lld x %lld offset %lld,%lld,%lld chunks %u: wire %.1f MB "
         "(raw %.1f MB); palpd fill %.3f s, encode %.3f s; palpview parse %.3f s, assemble %.3f "
@@ -103,8 +105,8 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof buf,
                   "%s\"%s\":{\"wire_bytes\":%zu,\"fill_s\":%.4f,\"encode_s\":%.4f,"
                   "\"parse_s\":%.4f,\"assemble_s\":%.4f,\"compose_s\":%.4f,\"voxels\":%zu}",
-                  crop ? "," : "", name, wire_bytes, fill_s, encode_s, parse_s, add_s, compose_s,
-                  scalars.size());
+                  mode > 0 ? "," : "", name, wire_bytes, fill_s, encode_s, parse_s, add_s,
+                  compose_s, scalars.size());
     json += buf;
   }
   std::printf("%s}\n", json.c_str());
