@@ -144,6 +144,7 @@ struct FrameState {
 struct ForceSample {
   double t_s = 0;  // seconds, server clock, relative to the first frame of the connection
   Vec3d force{};
+  std::int64_t server_time_ns = 0;  // the tick's deadline, server clock
 };
 
 struct LinkStats {

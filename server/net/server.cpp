@@ -15,6 +15,7 @@
 #include "base/errors.hpp"
 #include "net/client_log.hpp"
 #include "net/client_queue.hpp"
+#include "net/force_history.hpp"
 #include "net/listen_check.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
@@ -141,6 +142,7 @@ class Server::Impl {
     // Volume streaming: the plan's frames (volume_cache.hpp), the next one to send.
     VolumePlan volume;
     std::shared_ptr<const VolumeCache::Frames> volume_frames;
+    Bytes history;  // ForceHistory, sent once after SceneInfo
     std::uint32_t volume_chunk = 0;
   };
   using SessionPtr = std::shared_ptr<Session>;
@@ -361,6 +363,9 @@ class Server::Impl {
     w->set_server_name(config_.server_name);
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
+    v1::ServerMessage history;  // the force before it came, after SceneInfo (force_history.hpp)
+    force_history_.fill(history.mutable_history());
+    s->history = frame_of(history);
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
     plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(),
                      h.volume_deflate(), h.volume_crop()});
@@ -425,6 +430,7 @@ class Server::Impl {
     s->buffers.clear();
     std::size_t frames_now = 0;
     s->queue.take(s->inflight, false);
+    if (s->history) s->inflight.push_back(std::exchange(s->history, nullptr));
     if (!s->closing && !s->ready && s->volume.chunks > 0 && s->inflight.empty())
       if (Bytes b = next_volume_chunk(*s)) s->inflight.push_back(std::move(b));
     if (!s->closing && s->ready) frames_now = s->queue.take(s->inflight, true);
@@ -542,6 +548,7 @@ class Server::Impl {
         if (std::find(touched.begin(), touched.end(), s) == touched.end()) touched.push_back(s);
       }
       if (tap_) tap_(*snap);
+      force_history_.add(snap->tick.t_ns, snap->tick.force);
       ring.pop();
     }
     for (const SessionPtr& s : touched) pump(s);
@@ -635,6 +642,7 @@ class Server::Impl {
       frames_dropped_{0}, timeouts_{0}, overflows_{0};
   // token refusals have a budget of their own, so a flood of other refusals cannot hide them
   ClientLog client_log_, token_log_;
+  ForceHistory force_history_;
   // Last: its encoders stop before anything they post to. Wakes the sessions waiting for a chunk.
   VolumeCache volume_cache_{scene_, config_.volume_chunk_bytes,
                             [this] {

@@ -342,6 +342,54 @@ TEST(StreamClient, StalledWhileThePalpdProcessIsStoppedAndLiveAfterwards) {
   EXPECT_LT(s.link.since_last_frame_s, 5.0);
 }
 
+// A station that joins after the loop ran gets palpd's force history (server/net/force_history):
+// its chart starts with the seconds before it came (t < 0), one sample every 20 ms, the forces
+// those a station present from the start received for the same ticks.
+TEST(StreamClient, ALateJoinerGetsTheSessionsForceHistory) {
+  Palpd palpd(palpd_args("phantom:sphere", "sim"), "history.log");
+  ASSERT_GT(palpd.port(), 0) << palpd.log();
+  StreamOptions early_opts = options_for(palpd.port());
+  early_opts.frame_rate_hz = 0;              // every tick
+  early_opts.force_history_max_samples = 0;  // none thinned
+  early_opts.volume_max_dim = 0;             // frames at once
+  StreamClient early(early_opts);
+  early.start();
+  LatestState e =
+      wait_for(early, [](const LatestState& l) { return l.force_history.size() > 2000; });
+  ASSERT_GT(e.force_history.size(), 2000u);  // 2 s of ticks seen from the start
+  StreamOptions late_opts = options_for(palpd.port());
+  late_opts.force_history_s = 10.0;
+  StreamClient late(late_opts);
+  late.start();
+  LatestState l = wait_for(late, [](const LatestState& s) { return s.frame.valid; });
+  ASSERT_TRUE(l.frame.valid);
+  e = early.latest();
+  std::vector<view::ForceSample> before;
+  for (const view::ForceSample& s : l.force_history)
+    if (s.t_s < 0) before.push_back(s);
+  // About the 2 s the loop ran before, every 20 ms.
+  ASSERT_GT(before.size(), 80u);
+  EXPECT_LE(before.size(), 501u);
+  for (std::size_t i = 1; i < before.size(); ++i) {
+    const std::int64_t gap = before[i].server_time_ns - before[i - 1].server_time_ns;
+    EXPECT_GE(gap, 20'000'000);
+    EXPECT_LT(gap, 25'000'000);
+  }
+  // The same ticks' forces as the early station's frames.
+  std::size_t matched = 0;
+  for (const view::ForceSample& s : before)
+    for (const view::ForceSample& r : e.force_history)
+      if (r.server_time_ns == s.server_time_ns) {
+        EXPECT_EQ(r.force, s.force);
+        ++matched;
+        break;
+      }
+  EXPECT_GT(matched, before.size() / 2);
+  bool pressed = false;
+  for (const view::ForceSample& s : before) pressed = pressed || norm(s.force) > 0.1;
+  EXPECT_TRUE(pressed);  // the sim device presses the ball: not a history of zeros
+}
+
 TEST(StreamClient, ReconnectsToARestartedPalpdAndTakesItsNewScene) {
   auto first = std::make_unique<Palpd>(palpd_args("phantom:sphere", "sim"), "first.log");
   ASSERT_GT(first->port(), 0) << first->log();
