@@ -83,6 +83,14 @@ RenderScene::RenderScene(vtkRenderWindow* window, SceneSettings settings)
   s.volume.set_keep_outside(settings.keep_outside);
   s.renderer->SetBackground(0.08, 0.09, 0.12);
   s.renderer->SetLayer(0);
+  // The semi-transparent tool (tool_layer.cpp) sorted against the ray-cast volume: depth
+  // peeling with volumes, so the hand inside the skin is seen through it, not pasted over it.
+  s.renderer->SetUseDepthPeeling(1);
+  s.renderer->SetUseDepthPeelingForVolumes(true);
+  s.renderer->SetMaximumNumberOfPeels(4);
+  s.renderer->SetOcclusionRatio(0.0);
+  window->SetAlphaBitPlanes(1);
+  window->SetMultiSamples(0);
   window->SetNumberOfLayers(2);
   window->AddRenderer(s.renderer);
   window->AddRenderer(s.chart.renderer());
