@@ -69,7 +69,8 @@ int run(const Options& o) {
   stream.frame_rate_hz = o.rate_hz;
   stream.volume_max_dim = o.volume_max_dim;
   stream.volume_hu = o.ct;
-  stream.volume_bone = !o.ct;  // the CT's presets never read d_bone
+  stream.volume_bone = !o.ct;            // the CT's presets never read d_bone
+  stream.volume_crop = !o.show_outside;  // the body's box, unless the outside is wanted
   stream.force_history_s = o.chart_s;
 
   ViewWindow window(
@@ -247,7 +248,8 @@ int run(const Options& o) {
     if (o.controller && state.volume) {
       if (!controller_ready || controller_connection != state.connection) {
         const RenderVolume& v = *state.volume;
-        if (!controller_ready) controller.reset(initial_pose(v.dims, v.spacing, v.d_surf));
+        if (!controller_ready)
+          controller.reset(initial_pose(v.dims, v.spacing, v.d_surf, 20.0, v.origin));
         controller_ready = true;
         controller_connection = state.connection;
       }

@@ -35,7 +35,8 @@ and deforms the skin where the tool presses.
   --rate HZ               frames/s asked of the server (default 120)
   --volume-max-dim N      render volume: at most N voxels per axis (default 256)
   --preset skin|bone|soft transfer-function preset (default skin), on the CT's HU
-  --show-outside          show the CT outside the body mask (table, cables; default hidden)
+  --show-outside          show the CT outside the body mask (table, cables; default hidden,
+                          and the volume cropped to the body's box)
   --no-ct                 render the distance maps' pseudo-density, not the CT's HU
   --no-deformation        do not deform the skin
   --width W --height H    window size (default 1280x800)

@@ -83,6 +83,14 @@ RenderScene::RenderScene(vtkRenderWindow* window, SceneSettings settings)
   s.volume.set_keep_outside(settings.keep_outside);
   s.renderer->SetBackground(0.08, 0.09, 0.12);
   s.renderer->SetLayer(0);
+  // The semi-transparent tool (tool_layer.cpp) sorted against the ray-cast volume: depth
+  // peeling with volumes, so the hand inside the skin is seen through it, not pasted over it.
+  s.renderer->SetUseDepthPeeling(1);
+  s.renderer->SetUseDepthPeelingForVolumes(true);
+  s.renderer->SetMaximumNumberOfPeels(4);
+  s.renderer->SetOcclusionRatio(0.0);
+  window->SetAlphaBitPlanes(1);
+  window->SetMultiSamples(0);
   window->SetNumberOfLayers(2);
   window->AddRenderer(s.renderer);
   window->AddRenderer(s.chart.renderer());
@@ -102,8 +110,9 @@ void RenderScene::Impl::place_camera() {
   double bounds[6] = {0, 1, 0, 1, 0, 1};
   if (const RenderVolume* source = volume.source()) {
     for (int a = 0; a < 3; ++a) {
-      bounds[2 * a] = 0;
-      bounds[2 * a + 1] = static_cast<double>(source->dims[a] - 1) * source->spacing[a];
+      bounds[2 * a] = source->origin[a];
+      bounds[2 * a + 1] =
+          source->origin[a] + static_cast<double>(source->dims[a] - 1) * source->spacing[a];
     }
   }
   const bool follow = settings.follow_mm > 0 && tool_known;

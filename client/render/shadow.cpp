@@ -41,7 +41,9 @@ double pad_radius(const std::string& tool_name) {
 // Trilinear sample of a float map on the render grid (scene frame mm); `outside` beyond it.
 double sample(const RenderVolume& volume, const std::vector<float>& map, const Vec3d& p,
               double outside) {
-  const double g[3] = {p.x / volume.spacing[0], p.y / volume.spacing[1], p.z / volume.spacing[2]};
+  const double g[3] = {(p.x - volume.origin[0]) / volume.spacing[0],
+                       (p.y - volume.origin[1]) / volume.spacing[1],
+                       (p.z - volume.origin[2]) / volume.spacing[2]};
   std::int64_t i0[3];
   double f[3];
   for (int a = 0; a < 3; ++a) {

@@ -149,6 +149,7 @@ ToolLayer::ToolLayer(vtkRenderer* renderer, double arrow_mm_per_newton)
   tool_actor_ = make_actor(tool_geometry("finger:37"), false);
   tool_actor_->GetProperty()->SetColor(0.93, 0.78, 0.66);
   tool_actor_->GetProperty()->SetSpecular(0.3);
+  tool_actor_->GetProperty()->SetOpacity(kToolOpacity);  // semi-transparent, as in the paper
   tool_actor_->VisibilityOff();
   renderer->AddActor(tool_actor_);
   contact_actor_ = make_actor(contact_poly_, true);

@@ -22,6 +22,10 @@
 
 namespace palp::view {
 
+// The tool (hand, finger, probe) is drawn semi-transparent, as in the paper: the skin, the
+// contacts and proxies beneath it stay visible (sorted against the volume by depth peeling).
+inline constexpr double kToolOpacity = 0.5;
+
 class ToolLayer {
  public:
   // Adds its actors (hidden until a valid frame) to `renderer`; the arrow is

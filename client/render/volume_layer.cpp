@@ -64,7 +64,7 @@ bool VolumeLayer::load(const LatestState& state) {
   image_->SetDimensions(static_cast<int>(source.dims[0]), static_cast<int>(source.dims[1]),
                         static_cast<int>(source.dims[2]));
   image_->SetSpacing(source.spacing[0], source.spacing[1], source.spacing[2]);
-  image_->SetOrigin(0, 0, 0);
+  image_->SetOrigin(source.origin[0], source.origin[1], source.origin[2]);
   scalar_array_->SetName("render_scalar");
   scalar_array_->SetNumberOfComponents(1);
   // No copy: the array reads render_scalars_, which the deformer writes in place.
@@ -86,9 +86,12 @@ bool VolumeLayer::load(const LatestState& state) {
 
 void VolumeLayer::set_contacts(const FrameState& frame) {
   deform_contacts_.clear();
+  // The deformer works on the volume's own voxels: (i, j, k) * spacing from its origin.
+  const Vec3d origin =
+      source_ ? Vec3d{source_->origin[0], source_->origin[1], source_->origin[2]} : Vec3d{};
   if (frame.valid)
     for (const ContactState& c : frame.contacts)
-      if (c.in_contact) deform_contacts_.push_back({c.x, c.p});
+      if (c.in_contact) deform_contacts_.push_back({c.x - origin, c.p - origin});
 }
 
 DeformResult VolumeLayer::deform() {

@@ -19,6 +19,7 @@ std::string encode_hello(const StreamOptions& opts) {
   h->set_volume_hu(opts.volume_hu);
   h->set_volume_skip_bone(!opts.volume_bone);
   h->set_volume_deflate(opts.volume_deflate);
+  h->set_volume_crop(opts.volume_crop);
   return palp::wire::encode_frame(m);
 }
 

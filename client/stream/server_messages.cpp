@@ -52,6 +52,9 @@ void StreamClient::Impl::on_message(const ConnectionPtr& c, const v1::ServerMess
     case v1::ServerMessage::kPong:
       on_pong(*c, m.pong(), now);
       return;
+    case v1::ServerMessage::kHistory:
+      on_history(*c, m.history());
+      return;
     case v1::ServerMessage::MSG_NOT_SET:
       break;
   }
@@ -111,6 +114,23 @@ void StreamClient::Impl::on_volume(Connection& c, const v1::VolumeChunk& chunk) 
   if (added.volume) shared.volume = std::move(added.volume);
 }
 
+// palpd's force before this client joined: checked, kept until the first frame gives t = 0.
+void StreamClient::Impl::on_history(Connection& c, const v1::ForceHistory& h) {
+  constexpr int kMaxSamples = 100000;
+  const int n = h.server_time_ns_size();
+  if (n > kMaxSamples || h.fx_size() != n || h.fy_size() != n || h.fz_size() != n)
+    throw ProtocolViolation("ForceHistory: " + std::to_string(n) +
+                            " times and forces of other lengths, or over 100000");
+  if (c.frames > 0) return;  // late: the chart has begun
+  c.joined_history.clear();
+  for (int i = 0; i < n; ++i) {
+    const Vec3d f{h.fx(i), h.fy(i), h.fz(i)};
+    if (!is_finite(f) || (i > 0 && h.server_time_ns(i) <= h.server_time_ns(i - 1)))
+      throw ProtocolViolation("ForceHistory: a force not finite or times not increasing");
+    c.joined_history.push_back({0.0, f, h.server_time_ns(i)});
+  }
+}
+
 void StreamClient::Impl::on_frame(Connection& c, const v1::HapticFrame& f, std::int64_t now) {
   if (c.assembly.active()) throw ProtocolViolation("a frame before the render volume was complete");
   FrameState frame = net::decode_frame(f);
@@ -135,10 +155,20 @@ void StreamClient::Impl::on_frame(Connection& c, const v1::HapticFrame& f, std::
 
   const bool was_live = accept_poses.load();
   std::lock_guard lock(shared_mutex);
+  if (c.frames == 1) {  // the session's force before this client joined, t < 0
+    history.clear();
+    for (ForceSample s : c.joined_history) {
+      s.t_s = static_cast<double>(s.server_time_ns - c.first_frame_server_ns) * 1e-9;
+      if (s.server_time_ns < f.server_time_ns() && s.t_s >= -opts.force_history_s)
+        history.push_back(s);
+    }
+    c.joined_history.clear();
+  }
   if (keep_sample) {
     ForceSample sample;
     sample.t_s = static_cast<double>(f.server_time_ns() - c.first_frame_server_ns) * 1e-9;
     sample.force = frame.force;
+    sample.server_time_ns = f.server_time_ns();
     history.push_back(sample);
     while (!history.empty() && history.front().t_s < sample.t_s - opts.force_history_s)
       history.pop_front();

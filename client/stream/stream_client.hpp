@@ -66,6 +66,7 @@ struct StreamOptions {
   bool volume_hu = true;       // the CT's HU and body mask (Hello.volume_hu)
   bool volume_bone = true;     // d_bone (false: Hello.volume_skip_bone)
   bool volume_deflate = true;  // zlib on the wire (Hello.volume_deflate)
+  bool volume_crop = true;     // the body's bounding box only, with hu (Hello.volume_crop)
   bool want_contacts = true;
   double stall_s = 0.5;          // no frame for this long: Stalled
   double reconnect_min_s = 0.2;  // first retry delay; doubles up to reconnect_max_s
@@ -114,6 +115,9 @@ struct SceneDescription {
 struct RenderVolume {
   std::array<std::int64_t, 3> dims{};
   std::array<double, 3> spacing{};  // mm between samples (scene spacing * step)
+  // Where voxel (0, 0, 0) lies, scene frame mm: (0, 0, 0) unless palpd cropped the volume to the
+  // body (Hello.volume_crop); voxel (i, j, k) lies at origin + (i, j, k) * spacing.
+  std::array<double, 3> origin{};
   std::uint32_t step = 1;
   std::vector<float> d_surf;       // mm, positive inside the body
   std::vector<float> d_bone;       // mm, positive inside bone; empty when the scene has none
@@ -145,6 +149,7 @@ struct FrameState {
 struct ForceSample {
   double t_s = 0;  // seconds, server clock, relative to the first frame of the connection
   Vec3d force{};
+  std::int64_t server_time_ns = 0;  // the tick's deadline, server clock
 };
 
 struct LinkStats {

@@ -44,6 +44,7 @@ struct StreamClient::Impl {
     std::int64_t first_frame_ns = 0;         // arrival of the first frame (0: none yet)
     std::int64_t first_frame_server_ns = 0;  // its server_time_ns: force history t = 0
     std::int64_t last_history_server_ns = 0;
+    std::vector<ForceSample> joined_history;  // palpd's ForceHistory, until the first frame
     std::uint64_t frames = 0;
     int pings = 0;
     std::int64_t last_ping_ns = 0;
@@ -99,6 +100,7 @@ struct StreamClient::Impl {
   void on_volume(Connection& c, const v1::VolumeChunk& chunk);
   void on_frame(Connection& c, const v1::HapticFrame& f, std::int64_t now);
   void on_stats(Connection& c, const v1::Stats& s);
+  void on_history(Connection& c, const v1::ForceHistory& h);
   void on_error(const ConnectionPtr& c, const v1::Error& e);
   void on_pong(Connection& c, const v1::Pong& p, std::int64_t now);
 

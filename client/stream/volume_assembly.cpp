@@ -67,13 +67,24 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     }
     if (dims[0] * dims[1] * dims[2] > kMaxVoxels) throw bad("more than 2^28 voxels");
     if (chunk.chunk_count() > dims[2]) throw bad("more chunks than slices");
+    // A cropped volume (offset): a box of the grid's voxels at the step; else the whole grid.
+    std::array<std::int64_t, 3> offset{};
+    if (chunk.offset_size() != 0 && chunk.offset_size() != 3) throw bad("needs 0 or 3 offsets");
+    for (int i = 0; i < chunk.offset_size(); ++i) {
+      offset[i] = chunk.offset(i);
+      if (offset[i] < 0 || offset[i] > kMaxAxis * std::int64_t{chunk.step()})
+        throw bad("offset " + std::to_string(offset[i]) + " out of range");
+    }
+    const bool cropped = chunk.offset_size() == 3;
     if (scene)
       for (int i = 0; i < 3; ++i) {
         const std::int64_t expect = (scene->dims[i] + chunk.step() - 1) / chunk.step();
-        if (dims[i] != expect)
+        if (!cropped && dims[i] != expect)
           throw bad("dimension " + std::to_string(dims[i]) + " along axis " + std::to_string(i) +
                     ", the scene's grid at step " + std::to_string(chunk.step()) + " has " +
                     std::to_string(expect));
+        if (cropped && offset[i] + (dims[i] - 1) * std::int64_t{chunk.step()} >= scene->dims[i])
+          throw bad("the cropped box leaves the scene's grid along axis " + std::to_string(i));
         const double sp = scene->spacing[i] * chunk.step();
         if (std::abs(spacing[i] - sp) > 1e-6 * sp) throw bad("spacing does not match the scene");
       }
@@ -105,6 +116,8 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     const bool has_bone = has_bone_, has_hu = has_hu_, deflate = deflate_;
     *this = VolumeAssembly{};
     active_ = true;
+    offset_size_ = chunk.offset_size();
+    offset_ = offset;
     step_ = chunk.step();
     chunk_count_ = chunk.chunk_count();
     has_bone_ = has_bone;
@@ -115,6 +128,8 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
       volume->dims = dims;
       volume->spacing = spacing;
       volume->step = chunk.step();
+      for (int i = 0; i < 3; ++i)  // grid voxel offset * the grid's spacing
+        volume->origin[i] = static_cast<double>(offset[i]) * spacing[i] / chunk.step();
       volume->d_surf.resize(voxels);
       if (has_bone_) volume->d_bone.resize(voxels);
       if (has_hu_) {
@@ -134,6 +149,9 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     if (chunk.step() != step_ || chunk.chunk_count() != chunk_count_)
       throw bad("step or chunk count differs from chunk 0");
     if (chunk.deflate() != deflate_) throw bad("deflate differs from chunk 0");
+    if (chunk.offset_size() != offset_size_) throw bad("offset differs from chunk 0");
+    for (int i = 0; i < chunk.offset_size(); ++i)
+      if (chunk.offset(i) != offset_[i]) throw bad("offset differs from chunk 0");
     for (int i = 0; i < 3; ++i)
       if (chunk.dims(i) != volume_->dims[i] || chunk.spacing(i) != volume_->spacing[i])
         throw bad("dims or spacing differ from chunk 0");

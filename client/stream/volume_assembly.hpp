@@ -37,6 +37,8 @@ class VolumeAssembly {
   std::uint32_t step_ = 0, chunk_count_ = 0, next_chunk_ = 0;
   std::int64_t next_k_ = 0;
   bool has_bone_ = false, has_hu_ = false, deflate_ = false;
+  int offset_size_ = 0;  // 3: a cropped volume
+  std::array<std::int64_t, 3> offset_{};
   std::shared_ptr<RenderVolume> volume_;
 };
 

@@ -127,7 +127,8 @@ void ControllerInput::rotate_tool(const Vec3d& axis, double angle) {
 }
 
 Pose initial_pose(const std::array<std::int64_t, 3>& dims, const std::array<double, 3>& spacing,
-                  std::span<const float> d_surf, double clearance_mm) {
+                  std::span<const float> d_surf, double clearance_mm,
+                  const std::array<double, 3>& origin) {
   const std::int64_t ci = dims[0] / 2, ck = dims[2] / 2;
   std::int64_t front_j = 0;
   const bool sized = dims[0] > 0 && dims[1] > 0 && dims[2] > 0 &&
@@ -143,9 +144,10 @@ Pose initial_pose(const std::array<std::int64_t, 3>& dims, const std::array<doub
   Pose pose;
   // Tool -z (the pads' side) points into the body: +y, a quarter turn about x.
   pose.orientation = axis_angle({1, 0, 0}, 0.5 * std::numbers::pi);
-  pose.position = {static_cast<double>(ci) * spacing[0],
-                   static_cast<double>(front_j) * spacing[1] + kFingerPadZ - clearance_mm,
-                   static_cast<double>(ck) * spacing[2]};
+  pose.position = {
+      origin[0] + static_cast<double>(ci) * spacing[0],
+      origin[1] + static_cast<double>(front_j) * spacing[1] + kFingerPadZ - clearance_mm,
+      origin[2] + static_cast<double>(ck) * spacing[2]};
   return pose;
 }
 

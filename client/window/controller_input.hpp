@@ -108,8 +108,10 @@ class ControllerInput {
 // A start pose for a volume of `dims` at `spacing` with the skin map `d_surf` (mm, positive
 // inside, i fastest): the tool points +y (anterior -> posterior: tool -z maps to scene +y) above
 // the body's front at the centre of the (i, k) plane, its pads `clearance_mm` in front of the
-// first voxel inside the body along that line (the grid's front face when none is).
+// first voxel inside the body along that line (the grid's front face when none is). `origin`:
+// where voxel (0, 0, 0) lies (scene mm; a cropped volume).
 Pose initial_pose(const std::array<std::int64_t, 3>& dims, const std::array<double, 3>& spacing,
-                  std::span<const float> d_surf, double clearance_mm = 20.0);
+                  std::span<const float> d_surf, double clearance_mm = 20.0,
+                  const std::array<double, 3>& origin = {});
 
 }  // namespace palp::view

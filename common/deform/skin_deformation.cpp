@@ -42,6 +42,13 @@ SkinDeformer::SkinDeformer(std::array<std::int64_t, 3> dims, std::array<double, 
     throw UsageError("skin deformation: roi_margin_mm must be finite and non-negative");
   if (!(params_.max_displacement_mm > 0.0 && std::isfinite(params_.max_displacement_mm)))
     throw UsageError("skin deformation: max_displacement_mm must be finite and positive");
+  if (!(params_.lattice_mm >= 0.0 && std::isfinite(params_.lattice_mm)))
+    throw UsageError("skin deformation: lattice_mm must be finite and non-negative");
+  for (int a = 0; a < 3; ++a) {
+    lattice_[a] = std::clamp<std::int64_t>(
+        static_cast<std::int64_t>(std::floor(params_.lattice_mm / spacing_[a])), 1, 16);
+    lattice_dims_[a] = (dims_[a] - 1) / lattice_[a] + 1;  // element e at voxel e * lattice
+  }
 }
 
 Vec3d SkinDeformer::displacement_at(std::int64_t i, std::int64_t j, std::int64_t k) const {
@@ -49,7 +56,35 @@ Vec3d SkinDeformer::displacement_at(std::int64_t i, std::int64_t j, std::int64_t
   if (i < roi_lo_[0] || j < roi_lo_[1] || k < roi_lo_[2] || i >= roi_hi_[0] || j >= roi_hi_[1] ||
       k >= roi_hi_[2])
     return {};
-  return mail_.displacement(i - roi_lo_[0], j - roi_lo_[1], k - roi_lo_[2]);
+  return lattice_displacement(i, j, k);
+}
+
+Vec3d SkinDeformer::lattice_displacement(std::int64_t i, std::int64_t j, std::int64_t k) const {
+  const std::array<std::int64_t, 3> v{i, j, k};
+  const auto md = mail_.dims();
+  std::array<std::int64_t, 3> e{};
+  std::array<double, 3> f{};
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t local = v[a] - roi_lo_[a];
+    e[a] = local / lattice_[a];
+    f[a] = static_cast<double>(local - e[a] * lattice_[a]) / static_cast<double>(lattice_[a]);
+  }
+  if (lattice_ == std::array<std::int64_t, 3>{1, 1, 1}) return mail_.displacement(e[0], e[1], e[2]);
+  Vec3d d{};
+  for (int c = 0; c < 8; ++c) {
+    const std::array<std::int64_t, 3> o{c & 1, (c >> 1) & 1, (c >> 2) & 1};
+    double w = 1.0;
+    std::array<std::int64_t, 3> n{};
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      w *= o[a] ? f[a] : 1.0 - f[a];
+      n[a] = e[a] + o[a];
+      inside = inside && n[a] < md[a];
+    }
+    if (w == 0.0 || !inside) continue;  // beyond the ROI: at rest
+    d += mail_.displacement(n[0], n[1], n[2]) * w;
+  }
+  return d;
 }
 
 DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::span<float> out) {
@@ -58,6 +93,7 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
     throw UsageError("skin deformation: the output volume has " + std::to_string(out.size()) +
                      " values, the original " + std::to_string(original_.size()));
   DeformResult result;
+  result.lattice = lattice_;
 
   // Anchors, in volume voxels for now: the element nearest each proxy moves by x - p.
   anchors_.clear();
@@ -72,9 +108,10 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
     const std::array<double, 3> p{contact.p.x, contact.p.y, contact.p.z};
     Index3 element{};
     bool inside = true;
-    for (int a = 0; a < 3; ++a) {
-      const double index = std::round(p[a] / spacing_[a]);
-      inside = inside && index >= 0.0 && index < static_cast<double>(dims_[a]);
+    for (int a = 0; a < 3; ++a) {  // the nearest element of the lattice
+      const double index = std::round(p[a] / (spacing_[a] * static_cast<double>(lattice_[a])));
+      inside = inside && index >= 0.0 && index < static_cast<double>(lattice_dims_[a]) &&
+               p[a] / spacing_[a] < static_cast<double>(dims_[a]) - 0.5;
       element[a] = inside ? static_cast<std::int64_t>(index) : 0;
     }
     if (!inside) continue;
@@ -103,39 +140,46 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
     // 0 (one more for the relaxation's reach, one more so the boundary lies beyond).
     const ChainMailParams& cm = params_.chainmail;
     const int relax_reach = cm.relax_iterations > 0 && cm.relax_rate > 0.0 ? 1 : 0;
+    Index3 elo{}, ehi{};  // the ROI in lattice elements
+    std::array<double, 3> h{};
     for (int a = 0; a < 3; ++a) {
+      h[a] = spacing_[a] * static_cast<double>(lattice_[a]);
       std::int64_t reach = 0;
       for (int c = 0; c < 3; ++c) {
         const double slack =
-            (c == a ? std::min(cm.max_stretch - 1.0, 1.0 - cm.min_stretch) : cm.max_shear) *
-            spacing_[a];
+            (c == a ? std::min(cm.max_stretch - 1.0, 1.0 - cm.min_stretch) : cm.max_shear) * h[a];
         reach = std::max(reach, static_cast<std::int64_t>(std::ceil(largest[c] / slack)));
       }
       const auto margin =
-          std::max(static_cast<std::int64_t>(std::ceil(params_.roi_margin_mm / spacing_[a])),
+          std::max(static_cast<std::int64_t>(std::ceil(params_.roi_margin_mm / h[a])),
                    reach + relax_reach + 1);
-      roi_lo_[a] = std::max<std::int64_t>(0, box_lo[a] - margin);
-      roi_hi_[a] = std::min<std::int64_t>(dims_[a], box_hi[a] + margin);
+      elo[a] = std::max<std::int64_t>(0, box_lo[a] - margin);
+      ehi[a] = std::min<std::int64_t>(lattice_dims_[a], box_hi[a] + margin);
+      roi_lo_[a] = elo[a] * lattice_[a];
+      roi_hi_[a] = std::min<std::int64_t>(dims_[a], (ehi[a] - 1) * lattice_[a] + 1);
     }
     for (auto& anchor : anchors_)
-      for (int a = 0; a < 3; ++a) anchor.element[a] -= roi_lo_[a];
-    mail_.resize({roi_hi_[0] - roi_lo_[0], roi_hi_[1] - roi_lo_[1], roi_hi_[2] - roi_lo_[2]},
-                 spacing_);
+      for (int a = 0; a < 3; ++a) anchor.element[a] -= elo[a];
+    mail_.resize({ehi[0] - elo[0], ehi[1] - elo[1], ehi[2] - elo[2]}, h);
+    const auto solve_start = std::chrono::steady_clock::now();
     mail_.solve(anchors_);
+    result.solve_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_start).count();
     roi_active_ = true;
     result.active = true;
     result.roi_lo = roi_lo_;
     result.roi_hi = roi_hi_;
-    result.elements =
-        (roi_hi_[0] - roi_lo_[0]) * (roi_hi_[1] - roi_lo_[1]) * (roi_hi_[2] - roi_lo_[2]);
+    result.elements = (ehi[0] - elo[0]) * (ehi[1] - elo[1]) * (ehi[2] - elo[2]);
+    // The voxels whose displacement may be nonzero: those next to a moved element.
     if (!empty_box(mail_.active_lo(), mail_.active_hi()))
       for (int a = 0; a < 3; ++a) {
-        new_lo[a] = mail_.active_lo()[a] + roi_lo_[a];
-        new_hi[a] = mail_.active_hi()[a] + roi_lo_[a];
+        new_lo[a] = std::max(roi_lo_[a], (mail_.active_lo()[a] - 1) * lattice_[a] + 1 + roi_lo_[a]);
+        new_hi[a] = std::min(roi_hi_[a], (mail_.active_hi()[a]) * lattice_[a] + roi_lo_[a]);
       }
   }
 
   // Restore what the last update wrote and this one does not, then write the new box.
+  const auto resample_start = std::chrono::steady_clock::now();
   restore(out, new_lo, new_hi);
   const bool had_old = !empty_box(written_lo_, written_hi_);
   const bool has_new = !empty_box(new_lo, new_hi);
@@ -154,6 +198,8 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
   written_lo_ = new_lo;
   written_hi_ = new_hi;
   if (has_new) resample(out);
+  result.resample_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - resample_start).count();
 
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -211,6 +257,50 @@ float SkinDeformer::sample(double i, double j, double k) const {
 }
 
 void SkinDeformer::resample(std::span<float> out) const {
+  if (lattice_ != std::array<std::int64_t, 3>{1, 1, 1}) {  // interpolated between elements
+    const auto md = mail_.dims();
+    const double* comp[3] = {mail_.displacement_component(0).data(),
+                             mail_.displacement_component(1).data(),
+                             mail_.displacement_component(2).data()};
+    const double inv[3] = {1.0 / spacing_[0], 1.0 / spacing_[1], 1.0 / spacing_[2]};
+    // Element e and fraction f of a voxel along an axis (the last element has f = 0: e + 1 is
+    // clamped, its weight 0).
+    const auto split = [&](int a, std::int64_t v, std::int64_t& e0, std::int64_t& e1, double& f) {
+      const std::int64_t local = v - roi_lo_[a];
+      e0 = local / lattice_[a];
+      e1 = std::min(e0 + 1, md[a] - 1);
+      f = static_cast<double>(local - e0 * lattice_[a]) / static_cast<double>(lattice_[a]);
+    };
+    for (std::int64_t k = written_lo_[2]; k < written_hi_[2]; ++k) {
+      std::int64_t k0, k1;
+      double fk;
+      split(2, k, k0, k1, fk);
+      for (std::int64_t j = written_lo_[1]; j < written_hi_[1]; ++j) {
+        std::int64_t j0, j1;
+        double fj;
+        split(1, j, j0, j1, fj);
+        const std::int64_t rows[4] = {md[0] * (j0 + md[1] * k0), md[0] * (j1 + md[1] * k0),
+                                      md[0] * (j0 + md[1] * k1), md[0] * (j1 + md[1] * k1)};
+        const double w[4] = {(1 - fj) * (1 - fk), fj * (1 - fk), (1 - fj) * fk, fj * fk};
+        const auto row = dims_[0] * (j + dims_[1] * k);
+        for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
+          std::int64_t i0, i1;
+          double fi;
+          split(0, i, i0, i1, fi);
+          double d[3] = {0, 0, 0};
+          for (int a = 0; a < 3; ++a)
+            for (int r = 0; r < 4; ++r)
+              d[a] += w[r] * ((1 - fi) * comp[a][rows[r] + i0] + fi * comp[a][rows[r] + i1]);
+          out[row + i] = d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0
+                             ? original_[row + i]
+                             : sample(static_cast<double>(i) - d[0] * inv[0],
+                                      static_cast<double>(j) - d[1] * inv[1],
+                                      static_cast<double>(k) - d[2] * inv[2]);
+        }
+      }
+    }
+    return;
+  }
   const auto mail_dims = mail_.dims();
   const double* dx = mail_.displacement_component(0).data();
   const double* dy = mail_.displacement_component(1).data();

@@ -30,6 +30,11 @@ struct DeformerParams {
   // An anchor moves at most this far (its direction kept): no tool presses deeper, and a contact
   // far from its proxy (a hostile or broken stream) must not make the ROI the whole volume.
   double max_displacement_mm = 40.0;
+  // ChainMail elements are at least this large: along an axis whose voxels are finer, one element
+  // spans floor(lattice_mm / spacing) voxels and the voxels between elements take the trilinear
+  // interpolation of their displacements (a full-resolution CT's 0.8 mm voxels: 1.6 mm elements,
+  // a quarter of the elements; voxels of 1 mm and more: one element a voxel, as before).
+  double lattice_mm = 1.6;
   ChainMailParams chainmail;
 };
 
@@ -48,9 +53,12 @@ struct DeformResult {
   std::array<std::int64_t, 3> lo{}, hi{};
   std::array<std::int64_t, 3> roi_lo{}, roi_hi{};  // the ChainMail box (volume voxels)
   std::int64_t elements = 0;                       // ChainMail elements in the ROI
+  std::array<std::int64_t, 3> lattice{1, 1, 1};    // voxels per element along each axis
   std::int64_t anchors = 0;                        // contacts used as anchors
   Vec3d mean_anchor_displacement{};                // mean of x_i - p_i over them (= -u)
   double seconds = 0;                              // time update() took
+  double solve_seconds = 0;                        // of which the ChainMail solve
+  double resample_seconds = 0;  // and the restore and resampling of the written box
 };
 
 class SkinDeformer {
@@ -80,14 +88,19 @@ class SkinDeformer {
                const std::array<std::int64_t, 3>& keep_hi) const;
   void resample(std::span<float> out) const;
   float sample(double i, double j, double k) const;
+  // The displacement at voxel (i, j, k) inside the ROI: the element's, or interpolated between
+  // elements on a coarser lattice.
+  Vec3d lattice_displacement(std::int64_t i, std::int64_t j, std::int64_t k) const;
 
   std::array<std::int64_t, 3> dims_;
   std::array<double, 3> spacing_;
   std::vector<float> original_;
   DeformerParams params_;
   ChainMail mail_;
-  std::vector<ChainMailAnchor> anchors_;  // scratch, reused
-  std::array<std::int64_t, 3> roi_lo_{}, roi_hi_{};
+  std::vector<ChainMailAnchor> anchors_;                     // scratch, reused
+  std::array<std::int64_t, 3> lattice_{1, 1, 1};             // voxels per element
+  std::array<std::int64_t, 3> lattice_dims_{};               // elements spanning the volume
+  std::array<std::int64_t, 3> roi_lo_{}, roi_hi_{};          // voxels (multiples of the lattice)
   std::array<std::int64_t, 3> written_lo_{}, written_hi_{};  // deformed voxels of `out`
   bool roi_active_ = false;
 };

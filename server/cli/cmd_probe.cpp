@@ -200,6 +200,7 @@ class Probe {
         break;
       case v1::ServerMessage::kResult:
       case v1::ServerMessage::kPong:
+      case v1::ServerMessage::kHistory:  // the force chart's, not the probe's
       case v1::ServerMessage::MSG_NOT_SET:
         break;
     }

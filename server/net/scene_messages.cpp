@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -79,7 +80,7 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
 }
 
 VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& request,
-                       std::size_t chunk_bytes) {
+                       std::size_t chunk_bytes, const VoxelBox* crop) {
   VolumePlan plan;
   const Grid& grid = scene.grid;
   const Index3 dims = grid.dims;
@@ -88,24 +89,69 @@ VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& reque
   plan.bone = request.bone && scene.fields->has_bone();
   plan.deflate = request.deflate;
   plan.voxel_bytes = sizeof(float) * (plan.bone ? 2 : 1) + (plan.hu ? 3 : 0);
+  // The box that goes out: the whole grid, or the crop (clamped to the grid).
+  VoxelBox box{{0, 0, 0}, {dims[0], dims[1], dims[2]}};
+  if (request.crop && plan.hu && crop && !crop->empty()) {
+    for (int a = 0; a < 3; ++a) {
+      box.lo[a] = std::clamp<std::int64_t>(crop->lo[a], 0, dims[a] - 1);
+      box.hi[a] = std::clamp<std::int64_t>(crop->hi[a], box.lo[a] + 1, dims[a]);
+    }
+  }
+  // Sampled voxels along axis a at step s: from lo aligned down to s, every s-th below hi.
+  const auto extent = [&](int a, std::uint32_t s) {
+    const std::int64_t lo = box.lo[a] / s * s;
+    return (box.hi[a] - lo + s - 1) / s;
+  };
   std::uint32_t step = request.step;
   if (step == 0) {
-    const std::int64_t largest = std::max({dims[0], dims[1], dims[2]});
+    const std::int64_t largest =
+        std::max({box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]});
     step = static_cast<std::uint32_t>((largest + request.max_dim - 1) / request.max_dim);
+    step = std::clamp<std::uint32_t>(step, 1, 1024);
+    // The alignment can add one voxel: coarser until every axis is within max_dim.
+    while (step < 1024 && std::max({extent(0, step), extent(1, step), extent(2, step)}) >
+                              static_cast<std::int64_t>(request.max_dim))
+      ++step;
   }
   step = std::clamp<std::uint32_t>(step, 1, 1024);
   // One slice must fit a chunk whatever was asked: coarser until it does.
   const auto slice_bytes = [&](std::uint32_t s) {
-    return static_cast<std::size_t>(((dims[0] + s - 1) / s) * ((dims[1] + s - 1) / s)) *
-           plan.voxel_bytes;
+    return static_cast<std::size_t>(extent(0, s) * extent(1, s)) * plan.voxel_bytes;
   };
   while (step < 1024 && slice_bytes(step) > kMaxChunkRawBytes) ++step;
   plan.step = step;
-  for (int a = 0; a < 3; ++a) plan.dims[a] = (dims[a] + step - 1) / step;
+  for (int a = 0; a < 3; ++a) {
+    plan.offset[a] = box.lo[a] / step * step;
+    plan.dims[a] = extent(a, step);
+  }
   plan.slab = static_cast<std::uint32_t>(
       std::max<std::size_t>(1, chunk_bytes / std::max<std::size_t>(1, slice_bytes(step))));
   plan.chunks = static_cast<std::uint32_t>((plan.dims[2] + plan.slab - 1) / plan.slab);
   return plan;
+}
+
+VoxelBox body_box(const Mask& body, double margin_mm) {
+  const Index3 d = body.grid.dims;
+  VoxelBox box{{d[0], d[1], d[2]}, {0, 0, 0}};
+  for (std::int64_t k = 0; k < d[2]; ++k)
+    for (std::int64_t j = 0; j < d[1]; ++j) {
+      const std::uint8_t* row = &body.data[static_cast<std::size_t>(d[0] * (j + d[1] * k))];
+      std::int64_t first = 0;
+      while (first < d[0] && row[first] == 0) ++first;
+      if (first == d[0]) continue;
+      std::int64_t last = d[0] - 1;
+      while (row[last] == 0) --last;
+      box.lo = {std::min(box.lo[0], first), std::min(box.lo[1], j), std::min(box.lo[2], k)};
+      box.hi = {std::max(box.hi[0], last + 1), std::max(box.hi[1], j + 1),
+                std::max(box.hi[2], k + 1)};
+    }
+  if (box.empty()) return {};
+  for (int a = 0; a < 3; ++a) {
+    const auto m = static_cast<std::int64_t>(std::ceil(margin_mm / body.grid.spacing[a]));
+    box.lo[a] = std::max<std::int64_t>(0, box.lo[a] - m);
+    box.hi[a] = std::min<std::int64_t>(d[a], box.hi[a] + m);
+  }
+  return box;
 }
 
 namespace {
@@ -131,7 +177,8 @@ std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan&
   for (std::uint32_t k = 0; k < k_count; ++k)
     for (std::int64_t j = 0; j < plan.dims[1]; ++j)
       for (std::int64_t i = 0; i < plan.dims[0]; ++i, ++v) {
-        const std::int64_t gi = i * st, gj = j * st, gk = (k_begin + k) * st;
+        const std::int64_t gi = plan.offset[0] + i * st, gj = plan.offset[1] + j * st,
+                           gk = plan.offset[2] + (k_begin + k) * st;
         const Vec3d x{static_cast<double>(gi) * sp[0], static_cast<double>(gj) * sp[1],
                       static_cast<double>(gk) * sp[2]};
         surf[v] = static_cast<float>(fields.sample_surf(x).value);
@@ -151,6 +198,8 @@ std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan&
     c->add_dims(plan.dims[a]);
     c->add_spacing(sp[a] * plan.step);
   }
+  if (plan.offset != std::array<std::int64_t, 3>{})
+    for (int a = 0; a < 3; ++a) c->add_offset(plan.offset[a]);
   c->set_k_begin(k_begin);
   c->set_k_count(k_count);
   c->set_deflate(plan.deflate);

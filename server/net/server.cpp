@@ -16,12 +16,14 @@
 #include "net/admission.hpp"
 #include "net/client_log.hpp"
 #include "net/client_queue.hpp"
+#include "net/force_history.hpp"
 #include "net/listen_check.hpp"
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
 #include "net/session.hpp"
 #include "net/tls_accept.hpp"
 #include "net/token_guard.hpp"
+#include "net/volume_cache.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::net {
@@ -292,9 +294,12 @@ class Server::Impl {
     w->set_server_name(config_.server_name);
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
+    v1::ServerMessage history;  // the force before it came, after SceneInfo (force_history.hpp)
+    force_history_.fill(history.mutable_history());
+    s->history = frame_of(history);
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
     plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(),
-                     h.volume_deflate()});
+                     h.volume_deflate(), h.volume_crop()});
     if (s->volume.chunks == 0) s->ready = true;
     log_client(who(*s) + " joined");
     pump(s);
@@ -338,18 +343,15 @@ class Server::Impl {
 
   void plan_volume(Session& s, const VolumeRequest& r) {
     if (!scene_.fields || (r.step == 0 && r.max_dim == 0)) return;
-    s.volume = net::plan_volume(scene_, r, config_.volume_chunk_bytes);
-    s.volume_k = 0;
-    s.volume_chunk = 0;
+    s.volume = volume_cache_.plan(r);
+    if (s.volume.chunks > 0) s.volume_frames = volume_cache_.get(s.volume);
   }
 
-  Bytes next_volume_chunk(Session& s) {
-    v1::ServerMessage m;
-    s.volume_k +=
-        fill_volume_chunk(scene_, s.volume, s.volume_k, s.volume_chunk, m.mutable_volume());
-    ++s.volume_chunk;
-    if (s.volume_chunk == s.volume.chunks) s.ready = true;
-    return frame_of(m);
+  Bytes next_volume_chunk(Session& s) {  // null: not encoded yet (volume_cache_ wakes us)
+    Bytes b = s.volume_frames->frame(s.volume_chunk);
+    if (b && ++s.volume_chunk == s.volume.chunks) s.ready = true;
+    if (s.ready) s.volume_frames.reset();
+    return b;
   }
 
   // ------------------------------------------------------------------ write
@@ -359,8 +361,9 @@ class Server::Impl {
     s->buffers.clear();
     std::size_t frames_now = 0;
     s->queue.take(s->inflight, false);
+    if (s->history) s->inflight.push_back(std::exchange(s->history, nullptr));
     if (!s->closing && !s->ready && s->volume.chunks > 0 && s->inflight.empty())
-      s->inflight.push_back(next_volume_chunk(*s));
+      if (Bytes b = next_volume_chunk(*s)) s->inflight.push_back(std::move(b));
     if (!s->closing && s->ready) frames_now = s->queue.take(s->inflight, true);
     if (s->inflight.empty()) {
       if (s->closing) close(*s);
@@ -476,6 +479,7 @@ class Server::Impl {
         if (std::find(touched.begin(), touched.end(), s) == touched.end()) touched.push_back(s);
       }
       for (const auto& tap : taps_) tap(*snap);
+      force_history_.add(snap->tick.t_ns, snap->tick.force);
       ring.pop();
     }
     for (const SessionPtr& s : touched) pump(s);
@@ -569,6 +573,16 @@ class Server::Impl {
       frames_dropped_{0}, timeouts_{0}, overflows_{0};
   // token refusals have a budget of their own, so a flood of other refusals cannot hide them
   ClientLog client_log_, token_log_;
+  ForceHistory force_history_;
+  // Last: its encoders stop before anything they post to. Wakes the sessions waiting for a chunk.
+  VolumeCache volume_cache_{scene_, config_.volume_chunk_bytes,
+                            [this] {
+                              asio::post(io_, [this] {
+                                for (const SessionPtr& s : sessions_)
+                                  if (!s->ready && s->volume_frames && !s->writing) pump(s);
+                              });
+                            },
+                            true};
 };
 
 Server::Server(ServerConfig config, SceneDescription scene, rt::HapticLoop& loop,

@@ -11,6 +11,7 @@
 #include "net/client_queue.hpp"
 #include "net/scene_messages.hpp"
 #include "net/server.hpp"
+#include "net/volume_cache.hpp"
 #include "palp.pb.h"
 #include "tls/stream.hpp"
 #include "tls/tls_context.hpp"
@@ -49,9 +50,11 @@ struct ServerSession {
   std::int64_t connected_ns = 0, last_rx_ns = 0, write_started_ns = 0;
   std::uint64_t frames_sent = 0;
   std::uint64_t frames_dropped_counted = 0;  // of queue.frames_dropped(), in frames_dropped_
-  // Volume streaming.
+  // Volume streaming: the plan's frames (volume_cache.hpp), the next one to send.
   VolumePlan volume;
-  std::uint32_t volume_k = 0, volume_chunk = 0;
+  std::shared_ptr<const VolumeCache::Frames> volume_frames;
+  Bytes history;  // ForceHistory, sent once after SceneInfo
+  std::uint32_t volume_chunk = 0;
 };
 
 }  // namespace palp::net

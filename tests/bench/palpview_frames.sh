@@ -44,5 +44,10 @@ for mode in deform nodeform; do
     --screenshot "$out/$mode.png" --frames "$frames" --timeout 600 \
     --volume-max-dim "${PALPVIEW_MAX_DIM:-256}" \
     --stats-json "$out/$mode.json" "${extra[@]}"
+  # palpview start -> the whole volume at the station (the second run finds palpd's encoded
+  # chunks cached: server/net/volume_cache.hpp)
+  python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); print("%s: volume at the station %.2f s, dims %s" % (sys.argv[2], j["volume_received_s"], j.get("volume_dims")))' \
+    "$out/$mode.json" "$mode"
 done
+echo "load: $(uptime | sed 's/.*load average: //')"
 echo "results in $out"

@@ -35,8 +35,8 @@
 #include "io/phantom.hpp"
 #include "support/cli_test_util.hpp"
 #include "wire/framing.hpp"
-#include "wire/volume_codec.hpp"
 #include "wire/messages.hpp"
+#include "wire/volume_codec.hpp"
 
 extern char** environ;
 
@@ -253,25 +253,34 @@ TEST(StreamClient, ReceivesSceneVolumeAndFramesFromPalpd) {
   EXPECT_EQ(s.scene->tick_rate_hz, 1000.0);
   EXPECT_EQ(s.scene->server_name, "palpd");
 
-  // The volume: every ceil(100 / 32) = 4th voxel, at the prepped map's values exactly.
+  // The volume: cropped to the body's box (Hello.volume_crop; the sphere phantom's body leaves
+  // little air), at the step that keeps the box within 32 a side, at the prepped map's values
+  // exactly, each voxel at origin + (i, j, k) * spacing.
   ASSERT_TRUE(s.volume);
   const view::RenderVolume& v = *s.volume;
-  EXPECT_EQ(v.step, 4u);
+  EXPECT_LE(v.step, 4u);
+  std::array<std::int64_t, 3> offset{};
   for (int a = 0; a < 3; ++a) {
-    EXPECT_EQ(v.dims[a], 25);
-    EXPECT_EQ(v.spacing[a], 4.0 * grid.spacing[a]);
+    EXPECT_LE(v.dims[a], 32);
+    EXPECT_EQ(v.spacing[a], v.step * grid.spacing[a]);
+    offset[a] = std::llround(v.origin[a] / grid.spacing[a]);
+    EXPECT_DOUBLE_EQ(v.origin[a], static_cast<double>(offset[a]) * grid.spacing[a]);
+    EXPECT_GE(offset[a], 0);
+    EXPECT_LE(offset[a] + (v.dims[a] - 1) * v.step, grid.dims[a] - 1);
   }
-  ASSERT_EQ(v.d_surf.size(), 25u * 25u * 25u);
+  const std::size_t n = static_cast<std::size_t>(v.dims[0] * v.dims[1] * v.dims[2]);
+  ASSERT_EQ(v.d_surf.size(), n);
   EXPECT_TRUE(v.d_bone.empty() || v.d_bone.size() == v.d_surf.size());
   EXPECT_EQ(s.link.volume_progress, 1.0);
   ASSERT_EQ(s.scene->metadata.count("prep_dir"), 1u);
   const DistanceMap d_surf = read_nifti_float(s.scene->metadata.at("prep_dir") + "/d_surf.nii.gz");
   std::size_t mismatches = 0, inside = 0;
-  for (std::int64_t k = 0; k < 25; ++k)
-    for (std::int64_t j = 0; j < 25; ++j)
-      for (std::int64_t i = 0; i < 25; ++i) {
-        const float got = v.d_surf[static_cast<std::size_t>((k * 25 + j) * 25 + i)];
-        mismatches += got != d_surf.at(4 * i, 4 * j, 4 * k);
+  const std::int64_t st = v.step;
+  for (std::int64_t k = 0; k < v.dims[2]; ++k)
+    for (std::int64_t j = 0; j < v.dims[1]; ++j)
+      for (std::int64_t i = 0; i < v.dims[0]; ++i) {
+        const float got = v.d_surf[static_cast<std::size_t>((k * v.dims[1] + j) * v.dims[0] + i)];
+        mismatches += got != d_surf.at(offset[0] + st * i, offset[1] + st * j, offset[2] + st * k);
         inside += got > 0;
       }
   EXPECT_EQ(mismatches, 0u);
@@ -333,11 +342,61 @@ TEST(StreamClient, StalledWhileThePalpdProcessIsStoppedAndLiveAfterwards) {
   EXPECT_LT(s.link.since_last_frame_s, 5.0);
 }
 
+// A station that joins after the loop ran gets palpd's force history (server/net/force_history):
+// its chart starts with the seconds before it came (t < 0), one sample every 20 ms, the forces
+// those a station present from the start received for the same ticks.
+TEST(StreamClient, ALateJoinerGetsTheSessionsForceHistory) {
+  Palpd palpd(palpd_args("phantom:sphere", "sim"), "history.log");
+  ASSERT_GT(palpd.port(), 0) << palpd.log();
+  StreamOptions early_opts = options_for(palpd.port());
+  early_opts.frame_rate_hz = 0;              // every tick
+  early_opts.force_history_max_samples = 0;  // none thinned
+  early_opts.volume_max_dim = 0;             // frames at once
+  StreamClient early(early_opts);
+  early.start();
+  LatestState e =
+      wait_for(early, [](const LatestState& l) { return l.force_history.size() > 2000; });
+  ASSERT_GT(e.force_history.size(), 2000u);  // 2 s of ticks seen from the start
+  StreamOptions late_opts = options_for(palpd.port());
+  late_opts.force_history_s = 10.0;
+  StreamClient late(late_opts);
+  late.start();
+  LatestState l = wait_for(late, [](const LatestState& s) { return s.frame.valid; });
+  ASSERT_TRUE(l.frame.valid);
+  e = early.latest();
+  std::vector<view::ForceSample> before;
+  for (const view::ForceSample& s : l.force_history)
+    if (s.t_s < 0) before.push_back(s);
+  // About the 2 s the loop ran before, every 20 ms.
+  ASSERT_GT(before.size(), 80u);
+  EXPECT_LE(before.size(), 501u);
+  for (std::size_t i = 1; i < before.size(); ++i) {
+    const std::int64_t gap = before[i].server_time_ns - before[i - 1].server_time_ns;
+    EXPECT_GE(gap, 20'000'000);
+    EXPECT_LT(gap, 25'000'000);
+  }
+  // The same ticks' forces as the early station's frames.
+  std::size_t matched = 0;
+  for (const view::ForceSample& s : before)
+    for (const view::ForceSample& r : e.force_history)
+      if (r.server_time_ns == s.server_time_ns) {
+        EXPECT_EQ(r.force, s.force);
+        ++matched;
+        break;
+      }
+  EXPECT_GT(matched, before.size() / 2);
+  bool pressed = false;
+  for (const view::ForceSample& s : before) pressed = pressed || norm(s.force) > 0.1;
+  EXPECT_TRUE(pressed);  // the sim device presses the ball: not a history of zeros
+}
+
 TEST(StreamClient, ReconnectsToARestartedPalpdAndTakesItsNewScene) {
   auto first = std::make_unique<Palpd>(palpd_args("phantom:sphere", "sim"), "first.log");
   ASSERT_GT(first->port(), 0) << first->log();
   const std::uint16_t port = first->port();
-  StreamClient client(options_for(port));
+  StreamOptions opts = options_for(port);
+  opts.volume_crop = false;  // the whole grid, whose size is known
+  StreamClient client(opts);
   client.start();
   LatestState s = wait_for(
       client, [](const LatestState& l) { return is_state(l, LinkState::Live) && l.volume; });

@@ -235,6 +235,52 @@ TEST(SkinDeformer, FarContactIsClampedToWhatAToolCanDo) {
   EXPECT_THROW(SkinDeformer(kDims, kSpacing, linear_volume(), params), UsageError);
 }
 
+// A volume finer than lattice_mm (0.5 mm voxels, 1.6 mm: 3 voxels an element): the ChainMail
+// runs on every third voxel, the voxels between take the trilinear interpolation of the elements'
+// displacements, the voxels with none are untouched bit for bit, the anchor's voxel is displaced
+// as the contact asks, and releasing restores the original exactly.
+TEST(SkinDeformer, FinerVoxelsRunTheChainMailOnACoarserLattice) {
+  const std::array<double, 3> fine{0.5, 0.5, 0.5};
+  SkinDeformer deformer(kDims, fine, linear_volume());
+  std::vector<float> out = deformer.original();
+  // One contact at voxel (24, 21, 21) = 12, 10.5, 10.5 mm (an element: multiples of 3), 2 mm down.
+  const Vec3d p{12.0, 10.5, 10.5};
+  const DeformResult r =
+      deformer.update(std::vector<DeformContact>{{p + Vec3d{0, 0, -2.0}, p}}, out);
+  ASSERT_TRUE(r.active);
+  EXPECT_EQ(r.lattice, (Index3{3, 3, 3}));
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(r.roi_lo[a] % 3, 0);
+  EXPECT_EQ(deformer.displacement_at(24, 21, 21), (Vec3d{0, 0, -2.0}));
+  // Between elements: the interpolation of the two neighbours along i.
+  const Vec3d e0 = deformer.displacement_at(27, 21, 21), e1 = deformer.displacement_at(30, 21, 21);
+  const Vec3d mid = deformer.displacement_at(28, 21, 21);
+  EXPECT_NEAR(mid.z, e0.z + (e1.z - e0.z) / 3.0, 1e-12);
+  EXPECT_LT(e0.z, 0.0);
+  std::int64_t untouched_differ = 0, moved = 0;
+  for (std::int64_t k = 0; k < kDims[2]; ++k)
+    for (std::int64_t j = 0; j < kDims[1]; ++j)
+      for (std::int64_t i = 0; i < kDims[0]; ++i) {
+        const std::int64_t v = voxel_index(i, j, k);
+        const Vec3d d = deformer.displacement_at(i, j, k);
+        if (d == Vec3d{}) {
+          untouched_differ += !bit_identical(out[v], deformer.original()[v]);
+          continue;
+        }
+        ++moved;
+        EXPECT_TRUE(inside(r.lo, r.hi, i, j, k));
+        // linear field: the sample at (i, j, k) - d / spacing, exactly up to float rounding
+        const double want = 3 * (i - 2 * d.x) + 5 * (j - 2 * d.y) + 7 * (k - 2 * d.z);
+        if (i - 2 * d.x >= 0 && j - 2 * d.y >= 0 && k - 2 * d.z >= 0) {
+          EXPECT_NEAR(out[v], want, 2e-3);
+        }
+      }
+  EXPECT_EQ(untouched_differ, 0);
+  EXPECT_GT(moved, 27);
+  const DeformResult released = deformer.update({}, out);
+  EXPECT_FALSE(released.active);
+  EXPECT_EQ(std::memcmp(out.data(), deformer.original().data(), out.size() * sizeof(float)), 0);
+}
+
 TEST(SkinDeformer, NoAllocationPerUpdateAfterWarmUp) {
   SkinDeformer deformer(kDims, kSpacing, linear_volume());
   std::vector<float> out = deformer.original();

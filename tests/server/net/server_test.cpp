@@ -168,6 +168,12 @@ TEST_F(ServerTest, LateJoinerGetsSceneAndVolumeBeforeFrames) {
   ASSERT_TRUE(m.has_welcome());
   ASSERT_TRUE(late.next(m));
   ASSERT_TRUE(m.has_scene());
+  // The force so far (the loop ran while the first client got its frames): ForceHistory.
+  ASSERT_TRUE(late.next(m));
+  ASSERT_TRUE(m.has_history());
+  EXPECT_GT(m.history().server_time_ns_size(), 0);
+  EXPECT_EQ(m.history().fx_size(), m.history().server_time_ns_size());
+  EXPECT_DOUBLE_EQ(m.history().interval_s(), 0.02);
   // 32^3 at step 2 -> 16^3; 4096-byte chunks hold 2 slices of 16 x 16 x (d_surf, d_bone)
   // floats: 8 chunks.
   const FieldSampler& fields = model_->fields();
