@@ -3,6 +3,7 @@
 
 #include <vtkAxis.h>
 #include <vtkBrush.h>
+#include <vtkChartLegend.h>
 #include <vtkFloatArray.h>
 #include <vtkPlot.h>
 
@@ -38,6 +39,9 @@ ForceChart::ForceChart(double seconds) : seconds_(seconds) {
   chart_->GetAxis(vtkAxis::BOTTOM)->SetTitle("t (s)");
   chart_->GetAxis(vtkAxis::LEFT)->SetTitle("N");
   chart_->SetShowLegend(true);
+  // Top left: the newest samples are at the right edge, where a legend would hide them.
+  chart_->GetLegend()->SetHorizontalAlignment(vtkChartLegend::LEFT);
+  chart_->GetLegend()->SetVerticalAlignment(vtkChartLegend::TOP);
   chart_->GetBackgroundBrush()->SetColorF(0.1, 0.1, 0.12, 0.75);
   scene_->AddItem(chart_);
   actor_->SetScene(scene_);
