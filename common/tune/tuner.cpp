@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <sstream>
+#include <thread>
 #include <utility>
 
 #include "base/errors.hpp"
@@ -294,6 +296,17 @@ Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setu
   }
   out.chosen = judge(out.results, setup.tolerance, out.tolerance_n, out.period_us);
   return out;
+}
+
+std::string machine_class() {
+  std::string cpu = "unknown CPU";
+  std::ifstream info("/proc/cpuinfo");
+  for (std::string line; std::getline(info, line);)
+    if (line.rfind("model name", 0) == 0) {
+      cpu = line.substr(line.find(':') + 2);
+      break;
+    }
+  return std::to_string(std::thread::hardware_concurrency()) + " cores, " + cpu;
 }
 
 }  // namespace palp::tune

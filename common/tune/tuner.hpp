@@ -125,4 +125,8 @@ using Progress = void (*)(const Judged& judged, std::size_t index, std::size_t c
 Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setup,
              Progress progress = nullptr);
 
+// The machine class a tuning's timings hold for: core count and CPU model ("2 cores, AMD EPYC
+// ..."), read from /proc/cpuinfo ("unknown CPU" elsewhere).
+std::string machine_class();
+
 }  // namespace palp::tune

@@ -92,17 +92,6 @@ std::string utc_now() {
   return text;
 }
 
-std::string machine_line() {
-  std::string cpu = "unknown CPU";
-  std::ifstream info("/proc/cpuinfo");
-  for (std::string line; std::getline(info, line);)
-    if (line.rfind("model name", 0) == 0) {
-      cpu = line.substr(line.find(':') + 2);
-      break;
-    }
-  return std::to_string(std::thread::hardware_concurrency()) + " cores, " + cpu;
-}
-
 std::string toml_string(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
@@ -226,7 +215,7 @@ int cmd_tune(const Arguments& argv_in) {
   {
     std::ofstream f(out_path);
     if (!f) throw ResourceError("tune: cannot write " + out_path.string());
-    f << "# " << head << "\n# on " << utc_now() << ", " << machine_line() << "\n";
+    f << "# " << head << "\n# on " << utc_now() << ", " << tune::machine_class() << "\n";
     f << "# chosen: " << label(chosen.candidate) << ": tick p50 " << chosen.measured.tick_p50_us
       << " us, p99 " << chosen.measured.tick_p99_us << " us; RMS force error "
       << chosen.measured.rms_error_n << " N, largest " << chosen.measured.max_error_n << " N\n";

@@ -114,17 +114,6 @@ void write_cached(const fs::path& path, const Cached& c, const std::string& abou
 
 }  // namespace
 
-std::string machine_class() {
-  std::string cpu = "unknown CPU";
-  std::ifstream info("/proc/cpuinfo");
-  for (std::string line; std::getline(info, line);)
-    if (line.rfind("model name", 0) == 0) {
-      cpu = line.substr(line.find(':') + 2);
-      break;
-    }
-  return std::to_string(std::thread::hardware_concurrency()) + " cores, " + cpu;
-}
-
 std::string tune_cache_key(const std::string& prep_dir, const std::string& tool, double rate_hz,
                            const ForceParams& p, const std::string& machine) {
   Fnv h;
@@ -157,7 +146,7 @@ StartTuning tune_at_start(const Args& args, Scene& scene, Tool& tool, const Forc
     throw UsageError("--tune-budget-s must be in [0.001, 3600]");
 
   const auto start = std::chrono::steady_clock::now();
-  const std::string machine = machine_class();
+  const std::string machine = tune::machine_class();
   const std::string key = tune_cache_key(scene.prep_dir, tool.name, rate_hz, params, machine);
   std::string cache_dir = scene_options(args).cache_dir;
   if (cache_dir.empty()) cache_dir = default_scene_cache_dir();

@@ -40,9 +40,6 @@ struct StartTuning {
   bool cached = false;
 };
 
-// The machine class a tuning is valid for: core count and CPU model.
-std::string machine_class();
-
 // The cache file name (hex, no directory) of a tuning of the maps in prep_dir (their bytes are
 // hashed) for a tool, rate, parameters and machine class.
 std::string tune_cache_key(const std::string& prep_dir, const std::string& tool, double rate_hz,
