@@ -22,12 +22,21 @@ echo "outputs: $(ls out/torso | tr '\n' ' ')"
 port=${PALP_PORT:-7400}
 echo
 echo "palpd: finger:37 on the torso at 1 kHz, sim device, port $port, for ${seconds} s"
+# With a display palpd runs for the window's SECONDS (+4); without one it runs until the
+# screenshots are written (a software renderer takes seconds a frame) and is stopped then.
+duration=$((seconds + 4))
+[[ -z "${DISPLAY:-}" ]] && duration=$((seconds + 300))
 # shellcheck disable=SC2086
-"$bin/palpd" --scene out/torso --device sim --port "$port" --duration "$((seconds + 4))" \
+"$bin/palpd" --scene out/torso --device sim --port "$port" --duration "$duration" \
   ${PALPD_OPTIONS:-} &
 server=$!
 trap 'kill "$server" 2>/dev/null || true' EXIT
-sleep 1
+# Clients start once palpd listens (it loads the scene and calibrates its wake-up first).
+for _ in $(seq 1 150); do
+  if (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null; then break; fi
+  kill -0 "$server" 2>/dev/null || { echo "palpd exited before listening" >&2; exit 1; }
+  sleep 0.1
+done
 
 viewer=$build/client/palpview
 if [[ ! -x "$viewer" ]]; then
@@ -54,6 +63,7 @@ else
   done
   wait "$probe"
   echo "screenshots: $(ls out/palpview/*.png | tr '\n' ' ')"
+  kill -INT "$server" 2>/dev/null || true  # palpd prints its summary and exits
 fi
 wait "$server"
 trap - EXIT
