@@ -281,7 +281,9 @@ int run(const Options& o) {
       }
     }
     const auto t1 = Clock::now();
+    const double cpu1 = thread_cpu_seconds();
     const DeformResult deform = scene.update_deformation();
+    const double deform_cpu_ms = 1e3 * (thread_cpu_seconds() - cpu1);
     const auto t2 = Clock::now();
     const std::int64_t uploaded = scene.upload_deformation();
     const auto t2u = Clock::now();
@@ -294,6 +296,7 @@ int run(const Options& o) {
     if (live) {
       times.receive.push_back(ms(t0, t1));
       times.deformation.push_back(ms(t1, t2));
+      times.add_deformation(deform, deform_cpu_ms, scene.deform_contacts());
       times.upload.push_back(ms(t2, t2u));
       times.upload_bytes.push_back(static_cast<double>(uploaded));
       times.render.push_back(ms(t2u, t3));
@@ -387,6 +390,7 @@ int run(const Options& o) {
                                                          static_cast<double>(times.deform_active)
                                                    : 0.0;
     j["deformation"] = o.deformation;
+    j["deformation_split"] = deformation_split_json(times);
     j["controller"] = o.controller;
     j["link_state"] = to_string(state.link.state);
     j["stream_frames_per_s"] = state.link.frames_per_s;

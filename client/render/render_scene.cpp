@@ -223,6 +223,10 @@ DeformResult RenderScene::update_deformation() {
   return impl_->volume.deform();
 }
 
+std::span<const DeformContact> RenderScene::deform_contacts() const {
+  return impl_->volume.deform_contacts();
+}
+
 std::int64_t RenderScene::upload_deformation() {
   last_upload_bytes_ = impl_->volume.upload(impl_->window);
   upload_called_ = true;

@@ -26,6 +26,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -84,6 +85,8 @@ class RenderScene {
   // Runs the skin deformation for the contacts of the last state (no-op when disabled or no
   // volume). Returns what SkinDeformer reported.
   DeformResult update_deformation();
+  // The contacts the last update_deformation() used (volume frame, mm).
+  std::span<const DeformContact> deform_contacts() const;
   // Sends the box the deformation wrote to the volume texture (a sub-volume upload; the whole
   // volume only for a new one): the bytes sent this frame ("upload" time).
   std::int64_t upload_deformation();

@@ -22,6 +22,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "deform/skin_deformation.hpp"
@@ -51,6 +52,8 @@ class VolumeLayer {
   // Runs SkinDeformer over the buffer (no-op when disabled or no volume) and notes the box it
   // wrote for upload(). Returns what SkinDeformer reported.
   DeformResult deform();
+  // The contacts deform() uses (volume frame, mm).
+  std::span<const DeformContact> deform_contacts() const { return deform_contacts_; }
   // Sends what changed to the GPU before the next render: the box deform() wrote, as a
   // sub-volume of the existing 3D texture (glTexSubImage3D), so the bytes are bounded by the
   // box, not the volume. Where the texture is not there yet (a new volume: the render uploads

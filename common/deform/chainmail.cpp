@@ -47,30 +47,31 @@ ChainMail::ChainMail(ChainMailParams params) : params_(params) {
     throw UsageError("chainmail: min_stretch = max_stretch = 1 leaves no slack to deform");
 }
 
-void ChainMail::resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h) {
+void ChainMail::resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h,
+                       std::array<std::int64_t, 3> origin) {
   for (int a = 0; a < 3; ++a) {
     if (dims[a] <= 0) throw UsageError("chainmail: box dimensions must be positive");
     if (!(h[a] > 0.0 && std::isfinite(h[a])))
       throw UsageError("chainmail: spacing must be positive and finite");
   }
-  const bool same_layout = dims == dims_;
+  // Every displacement is 0 outside the active box and anchored_ is 0 between solves, so
+  // zeroing the active box (in the old layout) leaves every stored value 0 and a new layout
+  // needs no pass over the whole box: what the vectors gain is value-initialised (0). The cost
+  // is the moved box, not the ROI, and the allocation is kept when the box shrinks.
+  reset();
   dims_ = dims;
   h_ = h;
+  origin_parity_ = (origin[0] + origin[1] + origin[2]) & 1;
   for (int c = 0; c < 3; ++c)
     for (int a = 0; a < 3; ++a) {
       link_min_[c][a] = c == a ? (params_.min_stretch - 1.0) * h[a] : -params_.max_shear * h[a];
       link_max_[c][a] = c == a ? (params_.max_stretch - 1.0) * h[a] : params_.max_shear * h[a];
     }
   const auto count = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
-  if (same_layout && disp_[0].size() == count) {
-    reset();
-    return;
-  }
-  for (auto& d : disp_) d.assign(count, 0.0);
+  for (auto& d : disp_) d.resize(count, 0.0);
   upper_.resize(count);
   lower_.resize(count);
-  anchored_.assign(count, 0);
-  active_lo_ = active_hi_ = {};
+  anchored_.resize(count, 0);
 }
 
 void ChainMail::reset() {
@@ -157,37 +158,45 @@ void ChainMail::hold_anchors(std::span<const ChainMailAnchor> anchors) {
 }
 
 std::int64_t ChainMail::propagate() {
-  // The influence box: beyond ceil(max |v_c| / slack) links along an axis no bound reaches 0.
-  Index3 lo{}, hi{};
+  // The influence box of each component: beyond ceil(max |v_c| / slack) links along an axis no
+  // bound of component c reaches 0 (each component is its own problem, so a press along y
+  // with little drag sweeps the x and z components over a much smaller box). The union of the
+  // three is where anything can move.
+  std::array<Index3, 3> comp_lo{}, comp_hi{};
+  Index3 lo{}, hi{}, anchor_lo{}, anchor_hi{};
   std::array<double, 3> largest{};
   for (int a = 0; a < 3; ++a) {
-    lo[a] = dims_[a];
-    hi[a] = 0;
+    anchor_lo[a] = dims_[a];
+    anchor_hi[a] = 0;
+    lo[a] = dims_[a] - 1;
+    hi[a] = 1;
   }
   for (const auto& anchor : held_)
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], anchor.element[a]);
-      hi[a] = std::max(hi[a], anchor.element[a] + 1);
+      anchor_lo[a] = std::min(anchor_lo[a], anchor.element[a]);
+      anchor_hi[a] = std::max(anchor_hi[a], anchor.element[a] + 1);
       largest[a] = std::max(largest[a], std::abs(component(anchor.displacement, a)));
     }
-  for (int a = 0; a < 3; ++a) {
-    std::int64_t reach = 0;
-    for (int c = 0; c < 3; ++c) {
+  for (int c = 0; c < 3; ++c)
+    for (int a = 0; a < 3; ++a) {
       const double slack = std::min(link_max_[c][a], -link_min_[c][a]);
-      reach = std::max(reach, static_cast<std::int64_t>(std::ceil(largest[c] / slack)));
+      const auto reach = static_cast<std::int64_t>(std::ceil(largest[c] / slack));
+      comp_lo[c][a] = std::max<std::int64_t>(1, anchor_lo[a] - reach);
+      comp_hi[c][a] = std::min<std::int64_t>(dims_[a] - 1, anchor_hi[a] + reach);
+      lo[a] = std::min(lo[a], comp_lo[c][a]);
+      hi[a] = std::max(hi[a], comp_hi[c][a]);
     }
-    lo[a] = std::max<std::int64_t>(1, lo[a] - reach);
-    hi[a] = std::min<std::int64_t>(dims_[a] - 1, hi[a] + reach);
-  }
-  const std::int64_t nx = hi[0] - lo[0];
   const std::int64_t stride_j = dims_[0], stride_k = dims_[0] * dims_[1];
 
   for (int c = 0; c < 3; ++c) {
+    const Index3& clo = comp_lo[c];
+    const Index3& chi = comp_hi[c];
+    const std::int64_t nx = chi[0] - clo[0];
     double* upper = upper_.data();
     double* lower = lower_.data();
-    for (std::int64_t k = lo[2]; k < hi[2]; ++k)
-      for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
-        const auto row = index(lo[0], j, k);
+    for (std::int64_t k = clo[2]; k < chi[2]; ++k)
+      for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
+        const auto row = index(clo[0], j, k);
         std::fill(upper + row, upper + row + nx, 0.0);
         std::fill(lower + row, lower + row + nx, 0.0);
       }
@@ -197,15 +206,15 @@ std::int64_t ChainMail::propagate() {
     }
     // Axis 0: along each row, a dependency chain.
     const double up0 = link_max_[c][0], down0 = -link_min_[c][0];
-    for (std::int64_t k = lo[2]; k < hi[2]; ++k)
-      for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+    for (std::int64_t k = clo[2]; k < chi[2]; ++k)
+      for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
         double* u = upper + index(0, j, k);
         double* l = lower + index(0, j, k);
-        for (std::int64_t i = lo[0] + 1; i < hi[0]; ++i) {
+        for (std::int64_t i = clo[0] + 1; i < chi[0]; ++i) {
           u[i] = std::min(u[i], u[i - 1] + up0);
           l[i] = std::max(l[i], l[i - 1] - down0);
         }
-        for (std::int64_t i = hi[0] - 2; i >= lo[0]; --i) {
+        for (std::int64_t i = chi[0] - 2; i >= clo[0]; --i) {
           u[i] = std::min(u[i], u[i + 1] + down0);
           l[i] = std::max(l[i], l[i + 1] - up0);
         }
@@ -214,10 +223,10 @@ std::int64_t ChainMail::propagate() {
     for (int a = 1; a < 3; ++a) {
       const double up = link_max_[c][a], down = -link_min_[c][a];
       const std::int64_t stride = a == 1 ? stride_j : stride_k;
-      const std::int64_t outer_lo = a == 1 ? lo[2] : lo[1], outer_hi = a == 1 ? hi[2] : hi[1];
+      const std::int64_t outer_lo = a == 1 ? clo[2] : clo[1], outer_hi = a == 1 ? chi[2] : chi[1];
       for (std::int64_t outer = outer_lo; outer < outer_hi; ++outer) {
-        const auto base = a == 1 ? index(lo[0], 0, outer) : index(lo[0], outer, 0);
-        for (std::int64_t s = lo[a] + 1; s < hi[a]; ++s) {
+        const auto base = a == 1 ? index(clo[0], 0, outer) : index(clo[0], outer, 0);
+        for (std::int64_t s = clo[a] + 1; s < chi[a]; ++s) {
           double* u = upper + base + s * stride;
           double* l = lower + base + s * stride;
           const double* up_prev = u - stride;
@@ -227,7 +236,7 @@ std::int64_t ChainMail::propagate() {
             l[i] = std::max(l[i], low_prev[i] - down);
           }
         }
-        for (std::int64_t s = hi[a] - 2; s >= lo[a]; --s) {
+        for (std::int64_t s = chi[a] - 2; s >= clo[a]; --s) {
           double* u = upper + base + s * stride;
           double* l = lower + base + s * stride;
           const double* up_next = u + stride;
@@ -240,12 +249,12 @@ std::int64_t ChainMail::propagate() {
       }
     }
     // The solution nearest rest: lower where it is above 0, upper where it is below (never both
-    // once the anchors are compatible).
+    // once the anchors are compatible). Outside this component's box it is 0 (reset() left it).
     double* d = disp_[c].data();
-    for (std::int64_t k = lo[2]; k < hi[2]; ++k)
-      for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
+    for (std::int64_t k = clo[2]; k < chi[2]; ++k)
+      for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
         const auto row = index(0, j, k);
-        for (std::int64_t i = lo[0]; i < hi[0]; ++i)
+        for (std::int64_t i = clo[0]; i < chi[0]; ++i)
           d[row + i] = lower[row + i] > 0.0 ? lower[row + i] : upper[row + i];
       }
     for (const auto& anchor : held_)
@@ -253,19 +262,33 @@ std::int64_t ChainMail::propagate() {
           component(anchor.displacement, c);
   }
 
-  // Count what moved and the tight box around it.
+  // Count what moved, the tight box around it, and each component's own (relax() starts from
+  // those).
   std::int64_t moved = 0;
   Index3 moved_lo = hi, moved_hi = lo;
+  for (int c = 0; c < 3; ++c) {
+    support_lo_[c] = hi;
+    support_hi_[c] = lo;
+  }
   for (std::int64_t k = lo[2]; k < hi[2]; ++k)
     for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
       const auto row = index(0, j, k);
-      for (std::int64_t i = lo[0]; i < hi[0]; ++i)
-        if (disp_[0][row + i] != 0.0 || disp_[1][row + i] != 0.0 || disp_[2][row + i] != 0.0) {
-          ++moved;
-          moved_lo = {std::min(moved_lo[0], i), std::min(moved_lo[1], j), std::min(moved_lo[2], k)};
-          moved_hi = {std::max(moved_hi[0], i + 1), std::max(moved_hi[1], j + 1),
-                      std::max(moved_hi[2], k + 1)};
+      for (std::int64_t i = lo[0]; i < hi[0]; ++i) {
+        bool any = false;
+        for (int c = 0; c < 3; ++c) {
+          if (disp_[c][row + i] == 0.0) continue;
+          any = true;
+          Index3& slo = support_lo_[c];
+          Index3& shi = support_hi_[c];
+          slo = {std::min(slo[0], i), std::min(slo[1], j), std::min(slo[2], k)};
+          shi = {std::max(shi[0], i + 1), std::max(shi[1], j + 1), std::max(shi[2], k + 1)};
         }
+        if (!any) continue;
+        ++moved;
+        moved_lo = {std::min(moved_lo[0], i), std::min(moved_lo[1], j), std::min(moved_lo[2], k)};
+        moved_hi = {std::max(moved_hi[0], i + 1), std::max(moved_hi[1], j + 1),
+                    std::max(moved_hi[2], k + 1)};
+      }
     }
   if (moved == 0) return 0;
   active_lo_ = moved_lo;
@@ -285,6 +308,7 @@ void ChainMail::relax() {
   const std::int64_t sj = dims_[0], sk = dims_[0] * dims_[1];
   const double rate = params_.relax_rate;
   constexpr double kSixth = 1.0 / 6.0;
+  Index3 done_lo = hi, done_hi = lo;  // the union of what each component may have moved
   for (int c = 0; c < 3; ++c) {
     double* d = disp_[c].data();
     const double m0 = link_min_[c][0], m1 = link_min_[c][1], m2 = link_min_[c][2];
@@ -300,23 +324,40 @@ void ChainMail::relax() {
                                    std::min(zm + x2, zp - m2));
       d[n] = std::min(std::max(wanted, low), high);
     };
+    // This component's nonzero box. An element that is 0 with six neighbours at 0 stays exactly
+    // 0 (wanted 0, low < 0 < high), so a pass needs only that box grown by one element; the
+    // box grows by one per pass until it fills the relaxed box. Same values as relaxing the
+    // whole box, a fraction of the work for a component that moved less far.
+    Index3 slo = support_lo_[c], shi = support_hi_[c];
+    if (slo[0] >= shi[0] || slo[1] >= shi[1] || slo[2] >= shi[2]) continue;  // all 0: stays so
     // Red-black order: the elements of one colour have neighbours of the other colour only,
     // so they update independently (no dependency chain along a row) and each still clamps
     // against its neighbours' current values. The colour that goes first alternates.
     for (int sweep = 0; sweep < params_.relax_iterations; ++sweep)
       for (int pass = 0; pass < 2; ++pass) {
-        const std::int64_t colour = (sweep + pass) % 2;
-        for (std::int64_t k = lo[2]; k < hi[2]; ++k)
-          for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
-            const std::int64_t first = lo[0] + ((lo[0] + j + k + colour) & 1);
+        for (int a = 0; a < 3; ++a) {
+          slo[a] = std::max(lo[a], slo[a] - 1);
+          shi[a] = std::min(hi[a], shi[a] + 1);
+        }
+        const std::int64_t colour = (sweep + pass + origin_parity_) % 2;
+        for (std::int64_t k = slo[2]; k < shi[2]; ++k)
+          for (std::int64_t j = slo[1]; j < shi[1]; ++j) {
+            const std::int64_t first = slo[0] + ((slo[0] + j + k + colour) & 1);
             const auto row = index(0, j, k);
-            for (std::int64_t i = first; i < hi[0]; i += 2)
+            for (std::int64_t i = first; i < shi[0]; i += 2)
               if (!anchored_[row + i]) relax_one(row + i);
           }
       }
+    for (int a = 0; a < 3; ++a) {
+      done_lo[a] = std::min(done_lo[a], slo[a]);
+      done_hi[a] = std::max(done_hi[a], shi[a]);
+    }
   }
-  active_lo_ = lo;
-  active_hi_ = hi;
+  // Every nonzero displacement lies in the union (the moved box is inside it).
+  for (int a = 0; a < 3; ++a) {
+    active_lo_[a] = std::min(active_lo_[a], done_lo[a]);
+    active_hi_[a] = std::max(active_hi_[a], done_hi[a]);
+  }
 }
 
 double ChainMail::max_violation() const {

@@ -56,8 +56,12 @@ class ChainMail {
   explicit ChainMail(ChainMailParams params = {});
 
   // A box of dims elements at rest spacing h (mm), every element at rest. Keeps the allocation
-  // when it shrinks. UsageError for a non-positive dimension or spacing.
-  void resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h);
+  // when it shrinks. `origin`: the box's first element in a larger lattice (a region of interest
+  // that moves with the tool): the red-black colours of the relaxation follow the parity of
+  // origin + local index, so where the box starts does not change the result. UsageError for a
+  // non-positive dimension or spacing.
+  void resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h,
+              std::array<std::int64_t, 3> origin = {});
   // Every element back to rest.
   void reset();
   // Every element back to rest, then the anchors held at their displacement, propagation and
@@ -105,6 +109,7 @@ class ChainMail {
   ChainMailParams params_;
   std::array<std::int64_t, 3> dims_{};
   std::array<double, 3> h_{1, 1, 1};
+  std::int64_t origin_parity_ = 0;  // (origin[0] + origin[1] + origin[2]) & 1
   std::array<std::array<double, 3>, 3> link_min_{}, link_max_{};  // [component][axis]
   std::array<std::vector<double>, 3> disp_;  // displacement from rest per element, per component
   std::vector<double> upper_, lower_;        // propagation scratch, one component at a time
@@ -112,6 +117,8 @@ class ChainMail {
   std::vector<ChainMailAnchor> held_;
   std::vector<std::int64_t> held_weight_;  // anchors merged into each held anchor
   std::array<std::int64_t, 3> active_lo_{}, active_hi_{};
+  // Per component, the box outside which it is 0 after propagate() (relax() starts there).
+  std::array<std::array<std::int64_t, 3>, 3> support_lo_{}, support_hi_{};
 };
 
 }  // namespace palp

@@ -45,8 +45,11 @@ SkinDeformer::SkinDeformer(std::array<std::int64_t, 3> dims, std::array<double, 
   if (!(params_.lattice_mm >= 0.0 && std::isfinite(params_.lattice_mm)))
     throw UsageError("skin deformation: lattice_mm must be finite and non-negative");
   for (int a = 0; a < 3; ++a) {
+    // A relative tolerance: spacings arrive as float32 from image headers (0.8f is
+    // 0.80000001 mm), and 1.6 / 0.80000001 must give 2 voxels an element, not 1.
     lattice_[a] = std::clamp<std::int64_t>(
-        static_cast<std::int64_t>(std::floor(params_.lattice_mm / spacing_[a])), 1, 16);
+        static_cast<std::int64_t>(std::floor(params_.lattice_mm / spacing_[a] * (1.0 + 1e-6))), 1,
+        16);
     lattice_dims_[a] = (dims_[a] - 1) / lattice_[a] + 1;  // element e at voxel e * lattice
   }
 }
@@ -160,7 +163,9 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
     }
     for (auto& anchor : anchors_)
       for (int a = 0; a < 3; ++a) anchor.element[a] -= elo[a];
-    mail_.resize({ehi[0] - elo[0], ehi[1] - elo[1], ehi[2] - elo[2]}, h);
+    // The lattice origin too: the relaxation's colours then follow the element's place in the
+    // volume, not in the ROI, so the ROI's placement (margin, clipping) changes nothing.
+    mail_.resize({ehi[0] - elo[0], ehi[1] - elo[1], ehi[2] - elo[2]}, h, elo);
     const auto solve_start = std::chrono::steady_clock::now();
     mail_.solve(anchors_);
     result.solve_seconds =
@@ -256,7 +261,7 @@ float SkinDeformer::sample(double i, double j, double k) const {
   return static_cast<float>(c0 + frac[2] * (c1 - c0));
 }
 
-void SkinDeformer::resample(std::span<float> out) const {
+void SkinDeformer::resample(std::span<float> out) {
   if (lattice_ != std::array<std::int64_t, 3>{1, 1, 1}) {  // interpolated between elements
     const auto md = mail_.dims();
     const double* comp[3] = {mail_.displacement_component(0).data(),
@@ -271,6 +276,22 @@ void SkinDeformer::resample(std::span<float> out) const {
       e1 = std::min(e0 + 1, md[a] - 1);
       f = static_cast<double>(local - e0 * lattice_[a]) / static_cast<double>(lattice_[a]);
     };
+    // The elements along i that the written box's rows interpolate between, and per voxel of
+    // a row its two elements (relative to the first) and fraction: the same for every row.
+    const std::int64_t e_first = (written_lo_[0] - roi_lo_[0]) / lattice_[0];
+    const std::int64_t e_count =
+        std::min((written_hi_[0] - 1 - roi_lo_[0]) / lattice_[0] + 1, md[0] - 1) - e_first + 1;
+    const std::int64_t nx = written_hi_[0] - written_lo_[0];
+    row_disp_.resize(static_cast<std::size_t>(3 * e_count));
+    column_.resize(static_cast<std::size_t>(nx));
+    for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
+      Column& c = column_[static_cast<std::size_t>(i - written_lo_[0])];
+      split(0, i, c.e0, c.e1, c.f);
+      c.e0 -= e_first;
+      c.e1 -= e_first;
+    }
+    double* row_d[3] = {row_disp_.data(), row_disp_.data() + e_count,
+                        row_disp_.data() + 2 * e_count};
     for (std::int64_t k = written_lo_[2]; k < written_hi_[2]; ++k) {
       std::int64_t k0, k1;
       double fk;
@@ -282,15 +303,19 @@ void SkinDeformer::resample(std::span<float> out) const {
         const std::int64_t rows[4] = {md[0] * (j0 + md[1] * k0), md[0] * (j1 + md[1] * k0),
                                       md[0] * (j0 + md[1] * k1), md[0] * (j1 + md[1] * k1)};
         const double w[4] = {(1 - fj) * (1 - fk), fj * (1 - fk), (1 - fj) * fk, fj * fk};
+        // The row's displacement at its elements (interpolated along j and k once a row, not
+        // once a voxel), then along i per voxel.
+        for (int a = 0; a < 3; ++a)
+          for (std::int64_t e = 0; e < e_count; ++e) {
+            const std::int64_t n = e_first + e;
+            row_d[a][e] = w[0] * comp[a][rows[0] + n] + w[1] * comp[a][rows[1] + n] +
+                          w[2] * comp[a][rows[2] + n] + w[3] * comp[a][rows[3] + n];
+          }
         const auto row = dims_[0] * (j + dims_[1] * k);
         for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
-          std::int64_t i0, i1;
-          double fi;
-          split(0, i, i0, i1, fi);
-          double d[3] = {0, 0, 0};
-          for (int a = 0; a < 3; ++a)
-            for (int r = 0; r < 4; ++r)
-              d[a] += w[r] * ((1 - fi) * comp[a][rows[r] + i0] + fi * comp[a][rows[r] + i1]);
+          const Column& c = column_[static_cast<std::size_t>(i - written_lo_[0])];
+          double d[3];
+          for (int a = 0; a < 3; ++a) d[a] = (1 - c.f) * row_d[a][c.e0] + c.f * row_d[a][c.e1];
           out[row + i] = d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0
                              ? original_[row + i]
                              : sample(static_cast<double>(i) - d[0] * inv[0],

@@ -26,7 +26,9 @@ namespace palp {
 struct DeformerParams {
   // The ROI: the anchors' bounding box grown by this much, and at least by what the largest
   // anchor displacement needs to fade to 0 through the links (plus the relaxation's reach).
-  double roi_margin_mm = 20.0;
+  // That reach alone keeps the deformation inside the ROI, so any margin gives the same
+  // displacements; the margin only sizes the ChainMail box (10 mm: was 20).
+  double roi_margin_mm = 10.0;
   // An anchor moves at most this far (its direction kept): no tool presses deeper, and a contact
   // far from its proxy (a hostile or broken stream) must not make the ROI the whole volume.
   double max_displacement_mm = 40.0;
@@ -86,7 +88,7 @@ class SkinDeformer {
  private:
   void restore(std::span<float> out, const std::array<std::int64_t, 3>& keep_lo,
                const std::array<std::int64_t, 3>& keep_hi) const;
-  void resample(std::span<float> out) const;
+  void resample(std::span<float> out);
   float sample(double i, double j, double k) const;
   // The displacement at voxel (i, j, k) inside the ROI: the element's, or interpolated between
   // elements on a coarser lattice.
@@ -103,6 +105,14 @@ class SkinDeformer {
   std::array<std::int64_t, 3> roi_lo_{}, roi_hi_{};          // voxels (multiples of the lattice)
   std::array<std::int64_t, 3> written_lo_{}, written_hi_{};  // deformed voxels of `out`
   bool roi_active_ = false;
+  // resample() scratch on a coarser lattice: a row's displacement at its elements (3 components)
+  // and, per voxel along i, its two elements and fraction.
+  struct Column {
+    std::int64_t e0 = 0, e1 = 0;
+    double f = 0;
+  };
+  std::vector<double> row_disp_;
+  std::vector<Column> column_;
 };
 
 }  // namespace palp

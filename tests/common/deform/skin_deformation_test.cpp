@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -101,7 +102,9 @@ TEST(SkinDeformer, AnchorsHoldTheContactDisplacementsAndTheirMeanIsMinusU) {
 }
 
 TEST(SkinDeformer, DeformationIsLocal) {
-  SkinDeformer deformer(kDims, kSpacing, linear_volume());
+  DeformerParams params;
+  params.roi_margin_mm = 20.0;  // (the default is 10 mm; any margin deforms alike)
+  SkinDeformer deformer(kDims, kSpacing, linear_volume(), params);
   std::vector<float> out = deformer.original();
   const DeformResult result = deformer.update(pad(24.0, 22.0, 20.0, 5.0), out);
   ASSERT_TRUE(result.active);
@@ -294,6 +297,61 @@ TEST(SkinDeformer, NoAllocationPerUpdateAfterWarmUp) {
   g_count_allocations = false;
   EXPECT_EQ(g_allocations.load(), 0);
   EXPECT_EQ(std::memcmp(out.data(), deformer.original().data(), out.size() * sizeof(float)), 0);
+}
+
+// Image headers store spacings as float32: 0.8f is 0.800000011920929 mm, and 1.6 mm elements
+// must still span 2 voxels there (they spanned 1 before: four times the elements in palpview on
+// the full-resolution CT). A spacing just too coarse for 2 still gets 1.
+TEST(SkinDeformer, Float32SpacingGetsTheIntendedLattice) {
+  const auto lattice_for = [](std::array<double, 3> spacing) {
+    SkinDeformer deformer(kDims, spacing, linear_volume());
+    std::vector<float> out = deformer.original();
+    const Vec3d p{10.0, 10.0, 10.0};
+    return deformer.update(std::vector<DeformContact>{{p + Vec3d{0, 0, -2.0}, p}}, out).lattice;
+  };
+  EXPECT_EQ(lattice_for({double(0.8f), double(0.8f), double(1.0f)}), (Index3{2, 2, 1}));
+  EXPECT_EQ(lattice_for({0.8, 0.8, 1.0}), (Index3{2, 2, 1}));
+  EXPECT_EQ(lattice_for({double(0.5f), double(0.53f), double(0.4f)}), (Index3{3, 3, 4}));
+  EXPECT_EQ(lattice_for({double(0.81f), 1.0, 2.0}), (Index3{1, 1, 1}));
+}
+
+// The ROI margin only sizes the ChainMail box: the reach computed from the displacement keeps the
+// deformation inside it, so margins of 0, 10 (the default), 20 and 40 mm write the same volume
+// bit for bit over a sliding press that also lifts and lands again (the box changes layout on
+// every frame), on an element a voxel and on a coarser lattice; a larger margin only makes the
+// box larger.
+TEST(SkinDeformer, AnyRoiMarginGivesTheSameDeformation) {
+  for (const auto& spacing :
+       {std::array<double, 3>{1.0, 1.0, 1.0}, std::array<double, 3>{0.5, 0.5, 0.8}}) {
+    std::vector<std::vector<float>> outs;
+    std::vector<std::int64_t> elements;
+    for (const double margin : {0.0, 10.0, 20.0, 40.0}) {
+      DeformerParams params;
+      params.roi_margin_mm = margin;
+      SkinDeformer deformer(kDims, spacing, linear_volume(), params);
+      std::vector<float> out = deformer.original();
+      std::vector<float> frames;
+      std::int64_t largest = 0;
+      for (int f = 0; f < 6; ++f) {
+        const double s = spacing[0] * 24.0;  // the volume's middle along i, mm
+        const auto contacts = f == 3 ? std::vector<DeformContact>{}
+                                     : pad(s - 3.0 + 1.3 * f, spacing[1] * 20.0 + 0.4 * f,
+                                           spacing[2] * 30.0, 3.0 + 0.5 * f);
+        const DeformResult r = deformer.update(contacts, out);
+        largest = std::max(largest, r.elements);
+        frames.insert(frames.end(), out.begin(), out.end());
+      }
+      outs.push_back(std::move(frames));
+      elements.push_back(largest);
+    }
+    for (std::size_t m = 1; m < outs.size(); ++m) {
+      ASSERT_EQ(outs[m].size(), outs[0].size());
+      EXPECT_EQ(std::memcmp(outs[m].data(), outs[0].data(), outs[0].size() * sizeof(float)), 0)
+          << "margin #" << m << ", spacing " << spacing[0];
+      EXPECT_GE(elements[m], elements[m - 1]);
+    }
+    EXPECT_GT(elements.back(), elements.front());
+  }
 }
 
 }  // namespace
