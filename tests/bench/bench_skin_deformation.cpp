@@ -11,6 +11,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "deform/skin_deformation.hpp"
@@ -101,25 +102,31 @@ BENCHMARK(BM_SkinDeformMargin)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The 512 x 512 x 400 CT at 0.8 x 0.8 x 1 mm: the same body.
+constexpr std::array<std::int64_t, 3> kFullDims{512, 512, 400};
+std::vector<float> full_volume() {
+  constexpr std::array<std::int64_t, 3> dims = kFullDims;
+  constexpr std::array<double, 3> spacing{0.8, 0.8, 1.0};
+  std::vector<float> v(static_cast<std::size_t>(dims[0] * dims[1] * dims[2]));
+  for (std::int64_t k = 0; k < dims[2]; ++k)
+    for (std::int64_t j = 0; j < dims[1]; ++j)
+      for (std::int64_t i = 0; i < dims[0]; ++i) {
+        const double x = (i * spacing[0] - kCentreX) / kSemiX;
+        const double y = (j * spacing[1] - kCentreY) / kSemiY;
+        v[i + dims[0] * (j + dims[1] * k)] =
+            x * x + y * y < 1.0 ? static_cast<float>(40.0 + 20.0 * std::sin(0.6 * i + 0.4 * k))
+                                : -1000.0f;
+      }
+  return v;
+}
+
 // Full resolution (issue 15): the 512 x 512 x 400 CT at 0.8 x 0.8 x 1 mm, finger:37 pressed
 // 6 mm, with the ROI margin given (mm), ChainMail on every voxel (lattice 0) or on 1.6 mm
 // elements (the default), and the ChainMail's and the resampling's shares.
 void BM_SkinDeformFull(benchmark::State& state) {
-  constexpr std::array<std::int64_t, 3> dims{512, 512, 400};
+  constexpr std::array<std::int64_t, 3> dims = kFullDims;
   constexpr std::array<double, 3> spacing{0.8, 0.8, 1.0};
-  static const std::vector<float> original = [&] {
-    std::vector<float> v(static_cast<std::size_t>(dims[0] * dims[1] * dims[2]));
-    for (std::int64_t k = 0; k < dims[2]; ++k)
-      for (std::int64_t j = 0; j < dims[1]; ++j)
-        for (std::int64_t i = 0; i < dims[0]; ++i) {
-          const double x = (i * spacing[0] - kCentreX) / kSemiX;
-          const double y = (j * spacing[1] - kCentreY) / kSemiY;
-          v[i + dims[0] * (j + dims[1] * k)] =
-              x * x + y * y < 1.0 ? static_cast<float>(40.0 + 20.0 * std::sin(0.6 * i + 0.4 * k))
-                                  : -1000.0f;
-        }
-    return v;
-  }();
+  static const std::vector<float> original = full_volume();
   palp::DeformerParams params;
   params.roi_margin_mm = static_cast<double>(state.range(0));
   params.lattice_mm = 0.1 * static_cast<double>(state.range(1));  // 0: an element a voxel
@@ -146,6 +153,65 @@ void BM_SkinDeformFull(benchmark::State& state) {
 BENCHMARK(BM_SkinDeformFull)
     ->ArgsProduct({{20, 10}, {0, 16}})
     ->ArgNames({"margin_mm", "lattice_mm_x10"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// What palpview does on the 512 x 512 x 400 CT (issue 15; tests/bench/palpview_frames.sh with
+// PALPVIEW_MAX_DIM=512, sim device finger:37), reproduced from the contacts its --stats-json
+// recorded (deformation_split.last_contacts): the spacing arrives as float32 from the image
+// header (0.8f mm), the pad lies on the body's flank (outward normal along -(1, 1, 0)) and is
+// pressed 5 mm along the inward normal; sliding along the body axis (k), the proxies of the
+// leading half lag 2.5 mm behind their contacts and those of the trailing half, still stuck,
+// 3.5 to 10 mm. Args: slide (0: a still press, 1: sliding, the proxies spread over 17 mm along
+// k) and the lattice as in BM_SkinDeformFull (0: an element a voxel, what palpview ran before the
+// float32 spacing got its 2 x 2 x 1 lattice). Alternates two frames 0.8 mm apart along k.
+std::vector<palp::DeformContact> flank_press(double shift_k, bool slide) {
+  const double theta = std::numbers::pi + std::atan(kSemiY / kSemiX);
+  const palp::Vec3d centre{kCentreX + kSemiX * std::cos(theta), kCentreY + kSemiY * std::sin(theta),
+                           200.0 + shift_k};
+  const palp::Vec3d inward = palp::Vec3d{1.0, 1.0, 0.0} * (1.0 / std::sqrt(2.0));
+  const palp::Vec3d across = palp::Vec3d{1.0, -1.0, 0.0} * (1.0 / std::sqrt(2.0));
+  std::vector<palp::DeformContact> contacts;
+  const auto points = palp::finger_pad_points(37, 0.0);
+  for (std::size_t m = 0; m < points.size(); ++m) {
+    const palp::Vec3d rest = centre + across * points[m].x + palp::Vec3d{0.0, 0.0, points[m].y};
+    const double lag =
+        !slide ? 0.0 : (points[m].y >= 0.0 ? 2.5 : 3.5 + 6.5 * static_cast<double>(m % 7) / 6.0);
+    contacts.push_back({rest + inward * 5.0, rest - palp::Vec3d{0.0, 0.0, lag}});
+  }
+  return contacts;
+}
+
+void BM_SkinDeformPalpview(benchmark::State& state) {
+  static const std::vector<float> original = full_volume();
+  const std::array<double, 3> spacing{static_cast<double>(0.8f), static_cast<double>(0.8f), 1.0};
+  const bool slide = state.range(0) != 0;
+  palp::DeformerParams params;
+  params.lattice_mm = 0.1 * static_cast<double>(state.range(1));
+  palp::SkinDeformer deformer(kFullDims, spacing, original, params);
+  std::vector<float> out = original;
+  const std::vector<palp::DeformContact> frames[2] = {flank_press(0.0, slide),
+                                                      flank_press(0.8, slide)};
+  palp::DeformResult last;
+  std::int64_t frame = 0;
+  double solve = 0, resample = 0;
+  for (int warm = 0; warm < 4; ++warm) last = deformer.update(frames[warm % 2], out);
+  for (auto _ : state) {
+    last = deformer.update(frames[frame++ % 2], out);
+    solve += last.solve_seconds;
+    resample += last.resample_seconds;
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["roi_elements"] = static_cast<double>(last.elements);
+  state.counters["lattice_i"] = static_cast<double>(last.lattice[0]);
+  state.counters["written_voxels"] = static_cast<double>(
+      (last.hi[0] - last.lo[0]) * (last.hi[1] - last.lo[1]) * (last.hi[2] - last.lo[2]));
+  state.counters["solve_ms"] = 1e3 * solve / static_cast<double>(frame);
+  state.counters["resample_ms"] = 1e3 * resample / static_cast<double>(frame);
+}
+BENCHMARK(BM_SkinDeformPalpview)
+    ->ArgsProduct({{0, 1}, {16, 0}})
+    ->ArgNames({"slide", "lattice_mm_x10"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -7,8 +7,11 @@
 #   SCENE      any palpd scene (phantom:torso, a prep directory, a CT file)
 # Writes OUT_DIR/{deform,nodeform}.json (palpview --stats-json) and .png, prints palpview's
 # summary lines. PALPVIEW_MAX_DIM (default 256) is palpview's --volume-max-dim (512: a 512-voxel
-# CT at full resolution); the JSON's volume_received_s is palpview's start -> whole volume. Runs palpview under xvfb-run (screen as large as the window) when DISPLAY is
-# unset; the render time is then llvmpipe's (CPU), not a GPU's.
+# CT at full resolution); PALPVIEW_MODES (default "deform nodeform") the runs to make. The JSON's
+# volume_received_s is palpview's start -> whole volume; deformation_split holds the deformation
+# update's thread CPU time, solve/resample split and ROI (tests/bench/palpview_deform.sh). Runs
+# palpview under xvfb-run (screen as large as the window) when DISPLAY is unset; the render time
+# is then llvmpipe's (CPU), not a GPU's.
 set -euo pipefail
 build=${1:?build dir}
 scene=${2:?scene}
@@ -37,7 +40,7 @@ run() {
     "$@"
   fi
 }
-for mode in deform nodeform; do
+for mode in ${PALPVIEW_MODES:-deform nodeform}; do
   extra=()
   [ "$mode" = nodeform ] && extra=(--no-deformation)
   run "$build/client/palpview" --connect "127.0.0.1:$port" --width "$width" --height "$height" \
