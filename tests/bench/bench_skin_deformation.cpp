@@ -8,6 +8,9 @@
 // SkinDeformer over it -> per iteration: the pad's proxies on the anterior skin (y = y_skin),
 // contact points `depth` mm deeper with a small per-point friction drag -> update() into the
 // render buffer. Counters: ChainMail elements in the ROI, voxels in the written box.
+// BM_SkinDeformFull runs the 512 x 512 x 400 CT at full resolution; BM_SkinDeformPalpview the
+// press palpview records there (--stats-json deformation_split: float32 spacing, oblique flank
+// press, sliding proxies), so the benchmark measures what palpview does.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
