@@ -54,7 +54,7 @@ void ChainMail::resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h
     if (!(h[a] > 0.0 && std::isfinite(h[a])))
       throw UsageError("chainmail: spacing must be positive and finite");
   }
-  // Every displacement is 0 outside the active box and anchored_ is 0 between solves, so
+  // Every displacement is 0 outside the active box, so
   // zeroing the active box (in the old layout) leaves every stored value 0 and a new layout
   // needs no pass over the whole box: what the vectors gain is value-initialised (0). The cost
   // is the moved box, not the ROI, and the allocation is kept when the box shrinks.
@@ -71,7 +71,6 @@ void ChainMail::resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h
   for (auto& d : disp_) d.resize(count, 0.0);
   upper_.resize(count);
   lower_.resize(count);
-  anchored_.resize(count, 0);
 }
 
 void ChainMail::reset() {
@@ -109,8 +108,6 @@ std::int64_t ChainMail::solve(std::span<const ChainMailAnchor> anchors) {
   if (held_.empty()) return 0;
   const std::int64_t moved = propagate();
   relax();
-  for (const auto& anchor : held_)
-    anchored_[index(anchor.element[0], anchor.element[1], anchor.element[2])] = 0;
   return moved;
 }
 
@@ -153,7 +150,6 @@ void ChainMail::hold_anchors(std::span<const ChainMailAnchor> anchors) {
       set_component(anchor.displacement, c,
                     std::min(std::max(component(anchor.displacement, c), lo), hi));
     }
-    anchored_[index(e[0], e[1], e[2])] = 1;
   }
 }
 
@@ -264,8 +260,9 @@ std::int64_t ChainMail::propagate() {
 
   // Count what moved, the tight box around it, and each component's own (relax() starts from
   // those).
+  // Row by row: the count (a branch-free loop) and each component's first and last nonzero
+  // element; the moved box is the union of the components' boxes.
   std::int64_t moved = 0;
-  Index3 moved_lo = hi, moved_hi = lo;
   for (int c = 0; c < 3; ++c) {
     support_lo_[c] = hi;
     support_hi_[c] = lo;
@@ -273,23 +270,34 @@ std::int64_t ChainMail::propagate() {
   for (std::int64_t k = lo[2]; k < hi[2]; ++k)
     for (std::int64_t j = lo[1]; j < hi[1]; ++j) {
       const auto row = index(0, j, k);
-      for (std::int64_t i = lo[0]; i < hi[0]; ++i) {
-        bool any = false;
-        for (int c = 0; c < 3; ++c) {
-          if (disp_[c][row + i] == 0.0) continue;
-          any = true;
-          Index3& slo = support_lo_[c];
-          Index3& shi = support_hi_[c];
-          slo = {std::min(slo[0], i), std::min(slo[1], j), std::min(slo[2], k)};
-          shi = {std::max(shi[0], i + 1), std::max(shi[1], j + 1), std::max(shi[2], k + 1)};
-        }
-        if (!any) continue;
-        ++moved;
-        moved_lo = {std::min(moved_lo[0], i), std::min(moved_lo[1], j), std::min(moved_lo[2], k)};
-        moved_hi = {std::max(moved_hi[0], i + 1), std::max(moved_hi[1], j + 1),
-                    std::max(moved_hi[2], k + 1)};
+      const double* d0 = disp_[0].data() + row;
+      const double* d1 = disp_[1].data() + row;
+      const double* d2 = disp_[2].data() + row;
+      std::int64_t in_row = 0;
+      for (std::int64_t i = lo[0]; i < hi[0]; ++i)
+        in_row += (d0[i] != 0.0) | (d1[i] != 0.0) | (d2[i] != 0.0);
+      if (in_row == 0) continue;
+      moved += in_row;
+      for (int c = 0; c < 3; ++c) {
+        const double* d = disp_[c].data() + row;
+        std::int64_t first = lo[0];
+        while (first < hi[0] && d[first] == 0.0) ++first;
+        if (first == hi[0]) continue;
+        std::int64_t last = hi[0] - 1;
+        while (d[last] == 0.0) --last;
+        Index3& slo = support_lo_[c];
+        Index3& shi = support_hi_[c];
+        slo = {std::min(slo[0], first), std::min(slo[1], j), std::min(slo[2], k)};
+        shi = {std::max(shi[0], last + 1), std::max(shi[1], j + 1), std::max(shi[2], k + 1)};
       }
     }
+  Index3 moved_lo = hi, moved_hi = lo;
+  for (int c = 0; c < 3; ++c)
+    for (int a = 0; a < 3; ++a)
+      if (support_lo_[c][0] < support_hi_[c][0]) {
+        moved_lo[a] = std::min(moved_lo[a], support_lo_[c][a]);
+        moved_hi[a] = std::max(moved_hi[a], support_hi_[c][a]);
+      }
   if (moved == 0) return 0;
   active_lo_ = moved_lo;
   active_hi_ = moved_hi;
@@ -344,9 +352,14 @@ void ChainMail::relax() {
           for (std::int64_t j = slo[1]; j < shi[1]; ++j) {
             const std::int64_t first = slo[0] + ((slo[0] + j + k + colour) & 1);
             const auto row = index(0, j, k);
-            for (std::int64_t i = first; i < shi[0]; i += 2)
-              if (!anchored_[row + i]) relax_one(row + i);
+            for (std::int64_t i = first; i < shi[0]; i += 2) relax_one(row + i);
           }
+        // The held anchors do not move: put back the ones this pass relaxed (their neighbours,
+        // of the other colour, were not read this pass, so this equals skipping them).
+        for (const auto& anchor : held_) {
+          const auto n = index(anchor.element[0], anchor.element[1], anchor.element[2]);
+          d[n] = component(anchor.displacement, c);
+        }
       }
     for (int a = 0; a < 3; ++a) {
       done_lo[a] = std::min(done_lo[a], slo[a]);

@@ -113,7 +113,6 @@ class ChainMail {
   std::array<std::array<double, 3>, 3> link_min_{}, link_max_{};  // [component][axis]
   std::array<std::vector<double>, 3> disp_;  // displacement from rest per element, per component
   std::vector<double> upper_, lower_;        // propagation scratch, one component at a time
-  std::vector<std::uint8_t> anchored_;       // 1 on held anchors during solve()
   std::vector<ChainMailAnchor> held_;
   std::vector<std::int64_t> held_weight_;  // anchors merged into each held anchor
   std::array<std::int64_t, 3> active_lo_{}, active_hi_{};

@@ -51,7 +51,11 @@ SkinDeformer::SkinDeformer(std::array<std::int64_t, 3> dims, std::array<double, 
         static_cast<std::int64_t>(std::floor(params_.lattice_mm / spacing_[a] * (1.0 + 1e-6))), 1,
         16);
     lattice_dims_[a] = (dims_[a] - 1) / lattice_[a] + 1;  // element e at voxel e * lattice
+    sample_upper_[a] = static_cast<double>(dims_[a] - 1);
+    sample_base_max_[a] = std::max<std::int64_t>(0, dims_[a] - 2);
   }
+  sample_stride_ = {1, dims_[0], dims_[0] * dims_[1]};
+  for (int a = 0; a < 3; ++a) sample_step_[a] = dims_[a] > 1 ? sample_stride_[a] : 0;
 }
 
 Vec3d SkinDeformer::displacement_at(std::int64_t i, std::int64_t j, std::int64_t k) const {
@@ -236,21 +240,19 @@ void SkinDeformer::restore(std::span<float> out, const Index3& keep_lo,
 }
 
 float SkinDeformer::sample(double i, double j, double k) const {
-  const std::array<double, 3> q{i, j, k};
-  std::array<std::int64_t, 3> base{};
-  std::array<double, 3> frac{};
+  // Per axis: clamp into the volume, the cell's base voxel (the last cell for the far edge; 0
+  // along an axis of one voxel) and the fraction; constants from the constructor.
+  const double q[3] = {i, j, k};
+  double frac[3];
+  std::int64_t offset = 0;
   for (int a = 0; a < 3; ++a) {
-    const double upper = static_cast<double>(dims_[a] - 1);
-    const double clamped = std::min(std::max(q[a], 0.0), upper);
-    auto b = static_cast<std::int64_t>(clamped);  // floor: clamped >= 0
-    if (b >= dims_[a] - 1) b = std::max<std::int64_t>(0, dims_[a] - 2);
-    base[a] = b;
-    frac[a] = dims_[a] > 1 ? clamped - static_cast<double>(b) : 0.0;
+    const double clamped = std::min(std::max(q[a], 0.0), sample_upper_[a]);
+    const auto b = std::min(static_cast<std::int64_t>(clamped), sample_base_max_[a]);
+    frac[a] = clamped - static_cast<double>(b);
+    offset += b * sample_stride_[a];
   }
-  const std::int64_t step_i = dims_[0] > 1 ? 1 : 0;
-  const std::int64_t step_j = dims_[1] > 1 ? dims_[0] : 0;
-  const std::int64_t step_k = dims_[2] > 1 ? dims_[0] * dims_[1] : 0;
-  const float* v = original_.data() + base[0] + dims_[0] * (base[1] + dims_[1] * base[2]);
+  const std::int64_t step_i = sample_step_[0], step_j = sample_step_[1], step_k = sample_step_[2];
+  const float* v = original_.data() + offset;
   const double c00 = v[0] + frac[0] * (v[step_i] - v[0]);
   const double c10 = v[step_j] + frac[0] * (v[step_j + step_i] - v[step_j]);
   const double c01 = v[step_k] + frac[0] * (v[step_k + step_i] - v[step_k]);

@@ -111,6 +111,10 @@ class SkinDeformer {
     std::int64_t e0 = 0, e1 = 0;
     double f = 0;
   };
+  // sample()'s constants per axis: the largest coordinate, the last cell's base voxel, the
+  // stride, and the step to the next voxel (0 along an axis of one voxel).
+  std::array<double, 3> sample_upper_{};
+  std::array<std::int64_t, 3> sample_base_max_{}, sample_stride_{}, sample_step_{};
   std::vector<double> row_disp_;
   std::vector<Column> column_;
 };
