@@ -12,12 +12,19 @@ namespace palp {
 namespace segmentation {
 
 void check_params(const SegmentationParams& p) {
-  const double values[] = {
-      p.body_threshold_hu,      p.min_body_part_ml,           p.body_core_radius_mm,
-      p.max_table_thickness_mm, p.min_table_width_mm,         p.bone_seed_hu,
-      p.bone_grow_hu,           p.bone_leak_contact_fraction, p.bone_max_hole_mm2,
-      p.bone_edge_fraction,     p.bone_max_cavity_ml,         p.min_bone_island_ml,
-      p.bone_enclosure_radius_mm};
+  const double values[] = {p.body_threshold_hu,
+                           p.min_body_part_ml,
+                           p.body_core_radius_mm,
+                           p.max_table_thickness_mm,
+                           p.min_table_width_mm,
+                           p.bone_seed_hu,
+                           p.bone_grow_hu,
+                           p.bone_leak_contact_fraction,
+                           p.bone_max_hole_mm2,
+                           p.bone_edge_fraction,
+                           p.bone_max_cavity_ml,
+                           p.min_bone_island_ml,
+                           p.bone_enclosure_radius_mm};
   for (double v : values)
     if (!std::isfinite(v)) throw UsageError("segmentation: parameters must be finite numbers");
   if (p.min_body_part_ml < 0 || p.body_core_radius_mm < 0 || p.max_table_thickness_mm < 0 ||

@@ -97,7 +97,8 @@ inline void print_bone_error_split(const CtVolume& ct, const Mask& body, const M
     for (int r = 0; r < 3; ++r) {
       std::int64_t sum = 0;
       std::printf("| %s | %s |", kinds[kd], regions[r]);
-      for (int b = 0; b < kBins; ++b) std::printf(" %lld |", static_cast<long long>(c[kd][r][b])), sum += c[kd][r][b];
+      for (int b = 0; b < kBins; ++b)
+        std::printf(" %lld |", static_cast<long long>(c[kd][r][b])), sum += c[kd][r][b];
       std::printf(" %lld |\n", static_cast<long long>(sum));
     }
   // Surface distances: each surface voxel's distance to the other surface, by bands.
@@ -182,7 +183,8 @@ inline void print_pieces(const CtVolume& ct, const Mask& a, const Mask& b, const
           ++p.n;
           p.hu += ct.data[n];
           p.max_hu = std::max(p.max_hu, static_cast<int>(ct.data[n]));
-          for (int d = 0; d < 3; ++d) p.lo[d] = std::min(p.lo[d], q[d]), p.hi[d] = std::max(p.hi[d], q[d]);
+          for (int d = 0; d < 3; ++d)
+            p.lo[d] = std::min(p.lo[d], q[d]), p.hi[d] = std::max(p.hi[d], q[d]);
           if (touches(b, q[0], q[1], q[2])) ++p.touching_b;
           const Index3 next[6] = {{q[0] - 1, q[1], q[2]}, {q[0] + 1, q[1], q[2]},
                                   {q[0], q[1] - 1, q[2]}, {q[0], q[1] + 1, q[2]},
@@ -199,11 +201,12 @@ inline void print_pieces(const CtVolume& ct, const Mask& a, const Mask& b, const
   std::printf("%s: %zu pieces\n", name, pieces.size());
   for (int t = 0; t < how_many && t < static_cast<int>(pieces.size()); ++t) {
     const Piece& p = pieces[static_cast<std::size_t>(t)];
-    std::printf("  %lld voxels (%lld touching), mean %.0f max %d HU, i %lld-%lld j %lld-%lld k %lld-%lld\n",
-                static_cast<long long>(p.n), static_cast<long long>(p.touching_b), p.hu / p.n,
-                p.max_hu, static_cast<long long>(p.lo[0]), static_cast<long long>(p.hi[0]),
-                static_cast<long long>(p.lo[1]), static_cast<long long>(p.hi[1]),
-                static_cast<long long>(p.lo[2]), static_cast<long long>(p.hi[2]));
+    std::printf(
+        "  %lld voxels (%lld touching), mean %.0f max %d HU, i %lld-%lld j %lld-%lld k %lld-%lld\n",
+        static_cast<long long>(p.n), static_cast<long long>(p.touching_b), p.hu / p.n, p.max_hu,
+        static_cast<long long>(p.lo[0]), static_cast<long long>(p.hi[0]),
+        static_cast<long long>(p.lo[1]), static_cast<long long>(p.hi[1]),
+        static_cast<long long>(p.lo[2]), static_cast<long long>(p.hi[2]));
   }
 }
 
