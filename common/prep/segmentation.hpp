@@ -9,8 +9,9 @@
 // slice (lungs and bowel gas that reach the first or last slice stay inside).
 // Bone: seeds at high HU grown into lower-HU bone inside the body; medium-HU regions that touch
 // bone only across a narrow contact (contrast-filled vessels, enhancing organs) are dropped;
-// marrow filled where two of the three orthogonal slice planes find it enclosed, and in small
-// cavities enclosed in 3D; the edge trimmed to a partial-volume level; small islands removed.
+// marrow filled where two of the three orthogonal slice planes find it enclosed, where bone
+// brackets it along most lines through it, and in small cavities enclosed in 3D; the edge
+// trimmed to a partial-volume level; small islands removed.
 #pragma once
 
 #include <cstdint>
