@@ -11,6 +11,7 @@
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
+#include "prep/bone_enclosure.hpp"
 #include "prep/bone_marrow.hpp"
 #include "prep/components.hpp"
 #include "prep/segmentation_shared.hpp"
@@ -183,6 +184,7 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   remove_leaks(params.bone_leak_contact_fraction, bone);  // vessels resting on bone
   for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });
   fill_marrow_by_votes(axes, params, bone);                 // marrow: enclosed in 2 of 3 planes
+  fill_between_cortices(axes, params, body, bone);          // marrow: bracketed along most lines
   fill_enclosed_cavities(params.bone_max_cavity_ml, bone);  // marrow enclosed in 3D
   refine_surface(ct, params.bone_edge_fraction, bone);      // partial-volume edge
   remove_small_islands(params.min_bone_island_ml, bone);    // islands

@@ -38,8 +38,8 @@ using Clock = std::chrono::steady_clock;
 // Bump when the algorithms change what prep writes, so old caches are not reused.
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
 // bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
-// edge trim at 0.3
-constexpr int kPrepAlgorithmVersion = 7;
+// edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp)
+constexpr int kPrepAlgorithmVersion = 8;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
@@ -130,6 +130,8 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_leak_contact_fraction", s.bone_leak_contact_fraction},
           {"bone_marrow_votes", s.bone_marrow_votes},
           {"bone_max_hole_mm2", s.bone_max_hole_mm2},
+          {"bone_enclosure_radius_mm", s.bone_enclosure_radius_mm},
+          {"bone_enclosure_directions", s.bone_enclosure_directions},
           {"bone_edge_fraction", s.bone_edge_fraction},
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},

@@ -12,11 +12,19 @@ namespace palp {
 namespace segmentation {
 
 void check_params(const SegmentationParams& p) {
-  const double values[] = {
-      p.body_threshold_hu,      p.min_body_part_ml,           p.body_core_radius_mm,
-      p.max_table_thickness_mm, p.min_table_width_mm,         p.bone_seed_hu,
-      p.bone_grow_hu,           p.bone_leak_contact_fraction, p.bone_max_hole_mm2,
-      p.bone_edge_fraction,     p.bone_max_cavity_ml,         p.min_bone_island_ml};
+  const double values[] = {p.body_threshold_hu,
+                           p.min_body_part_ml,
+                           p.body_core_radius_mm,
+                           p.max_table_thickness_mm,
+                           p.min_table_width_mm,
+                           p.bone_seed_hu,
+                           p.bone_grow_hu,
+                           p.bone_leak_contact_fraction,
+                           p.bone_max_hole_mm2,
+                           p.bone_edge_fraction,
+                           p.bone_max_cavity_ml,
+                           p.min_bone_island_ml,
+                           p.bone_enclosure_radius_mm};
   for (double v : values)
     if (!std::isfinite(v)) throw UsageError("segmentation: parameters must be finite numbers");
   if (p.min_body_part_ml < 0 || p.body_core_radius_mm < 0 || p.max_table_thickness_mm < 0 ||
@@ -27,6 +35,10 @@ void check_params(const SegmentationParams& p) {
     throw UsageError("segmentation: bone_edge_fraction must lie in [0, 1]");
   if (p.bone_marrow_votes < 1 || p.bone_marrow_votes > 3)
     throw UsageError("segmentation: bone_marrow_votes must be 1, 2 or 3");
+  if (p.bone_enclosure_directions < 0 || p.bone_enclosure_directions > 13)
+    throw UsageError("segmentation: bone_enclosure_directions must lie in [0, 13]");
+  if (p.bone_enclosure_radius_mm < 0 || p.bone_enclosure_radius_mm > 100)
+    throw UsageError("segmentation: bone_enclosure_radius_mm must lie in [0, 100]");
   if (p.bone_grow_hu > p.bone_seed_hu)
     throw UsageError("segmentation: bone_grow_hu must not exceed bone_seed_hu");
 }

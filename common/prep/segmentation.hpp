@@ -9,8 +9,9 @@
 // slice (lungs and bowel gas that reach the first or last slice stay inside).
 // Bone: seeds at high HU grown into lower-HU bone inside the body; medium-HU regions that touch
 // bone only across a narrow contact (contrast-filled vessels, enhancing organs) are dropped;
-// marrow filled where two of the three orthogonal slice planes find it enclosed, and in small
-// cavities enclosed in 3D; the edge trimmed to a partial-volume level; small islands removed.
+// marrow filled where two of the three orthogonal slice planes find it enclosed, where bone
+// brackets it along most lines through it, and in small cavities enclosed in 3D; the edge
+// trimmed to a partial-volume level; small islands removed.
 #pragma once
 
 #include <cstdint>
@@ -44,6 +45,12 @@ struct SegmentationParams {
   // the spinal canal only in axial slices (common/prep/bone_marrow.hpp).
   int bone_marrow_votes = 2;
   double bone_max_hole_mm2 = 3000.0;
+  // Marrow between cortices: a voxel outside the bone is filled when bone brackets it (on both
+  // sides, each within bone_enclosure_radius_mm) along at least bone_enclosure_directions of the
+  // 13 lines through it: the sacrum, the pelvis between its cortices, a femoral head, open in
+  // every plane (common/prep/bone_enclosure.hpp). 0 directions: off.
+  double bone_enclosure_radius_mm = 12.0;
+  int bone_enclosure_directions = 10;
   // Edge trim: a bone voxel beside non-bone, next to a thicker bone voxel, is dropped when its HU
   // is below this fraction of the way from its outside neighbours' mean to its brightest bone
   // neighbour; 0: no trim. The half-maximum (0.5) fits sharp phantom edges but cuts ribs and

@@ -1,0 +1,188 @@
+// Marrow between cortices (see bone_enclosure.hpp).
+//
+// Per line direction, two sweeps over the bone's bounding box (grown by the radius): the forward
+// sweep stores each voxel's steps back to the nearest bone along the line (capped), the backward
+// sweep the steps ahead, and a voxel with both within the radius gets the line's vote. One byte
+// per voxel for the distances, visited in an order where the neighbour behind is done, so the
+// rows vectorise; the 13 directions are split between two workers with their own buffers.
+#include "prep/bone_enclosure.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "base/parallel.hpp"
+#include "prep/components.hpp"
+
+namespace palp::segmentation {
+namespace {
+
+struct Line {
+  std::array<std::int64_t, 3> step{};  // voxel step along each axis, -1, 0 or 1
+  std::int64_t reach = 0;              // steps within the radius
+};
+
+// The 13 lines through a voxel of the 3x3x3 neighbourhood (one of each opposite pair).
+std::vector<Line> lines_within(const Grid& g, double radius_mm) {
+  std::vector<Line> lines;
+  for (std::int64_t dz = -1; dz <= 1; ++dz)
+    for (std::int64_t dy = -1; dy <= 1; ++dy)
+      for (std::int64_t dx = -1; dx <= 1; ++dx) {
+        const std::int64_t first = dx != 0 ? dx : dy != 0 ? dy : dz;
+        if (first <= 0) continue;
+        const double len = std::sqrt(std::pow(static_cast<double>(dx) * g.spacing[0], 2) +
+                                     std::pow(static_cast<double>(dy) * g.spacing[1], 2) +
+                                     std::pow(static_cast<double>(dz) * g.spacing[2], 2));
+        const auto reach = static_cast<std::int64_t>(std::floor(radius_mm / len));
+        lines.push_back({{dx, dy, dz}, std::min<std::int64_t>(reach, 250)});
+      }
+  return lines;
+}
+
+// The bone's bounding box grown by the radius, and the box's cells: 0 outside the body, 1 bone,
+// 2 a body voxel outside the bone (a candidate).
+struct Box {
+  std::array<std::int64_t, 3> lo{}, dims{};
+  std::array<std::array<bool, 2>, 3> cut{};  // leaving the box there leaves the scan's end slices
+  std::vector<std::uint8_t> cells;
+  std::size_t at(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return static_cast<std::size_t>(i + dims[0] * (j + dims[1] * k));
+  }
+};
+
+bool bone_box(const Mask& bone, const Mask& body, const std::array<std::int64_t, 3>& margin,
+              int slice, Box& box) {
+  const Grid& g = bone.grid;
+  std::array<std::int64_t, 3> lo = g.dims, hi = {-1, -1, -1};
+  for_each_nonzero(bone, [&](std::size_t n) {
+    const auto nx = static_cast<std::size_t>(g.dims[0]), ny = static_cast<std::size_t>(g.dims[1]);
+    const std::array<std::int64_t, 3> q = {static_cast<std::int64_t>(n % nx),
+                                           static_cast<std::int64_t>((n / nx) % ny),
+                                           static_cast<std::int64_t>(n / (nx * ny))};
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], q[a]), hi[a] = std::max(hi[a], q[a]);
+  });
+  if (hi[0] < 0) return false;
+  for (int a = 0; a < 3; ++a) {
+    box.lo[a] = std::max<std::int64_t>(0, lo[a] - margin[a] - 1);
+    const std::int64_t top = std::min(g.dims[a] - 1, hi[a] + margin[a] + 1);
+    box.dims[a] = top - box.lo[a] + 1;
+    box.cut[a] = {a == slice && box.lo[a] == 0, a == slice && top == g.dims[a] - 1};
+  }
+  box.cells.assign(static_cast<std::size_t>(box.dims[0] * box.dims[1] * box.dims[2]), 0);
+  for (std::int64_t k = 0; k < box.dims[2]; ++k)
+    for (std::int64_t j = 0; j < box.dims[1]; ++j) {
+      const std::size_t src = g.linear(box.lo[0], box.lo[1] + j, box.lo[2] + k);
+      std::uint8_t* out = box.cells.data() + box.at(0, j, k);
+      for (std::int64_t i = 0; i < box.dims[0]; ++i)
+        out[i] =
+            bone.data[src + static_cast<std::size_t>(i)]
+                ? 1
+                : static_cast<std::uint8_t>(body.data[src + static_cast<std::size_t>(i)] ? 2 : 0);
+    }
+  return true;
+}
+
+constexpr std::uint8_t kFar = 255;
+
+inline std::uint8_t next_step(std::uint8_t from) {  // one step further, saturating at kFar
+  return static_cast<std::uint8_t>(std::min<unsigned>(from, kFar - 1u) + 1u);
+}
+
+// One sweep along `step`: dist[q] = 0 on bone, else 1 + dist[q - step], saturating at kFar;
+// leaving the box across a cut end counts as bone just outside. With `votes`, the backward sweep
+// (step negated) adds a vote where the candidate's forward value (still in dist) and its backward
+// value are both within `reach`, before overwriting it.
+void sweep(const Box& box, const std::array<std::int64_t, 3>& step, std::uint8_t reach,
+           std::uint8_t* dist, std::uint8_t* votes) {
+  const std::int64_t nx = box.dims[0], ny = box.dims[1], nz = box.dims[2], dx = step[0];
+  const auto exit_value = [&](int axis, std::int64_t from) {  // `from`: the coordinate left to
+    return box.cut[axis][from < 0 ? 0 : 1] ? std::uint8_t{1} : kFar;
+  };
+  const auto put = [&](std::uint8_t* d, const std::uint8_t* cell, std::uint8_t* v, std::int64_t i,
+                       std::uint8_t from) {
+    const std::uint8_t value = cell[i] == 1 ? std::uint8_t{0} : next_step(from);
+    if (v) v[i] += static_cast<std::uint8_t>((cell[i] == 2) & (d[i] <= reach) & (value <= reach));
+    d[i] = value;
+  };
+  for (std::int64_t kk = 0; kk < nz; ++kk) {
+    const std::int64_t k = step[2] < 0 ? nz - 1 - kk : kk;
+    for (std::int64_t jj = 0; jj < ny; ++jj) {
+      const std::int64_t j = step[1] < 0 ? ny - 1 - jj : jj;
+      const std::int64_t pk = k - step[2], pj = j - step[1];
+      std::uint8_t row_exit = 0;  // 0: the row behind is inside the box
+      if (pk < 0 || pk >= nz) row_exit = exit_value(2, pk);
+      if (pj < 0 || pj >= ny)
+        row_exit = row_exit ? std::min(row_exit, exit_value(1, pj)) : exit_value(1, pj);
+      const std::size_t row = box.at(0, j, k);
+      const std::uint8_t* cell = box.cells.data() + row;
+      std::uint8_t* d = dist + row;
+      std::uint8_t* v = votes ? votes + row : nullptr;
+      // The voxel whose neighbour behind lies beyond the row's end (none when dx == 0).
+      const std::int64_t edge = dx > 0 ? 0 : nx - 1;
+      const std::int64_t lo = dx > 0 ? 1 : 0, hi = dx < 0 ? nx - 1 : nx;  // the others
+      if (dx != 0) {
+        const std::uint8_t x_exit = exit_value(0, edge - dx);
+        put(d, cell, v, edge, row_exit ? std::min(row_exit, x_exit) : x_exit);
+      }
+      if (row_exit) {
+        for (std::int64_t i = lo; i < hi; ++i) put(d, cell, v, i, row_exit);
+      } else if (step[1] == 0 && step[2] == 0) {  // along the row: each voxel needs the last
+        if (dx > 0)
+          for (std::int64_t i = lo; i < hi; ++i) put(d, cell, v, i, d[i - 1]);
+        else
+          for (std::int64_t i = hi - 1; i >= lo; --i) put(d, cell, v, i, d[i + 1]);
+      } else {  // the row behind is done: independent voxels
+        const std::uint8_t* behind = dist + box.at(0, pj, pk) - dx;
+        for (std::int64_t i = lo; i < hi; ++i) put(d, cell, v, i, behind[i]);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void fill_between_cortices(const PatientAxes& axes, const SegmentationParams& params,
+                           const Mask& body, Mask& bone) {
+  const int needed = params.bone_enclosure_directions;
+  if (needed <= 0) return;
+  const Grid& g = bone.grid;
+  const std::vector<Line> lines = lines_within(g, params.bone_enclosure_radius_mm);
+  std::array<std::int64_t, 3> margin{};
+  for (int a = 0; a < 3; ++a)
+    margin[a] =
+        static_cast<std::int64_t>(std::floor(params.bone_enclosure_radius_mm / g.spacing[a]));
+  check_allocation(g, 5, "bone enclosure");
+  Box box;
+  if (!bone_box(bone, body, margin, axes.slice, box)) return;
+  // Two workers, each with its own distances and votes for its share of the lines.
+  constexpr std::int64_t kWorkers = 2;
+  std::vector<std::vector<std::uint8_t>> votes(kWorkers);
+  const auto count = static_cast<std::int64_t>(lines.size());
+  parallel_for_chunks(kWorkers, 1, [&](std::int64_t w0, std::int64_t w1) {
+    for (std::int64_t w = w0; w < w1; ++w) {
+      std::vector<std::uint8_t> dist(box.cells.size());
+      std::vector<std::uint8_t>& v = votes[static_cast<std::size_t>(w)];
+      v.assign(box.cells.size(), 0);
+      for (std::int64_t l = w; l < count; l += kWorkers) {
+        const Line& line = lines[static_cast<std::size_t>(l)];
+        const auto reach = static_cast<std::uint8_t>(line.reach);
+        sweep(box, line.step, reach, dist.data(), nullptr);
+        const std::array<std::int64_t, 3> back = {-line.step[0], -line.step[1], -line.step[2]};
+        sweep(box, back, reach, dist.data(), v.data());
+      }
+    }
+  });
+  for (std::int64_t k = 0; k < box.dims[2]; ++k)
+    for (std::int64_t j = 0; j < box.dims[1]; ++j)
+      for (std::int64_t i = 0; i < box.dims[0]; ++i) {
+        const std::size_t q = box.at(i, j, k);
+        if (votes[0][q] + votes[1][q] >= needed)
+          bone.data[g.linear(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k)] = 1;
+      }
+}
+
+}  // namespace palp::segmentation
