@@ -25,9 +25,9 @@
 #include "io/ct_io.hpp"
 #include "io/gzip.hpp"
 #include "prep/ct_check.hpp"
+#include "prep/iso_projection.hpp"
 #include "prep/output_guard.hpp"
 #include "prep/reorient.hpp"
-#include "prep/iso_projection.hpp"
 #include "prep/subvoxel_distance.hpp"
 
 namespace palp {
@@ -314,8 +314,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
   DistanceMap map;  // one buffer serves both maps: each is written before the next is computed
   const double band = subvoxel_band_mm(params.surface, result.grid);
-  const double coarsest = std::max({result.grid.spacing[0], result.grid.spacing[1],
-                                    result.grid.spacing[2]});
+  const double coarsest =
+      std::max({result.grid.spacing[0], result.grid.spacing[1], result.grid.spacing[2]});
   IsoProjectionStats projected;
   auto distance_stage = [&](const char* name, const char* file, const Mask& mask,
                             SurfacePoints& points, float* range) {

@@ -68,11 +68,10 @@ Options:
 }  // namespace
 
 int cmd_prep(const Arguments& argv) {
-  const Args args(
-      argv, {"help", "no-cache", "quiet", "not-hu-ok"},
-      {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed", "bone-grow",
-       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu", "bone-levels",
-       "skin-projection"});
+  const Args args(argv, {"help", "no-cache", "quiet", "not-hu-ok"},
+                  {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
+                   "bone-grow", "min-bone-island", "max-table-thickness", "surface", "skin-hu",
+                   "bone-hu", "bone-levels", "skin-projection"});
   if (args.has("help")) {
     std::cout << prep_usage();
     return 0;
