@@ -25,6 +25,7 @@
 #include "io/ct_io.hpp"
 #include "io/gzip.hpp"
 #include "prep/ct_check.hpp"
+#include "prep/iso_projection.hpp"
 #include "prep/output_guard.hpp"
 #include "prep/reorient.hpp"
 #include "prep/subvoxel_distance.hpp"
@@ -140,6 +141,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"skin_iso_hu", params.surface.skin_hu},
           {"bone_iso_hu", params.surface.bone_hu},
           {"subvoxel_band_mm", params.surface.band_mm},
+          {"skin_projection_mm", params.surface.skin_projection_mm},
           {"bone_levels", params.adapt_bone_levels ? "adapted" : "as given"}};
 }
 
@@ -147,6 +149,13 @@ nlohmann::json params_json(const PrepParams& params) {
 double subvoxel_band_mm(const SurfaceParams& surface, const Grid& grid) {
   if (surface.band_mm > 0.0) return surface.band_mm;
   return 2.0 * std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
+}
+
+// The reach of d_surf's projection onto the HU iso-surface: the parameter, or three coarsest
+// spacings (a pad 6 mm deep on a 3 mm CT reads nodes up to 9 mm deep).
+double skin_projection_mm(const SurfaceParams& surface, const Grid& grid) {
+  if (surface.skin_projection_mm >= 0.0) return surface.skin_projection_mm;
+  return 3.0 * std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
 }
 
 // Writes to a temporary name and renames, so an interrupted run never leaves a half file
@@ -295,7 +304,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     });
   }
   stage("write CT", [&] { write_atomically(dir / kCtFile, ct); });
-  ct = CtVolume{};  // the HU are not needed past segmentation, the surface points and the copy
+  const double projection = skin_projection_mm(params.surface, result.grid);
+  if (!subvoxel || projection == 0.0) ct = CtVolume{};  // else d_surf's projection reads the HU
   result.stats.body_voxels = count_nonzero(body);
   result.stats.bone_voxels = count_nonzero(bone);
   stage("write masks", [&] {
@@ -306,12 +316,21 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
   DistanceMap map;  // one buffer serves both maps: each is written before the next is computed
   const double band = subvoxel_band_mm(params.surface, result.grid);
+  const double coarsest =
+      std::max({result.grid.spacing[0], result.grid.spacing[1], result.grid.spacing[2]});
+  IsoProjectionStats projected;
   auto distance_stage = [&](const char* name, const char* file, const Mask& mask,
                             SurfacePoints& points, float* range) {
     stage(name, [&] {
       if (subvoxel) {
         subvoxel_signed_distance(points, mask, band, params.distance.band_mm, map,
                                  params.distance.threads);
+        if (&mask == &body && !ct.data.empty()) {
+          projected = project_onto_iso_surface(ct, body, params.surface.skin_hu, projection,
+                                               coarsest, 0.25 * coarsest, params.distance.band_mm,
+                                               map, params.distance.threads);
+          ct = CtVolume{};  // the HU are not needed past this
+        }
       } else {
         signed_distance(mask, params.distance, map);
       }
@@ -355,6 +374,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   if (subvoxel) {
     json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", surface.bone_hu}};
     json["subvoxel_band_mm_used"] = band;
+    json["skin_projection"] = {{"reach_mm", projection},
+                               {"nodes", {projected.visited, projected.projected}}};
     // [points, placed by HU]: the rest straddle no level (the mask cut there: table contact,
     // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
     json["surface_points"] = point_counts;

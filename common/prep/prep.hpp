@@ -26,6 +26,9 @@ struct SurfaceParams {
   double skin_hu = -500.0;  // iso level of d_surf's surface
   double bone_hu = 200.0;   // iso level of d_bone's surface
   double band_mm = 0.0;     // sub-voxel band; 0 = twice the grid's coarsest spacing
+  // d_surf's nodes within this distance move to the trilinear HU's own iso-surface
+  // (prep/iso_projection.hpp); < 0 = three coarsest spacings, 0 = off
+  double skin_projection_mm = -1.0;
 };
 
 const char* surface_method_name(SurfaceMethod method);

@@ -41,6 +41,8 @@ Options:
                           voxel faces (default subvoxel)
   --skin-hu HU            iso level of the skin surface for subvoxel (default %g)
   --bone-hu HU            iso level of the bone surface for subvoxel (default %g)
+  --skin-projection MM    subvoxel: d_surf within MM inside the skin takes the distance to the
+                          trilinear HU's own iso-surface (0: off; default three coarsest spacings)
   --threads N             worker threads (default: all cores, here %u)
   --body-threshold HU     voxels above this are not air (default %g)
   --min-body-part ML      drop separate parts smaller than this, except the patient (default %g)
@@ -66,10 +68,10 @@ Options:
 }  // namespace
 
 int cmd_prep(const Arguments& argv) {
-  const Args args(
-      argv, {"help", "no-cache", "quiet", "not-hu-ok"},
-      {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed", "bone-grow",
-       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu", "bone-levels"});
+  const Args args(argv, {"help", "no-cache", "quiet", "not-hu-ok"},
+                  {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
+                   "bone-grow", "min-bone-island", "max-table-thickness", "surface", "skin-hu",
+                   "bone-hu", "bone-levels", "skin-projection"});
   if (args.has("help")) {
     std::cout << prep_usage();
     return 0;
@@ -93,6 +95,11 @@ int cmd_prep(const Arguments& argv) {
   }
   params.surface.skin_hu = args.number("skin-hu", params.surface.skin_hu);
   params.surface.bone_hu = args.number("bone-hu", params.surface.bone_hu);
+  if (args.get("skin-projection")) {
+    params.surface.skin_projection_mm = args.number("skin-projection", 0.0);
+    if (!(params.surface.skin_projection_mm >= 0.0 && params.surface.skin_projection_mm <= 100.0))
+      throw UsageError("--skin-projection must be in [0, 100] mm");
+  }
   if (const auto levels = args.get("bone-levels")) {
     if (*levels != "adapt" && *levels != "given")
       throw UsageError("--bone-levels must be adapt or given, not '" + *levels + "'");

@@ -35,9 +35,12 @@
 //
 //   study_force_model [--out DIR] [--quick]
 // PALP_CT: the CT (default ../shared/data/ct_abdomen_3mm.nii.gz).
+// PALP_STUDY_PARTS: the parts to run (names among contrast, friction, contacts, smooth; all
+// when unset).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <random>
@@ -50,6 +53,7 @@
 #include "model/field_sampler.hpp"
 #include "model/force_model.hpp"
 #include "model/tool.hpp"
+#include "prep/iso_projection.hpp"
 #include "scene/scene.hpp"
 #include "scene/trajectory_gen.hpp"
 
@@ -421,6 +425,34 @@ struct Hu {
                   at(x + Vec3d{0, 0, h}) - at(x - Vec3d{0, 0, h})};
     return normalized(-1.0 * g);
   }
+  // The distance from p to the -500 HU iso-surface (prep/iso_projection.hpp), from a surface
+  // point near its nearest one; signed as the maps are (positive inside, where HU >= -500).
+  double distance(const Vec3d& p, const Vec3d& near) const {
+    const double q[3] = {p.x, p.y, p.z};
+    double x[3] = {near.x, near.y, near.z};
+    const double d = distance_to_iso_surface(ct, -500.0, q, x);
+    return at(p) >= -500.0 ? d : -d;
+  }
+  // The trilinear interpolation at p of the exact distances at the 8 grid nodes around it.
+  double interpolated_node_distance(const Vec3d& p, const Vec3d& near) const {
+    const Grid& g = ct.grid;
+    double out = 0.0;
+    const double u[3] = {p.x / g.spacing[0], p.y / g.spacing[1], p.z / g.spacing[2]};
+    double t[3], base[3];
+    for (int a = 0; a < 3; ++a) {
+      base[a] = std::floor(u[a]);
+      t[a] = u[a] - base[a];
+    }
+    for (int c = 0; c < 8; ++c) {
+      const int b[3] = {c & 1, (c >> 1) & 1, c >> 2};
+      double w = 1.0;
+      for (int a = 0; a < 3; ++a) w *= b[a] ? t[a] : 1.0 - t[a];
+      const Vec3d node{(base[0] + b[0]) * g.spacing[0], (base[1] + b[1]) * g.spacing[1],
+                       (base[2] + b[2]) * g.spacing[2]};
+      out += w * distance(node, near);
+    }
+    return out;
+  }
   // The -500 HU crossing met coming in along -dir from `outside` (bisection to 1e-6 mm): from
   // outside, so that gas in the bowel is not taken for the skin.
   Vec3d skin(const Vec3d& outside, const Vec3d& dir) const {
@@ -433,6 +465,34 @@ struct Hu {
     return outside - (0.5 * (lo + hi)) * dir;
   }
 };
+
+// D_surf at p sampled as sum_c w_c (D_c + g_c . (p - c) / 2) over the 8 nodes c around p, g_c the
+// map's gradient at c by central differences: the mean of the trilinear sample and of the
+// first-order Taylor expansions from the corners, whose quadratic errors are equal and opposite
+// (a candidate for the tick, measured here only).
+double gradient_corrected_surf(const FieldSampler& fields, const Grid& g, const Vec3d& p) {
+  const double u[3] = {p.x / g.spacing[0], p.y / g.spacing[1], p.z / g.spacing[2]};
+  double base[3], t[3];
+  for (int a = 0; a < 3; ++a) {
+    base[a] = std::floor(u[a]);
+    t[a] = u[a] - base[a];
+  }
+  const auto at = [&](const Vec3d& x) { return fields.sample_surf(x).value; };
+  const Vec3d ex{g.spacing[0], 0, 0}, ey{0, g.spacing[1], 0}, ez{0, 0, g.spacing[2]};
+  double out = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const int b[3] = {c & 1, (c >> 1) & 1, c >> 2};
+    double w = 1.0;
+    for (int a = 0; a < 3; ++a) w *= b[a] ? t[a] : 1.0 - t[a];
+    const Vec3d node{(base[0] + b[0]) * g.spacing[0], (base[1] + b[1]) * g.spacing[1],
+                     (base[2] + b[2]) * g.spacing[2]};
+    const Vec3d grad{(at(node + ex) - at(node - ex)) / (2 * g.spacing[0]),
+                     (at(node + ey) - at(node - ey)) / (2 * g.spacing[1]),
+                     (at(node + ez) - at(node - ez)) / (2 * g.spacing[2])};
+    out += w * (at(node) + 0.5 * dot(grad, p - node));
+  }
+  return out;
+}
 
 void smoothness(const std::string& ct_path, Csv& csv) {
   const std::vector<Variant> vars = variants_for(ct_path);
@@ -458,7 +518,8 @@ void smoothness(const std::string& ct_path, Csv& csv) {
       prm.bone_enabled = false;
       const Model m(v.fields, tool, prm);
       State st = make_state(m);
-      std::vector<double> f, map_depth;  // map_depth: D_surf at the pad centre (nominal: depth)
+      std::vector<double> f, map_depth, exact_depth, exact_nodes_depth,
+          corrected_depth;    // map_depth: D_surf at the pad centre (nominal: depth)
       double skin_gap = 0.0;  // largest |D_surf| on the HU iso-surface: the maps' own error
       for (int t = 0; t <= n; ++t) {
         const double along = spec.from + (spec.to - spec.from) * t / n;
@@ -471,8 +532,16 @@ void smoothness(const std::string& ct_path, Csv& csv) {
         tick(m, st, pad_pose(skin - depth * nrm, nrm, q, offset));
         f.push_back(norm(st.f_device));
         map_depth.push_back(v.fields->sample_surf(skin - depth * nrm).value);
+        // The exact distance from the pad centre to the trilinear HU's iso-surface, and the
+        // trilinear interpolation of the exact distances at the 8 grid nodes around it: what the
+        // tick would read from a map exact at its nodes.
+        const Vec3d pad = skin - depth * nrm;
+        exact_depth.push_back(hu.distance(pad, skin));
+        exact_nodes_depth.push_back(hu.interpolated_node_distance(pad, skin));
+        corrected_depth.push_back(gradient_corrected_surf(*v.fields, hu.ct.grid, pad));
       }
-      double sq = 0.0, step = 0.0, mean = 0.0, sq_depth = 0.0;
+      double sq = 0.0, step = 0.0, mean = 0.0, sq_depth = 0.0, sq_err = 0.0, sq_nodes = 0.0,
+             sq_corrected = 0.0;
       int cnt = 0;
       for (int t = half; t + half < static_cast<int>(f.size()); ++t) {
         double avg = 0.0, avg_depth = 0.0;
@@ -481,17 +550,28 @@ void smoothness(const std::string& ct_path, Csv& csv) {
         avg_depth /= 2 * half + 1;
         sq += (f[t] - avg) * (f[t] - avg);
         sq_depth += (map_depth[t] - avg_depth) * (map_depth[t] - avg_depth);
+        sq_err += (map_depth[t] - exact_depth[t]) * (map_depth[t] - exact_depth[t]);
+        sq_nodes +=
+            (exact_nodes_depth[t] - exact_depth[t]) * (exact_nodes_depth[t] - exact_depth[t]);
+        sq_corrected +=
+            (corrected_depth[t] - exact_depth[t]) * (corrected_depth[t] - exact_depth[t]);
         mean += f[t];
         ++cnt;
       }
       for (std::size_t t = 1; t < f.size(); ++t) step = std::max(step, std::fabs(f[t] - f[t - 1]));
       const double sd = std::sqrt(sq / cnt), sd_depth = std::sqrt(sq_depth / cnt);
-      csv.row({std::string(to_string(v.model)), depth, mean / cnt, sd, step, skin_gap});
+      const double err = std::sqrt(sq_err / cnt), nodes_err = std::sqrt(sq_nodes / cnt);
+      const double corrected_err = std::sqrt(sq_corrected / cnt);
+      csv.row({std::string(to_string(v.model)), depth, mean / cnt, sd, step, skin_gap, sd_depth,
+               err, nodes_err, corrected_err});
       std::printf(
           "smooth %-5s finger:1 %g mm true depth, %.0f mm at 20 mm/s: mean %.3f N, detrended "
           "std %.3f N, largest tick step %.3f N (|D_surf| on the iso-surface up to %.2f mm; "
-          "D_surf at the pad centre: detrended std %.3f mm)\n",
-          to_string(v.model), depth, len, mean / cnt, sd, step, skin_gap, sd_depth);
+          "D_surf at the pad centre: detrended std %.3f mm, against the exact distance rms "
+          "%.3f mm; exact nodes interpolated: rms %.3f mm; the map gradient-corrected: rms %.3f "
+          "mm)\n",
+          to_string(v.model), depth, len, mean / cnt, sd, step, skin_gap, sd_depth, err, nodes_err,
+          corrected_err);
     }
 }
 
@@ -556,6 +636,11 @@ int main(int argc, char** argv) {
   const std::string ct = env_ct ? env_ct : "../shared/data/ct_abdomen_3mm.nii.gz";
   const bool have_ct = std::filesystem::exists(ct);
   if (!have_ct) std::printf("no CT at %s: its parts are skipped\n", ct.c_str());
+  // PALP_STUDY_PARTS (e.g. "smooth" or "contrast,friction") runs only the parts named
+  const char* env_parts = std::getenv("PALP_STUDY_PARTS");
+  const auto want = [env_parts](const char* part) {
+    return env_parts == nullptr || std::strstr(env_parts, part) != nullptr;
+  };
 
   Csv c_csv(flags.out_dir + "/force_model_contrast.csv",
             {"scene", "tool", "model", "azimuth_deg", "depth_mm", "site", "pos_mm", "bone_below_mm",
@@ -569,8 +654,8 @@ int main(int argc, char** argv) {
     torso_paths.emplace_back();
     torso_paths.back().azimuth_deg = az;
   }
-  contrast("torso", "phantom:torso", torso_paths, depths, c_csv, r_csv);
-  if (have_ct) {
+  if (want("contrast")) contrast("torso", "phantom:torso", torso_paths, depths, c_csv, r_csv);
+  if (have_ct && want("contrast")) {
     std::vector<RibsSpec> ct_paths;
     for (double az = -50.0; az <= 20.0; az += 10.0) {
       ct_paths.emplace_back();
@@ -586,16 +671,18 @@ int main(int argc, char** argv) {
             {"model", "sweep", "depth_mm", "speed_mm_s", "rate_hz", "friction_N", "change_pct"});
   Csv k_csv(flags.out_dir + "/force_model_creep.csv",
             {"model", "depth_mm", "shift_mm", "f_start_N", "f_end_N", "decay_pct"});
-  friction(flags, f_csv, k_csv);
+  if (want("friction")) friction(flags, f_csv, k_csv);
   std::printf("friction: %.1f s\n", now_seconds() - t0);
 
   Csv n_csv(flags.out_dir + "/force_model_contacts.csv",
             {"model", "depth_mm", "points", "force_N", "vs_finger1_pct"});
-  contact_count(n_csv);
+  if (want("contacts")) contact_count(n_csv);
 
   Csv s_csv(flags.out_dir + "/force_model_smooth.csv",
-            {"model", "depth_mm", "mean_N", "detrended_std_N", "max_step_N", "map_skin_error_mm"});
-  if (have_ct) smoothness(ct, s_csv);
+            {"model", "depth_mm", "mean_N", "detrended_std_N", "max_step_N", "map_skin_error_mm",
+             "map_depth_std_mm", "map_vs_exact_rms_mm", "exact_nodes_interp_rms_mm",
+             "gradient_corrected_vs_exact_rms_mm"});
+  if (have_ct && want("smooth")) smoothness(ct, s_csv);
   std::printf("force_model: %.1f s\n", now_seconds() - t0);
   return 0;
 }

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Charts distance error against voxel size for both surface methods (docs/prep.md).
+"""Charts distance error against voxel size for both surface methods (docs/prep.md), and
+d_surf after its projection onto the trilinear HU iso-surface (prep/iso_projection.hpp).
 
 Reads the rows that build/tests/subvoxel_distance_test prints on stdin and writes an SVG (no
 plotting library: the VM has none). Usage:
@@ -8,7 +9,8 @@ plotting library: the VM has none). Usage:
 import re
 import sys
 
-ROW = re.compile(r"^(\w+)\s+(\d+) mm\s+mask rms ([\d.]+) max ([\d.]+) \| subvoxel rms ([\d.]+) max ([\d.]+)")
+ROW = re.compile(r"^(\w+)\s+(\d+) mm\s+mask rms ([\d.]+) max ([\d.]+) \| subvoxel rms ([\d.]+) max ([\d.]+)"
+                 r"(?: \| projected rms ([\d.]+) max ([\d.]+))?")
 
 
 def main():
@@ -16,7 +18,8 @@ def main():
     for line in sys.stdin:
         m = ROW.match(line.strip())
         if m:
-            rows.append((m.group(1), int(m.group(2))) + tuple(float(v) for v in m.groups()[2:]))
+            rows.append((m.group(1), int(m.group(2))) +
+                        tuple(float(v) if v is not None else None for v in m.groups()[2:]))
     if not rows:
         sys.exit("no result rows on stdin")
     width, height, left, right, top, bottom = 720, 440, 70, 190, 40, 60
@@ -46,10 +49,12 @@ def main():
                    'stroke="black" stroke-dasharray="2,2"/>')
     series = []
     for shape, dash in [("sphere", ""), ("slab", "6,3")]:
-        for method, colour, col in [("mask", "#c0392b", (2, 3)), ("subvoxel", "#2471a3", (4, 5))]:
+        for method, colour, col in [("mask", "#c0392b", (2, 3)), ("subvoxel", "#2471a3", (4, 5)),
+                                    ("projected", "#1e8449", (6, 7))]:
             for stat, idx, marker in [("RMS", col[0], "circle"), ("max", col[1], "square")]:
-                pts = sorted((r[1], r[idx]) for r in rows if r[0] == shape)
-                series.append((f"{method} {stat}, {shape}", colour, dash, marker, pts))
+                pts = sorted((r[1], r[idx]) for r in rows if r[0] == shape and r[idx] is not None)
+                if pts:
+                    series.append((f"{method} {stat}, {shape}", colour, dash, marker, pts))
     for i, (name, colour, dash, marker, pts) in enumerate(series):
         path = " ".join(f"{x_of(h):.1f},{y_of(v):.1f}" for h, v in pts)
         dash_attr = f' stroke-dasharray="{dash}"' if dash else ""

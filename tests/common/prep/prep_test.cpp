@@ -13,6 +13,7 @@
 #include "io/ct_io.hpp"
 #include "io/phantom.hpp"
 #include "prep/distance_transform.hpp"
+#include "prep/iso_projection.hpp"
 #include "prep/segmentation.hpp"
 #include "prep/subvoxel_distance.hpp"
 
@@ -107,6 +108,17 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   const double band = 2.0 * 2.5;  // twice the coarsest spacing
   subvoxel_signed_distance(surface_points(ct, body, -400.0), body, band, params.distance.band_mm,
                            expected);
+  {  // skin_projection_mm = 0: the tangent discs' map as it was
+    PrepParams off = params;
+    off.surface.skin_projection_mm = 0.0;
+    run_prep(input, (dir_ / "off").string(), off);
+    EXPECT_EQ(read_nifti_float((dir_ / "off" / kSurfaceDistanceFile).string()).data, expected.data);
+  }
+  // then moved onto the trilinear HU's iso-surface within three coarsest spacings inside, one
+  // outside (prep/iso_projection.hpp)
+  const IsoProjectionStats moved = project_onto_iso_surface(
+      ct, body, -400.0, 3.0 * 2.5, 2.5, 0.25 * 2.5, params.distance.band_mm, expected);
+  EXPECT_GT(moved.projected, 0u);
   EXPECT_EQ(d_surf.data, expected.data);
   // It is not the mask's map: the surface moved off the voxel faces.
   EXPECT_NE(d_surf.data, signed_distance(body, params.distance).data);
@@ -121,6 +133,8 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   EXPECT_EQ(json["hu_levels"]["bone_iso_hu"], 200.0 + offset);
   EXPECT_EQ(json["hu_levels"]["bone_grow_hu"], 150.0 + offset);
   EXPECT_EQ(json["subvoxel_band_mm_used"], band);
+  EXPECT_EQ(json["skin_projection"]["reach_mm"], 3.0 * 2.5);
+  EXPECT_EQ(json["skin_projection"]["nodes"][1], moved.projected);
   const SurfacePoints skin = surface_points(ct, body, -400.0);
   EXPECT_EQ(json["surface_points"]["skin"][0], skin.points.size());
   EXPECT_EQ(json["surface_points"]["skin"][1], skin.interpolated);
