@@ -26,7 +26,8 @@
 # dds_mc_batch"), PALP_DDS_BATCH_MS (10), PALP_DDS_RCVBUF (Cyclone's socket receive buffer for
 # every DDS transport, e.g. 4MB: <Internal><SocketReceiveBufferSize min=...>; the kernel's
 # net.core.rmem_max caps it; default: Cyclone's, 1 MiB if allowed), PALP_DDS_SECONDS
-# (10 per run), PALP_DDS_RATE (1000), PALP_DDS_REPEATS (1), PALP_DDS_DOMAIN (42),
+# (10 per run), PALP_DDS_WARMUP_S (12: DDS subscribers count nothing until this long after the
+# last has started), PALP_DDS_RATE (1000), PALP_DDS_REPEATS (1), PALP_DDS_DOMAIN (42),
 # PALP_DDS_OUT (/tmp/palp-dds), PALP_DDS_URI (the Cyclone configuration; default: the loopback
 # interface, no multicast, unicast discovery of localhost, up to 100 participants),
 # PALP_DDS_MC_URI (the multicast one). The rows carry palpd's own count of frames it numbered
@@ -40,6 +41,7 @@ transports=${PALP_DDS_TRANSPORTS:-tcp dds dds_mc dds_batch dds_mc_batch}
 batch_ms=${PALP_DDS_BATCH_MS:-10}
 rcvbuf=${PALP_DDS_RCVBUF:-}
 seconds=${PALP_DDS_SECONDS:-10}
+settle=${PALP_DDS_WARMUP_S:-12}
 rate=${PALP_DDS_RATE:-1000}
 repeats=${PALP_DDS_REPEATS:-1}
 domain=${PALP_DDS_DOMAIN:-42}
@@ -75,7 +77,7 @@ for ((rep = 1; rep <= repeats; rep++)); do
       # Subscribers start 50 ms apart: palpd runs long enough for the last to finish.
       # DDS subscribers skip a warm-up so all of them measure the same window, after every one
       # has joined (joining 64 Cyclone participants at once is a burst of discovery traffic).
-      run_s=$(awk -v s="$seconds" -v n="$n" 'BEGIN{printf "%d", s + 8 + n * 0.05}')
+      run_s=$(awk -v s="$seconds" -v n="$n" -v w="$settle" 'BEGIN{printf "%d", s + 6 + w + n * 0.05}')
       dds_args=(--dds "$domain" --rig bench --dds-batch-ms "$batch_ms")
       sub_args=()
       case $transport in
@@ -94,7 +96,7 @@ for ((rep = 1; rep <= repeats; rep++)); do
       probes=()
       for ((i = 0; i < n; i++)); do
         if [[ $transport != tcp ]]; then
-          warmup=$(awk -v n="$n" -v i="$i" 'BEGIN{printf "%.2f", (n - i) * 0.05 + 2}')
+          warmup=$(awk -v n="$n" -v i="$i" -v w="$settle" 'BEGIN{printf "%.2f", (n - i) * 0.05 + w}')
           "$palp" probe --dds "$domain" --rig bench --duration "$seconds" --stall 10 \
             --warmup "$warmup" "${sub_args[@]}" \
             "${probe_args[@]}" >"$dir/probe$i.log" 2>&1 &
@@ -125,6 +127,7 @@ done
 import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
 f = lambda v, d=1: "n/a" if v is None else f"{v:.{d}f}"
+na = lambda v: "n/a" if v is None else v
 print("\n| run | ticks | misses (overruns) | lateness p99 (bound) / max, us | latency p99 worst / "
       "median subscriber, us | min delivered | min frames/s | subscribers ok | CPU used | "
       "palpd CPU s | palpd DDS drops | load at start |")
@@ -138,6 +141,6 @@ for r in rows:
           f"{f(r['latency_p99_us_max'])} / {f(r['latency_p99_us_median'])} | "
           f"{f(r['delivered_min'], 4)} | {f(r['frames_per_s_min'])} | "
           f"{r['observers_ok']}/{r['observers']} | {r['cpu_used_pct']} % | "
-          f"{r.get('palpd_cpu_s', 'n/a')} | {r.get('palpd_dds_dropped') if r.get('palpd_dds_dropped') is not None else 'n/a'} | "
+          f"{na(r.get('palpd_cpu_s'))} | {na(r.get('palpd_dds_dropped'))} | "
           f"{r.get('load', 'n/a')} |")
 PY
