@@ -40,6 +40,7 @@ class FrameBatcher {
   // or clear()); then clear() starts the next one.
   const palp_dds_FrameBatch& sample();
   void clear();
+  void drop() { count_ = 0; }  // forget the pending frames (no reader): batch_index unchanged
   std::uint64_t batches() const { return batch_index_; }  // batches cleared so far
 
  private:

@@ -225,7 +225,7 @@ class DdsPublisher::Impl {
     const bool want_frames = matched(frames_), want_full = matched(full_);
     const bool want_pose = matched(pose_), want_wrench = matched(wrench_);
     const bool want_batch = batch_ && matched(batch_);
-    if (batcher_ && !want_batch) batcher_->clear();  // its readers left
+    if (batcher_ && !want_batch) batcher_->drop();  // its readers left
     while (const rt::Snapshot* s = ring_.front()) {
       const rt::TickRecord& t = s->tick;
       const auto stamp = to_time(t.t_ns + offset);

@@ -25,7 +25,7 @@
 # Environment: PALP_DDS_COUNTS ("1 16 64"), PALP_DDS_TRANSPORTS ("tcp dds dds_mc dds_batch
 # dds_mc_batch"), PALP_DDS_BATCH_MS (10), PALP_DDS_RCVBUF (Cyclone's socket receive buffer for
 # every DDS transport, e.g. 4MB: <Internal><SocketReceiveBufferSize min=...>; the kernel's
-# net.core.rmem_max caps it; default: Cyclone's, 1 MiB if allowed), PALP_DDS_SECONDS
+# net.core.rmem_max may cap it; default: Cyclone's, 1 MiB if allowed), PALP_DDS_SECONDS
 # (10 per run), PALP_DDS_WARMUP_S (12: DDS subscribers count nothing until this long after the
 # last has started), PALP_DDS_RATE (1000), PALP_DDS_REPEATS (1), PALP_DDS_DOMAIN (42),
 # PALP_DDS_OUT (/tmp/palp-dds), PALP_DDS_URI (the Cyclone configuration; default: the loopback

@@ -49,6 +49,11 @@ TEST(FrameBatcher, TenMillisecondsAtOneKilohertzAreTenFrames) {
   b.add(frame(10, 10 * kMs));
   EXPECT_EQ(b.sample().batch_index, 1u);
   EXPECT_EQ(b.sample().frames._buffer[0].frame_index, 10u);
+  b.drop();  // no reader: forgotten, the next batch keeps index 1
+  EXPECT_EQ(b.size(), 0u);
+  b.add(frame(20, 20 * kMs));
+  EXPECT_EQ(b.sample().batch_index, 1u);
+  EXPECT_EQ(b.sample().frames._length, 1u);
 }
 
 TEST(FrameBatcher, AFrameOutsideTheWindowEndsTheBatchBeforeIt) {
