@@ -36,7 +36,7 @@ struct DdsConfig {
   double batch_ms = 10;    // frame_batch: the frames of this much loop time per sample (0: none)
   double stats_interval_s = 1.0;       // Stats (and a look for a changed scene) this often
   std::uint32_t volume_max_dim = 128;  // render volume: voxels per axis at most (0: none)
-  std::size_t queue = 256;  // snapshots between the io thread and the DDS thread (256 ms at 1 kHz)
+  std::size_t queue = 1024;  // snapshots between the io thread and the DDS thread (1 s at 1 kHz)
   bool control = false;     // read rt/palp/<rig>/device_pose
   std::string token;        // with control: the token a DevicePose must carry
   bool report = true;       // a line of counters on stdout when it stops
