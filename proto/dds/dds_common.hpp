@@ -20,9 +20,10 @@ inline constexpr const char* kToolPose = "tool_pose";  // geometry_msgs PoseStam
 inline constexpr const char* kWrench = "wrench";       // geometry_msgs WrenchStamped, N, N·m
 inline constexpr const char* kFrames = "frames";       // palp::dds::HapticFrame, no contacts
 inline constexpr const char* kFramesContacts = "frames_contacts";  // the same with contacts
-inline constexpr const char* kScene = "scene";                     // Encoded: palp.v1.SceneInfo
-inline constexpr const char* kStats = "stats";                     // Encoded: palp.v1.Stats
-inline constexpr const char* kVolume = "volume";                   // Encoded: palp.v1.VolumeChunk
+inline constexpr const char* kFrameBatch = "frame_batch";  // palp::dds::FrameBatch: frames batched
+inline constexpr const char* kScene = "scene";             // Encoded: palp.v1.SceneInfo
+inline constexpr const char* kStats = "stats";             // Encoded: palp.v1.Stats
+inline constexpr const char* kVolume = "volume";           // Encoded: palp.v1.VolumeChunk
 inline constexpr const char* kDevicePose = "device_pose";  // palp::dds::DevicePose (controllers)
 inline constexpr const char* kRigsTopic = "rt/palp/rigs";  // palp::dds::RigInfo, one per palpd
 

@@ -1,6 +1,7 @@
 #include "dds_subscriber.hpp"
 
 #include <chrono>
+#include <cstring>
 #include <map>
 #include <thread>
 
@@ -46,7 +47,10 @@ RigSubscriber::RigSubscriber(const SubscriberOptions& options) : options_(option
   const dds_entity_t p = participant_.get();
   waitset_ = checked(dds_create_waitset(p), "wait-set");
   const std::string& rig = options_.rig;
-  if (options_.frames)
+  if (options_.frames && options_.batch)
+    batch_ = reader(p, waitset_, &palp_dds_FrameBatch_desc, topic_name(rig, kFrameBatch),
+                    QosKind::Stream, options_.frame_depth);
+  else if (options_.frames)
     frames_ = reader(p, waitset_, &palp_dds_HapticFrame_desc,
                      topic_name(rig, options_.contacts ? kFramesContacts : kFrames),
                      QosKind::Stream, options_.frame_depth);
@@ -88,6 +92,22 @@ std::size_t RigSubscriber::take(const Handlers& h) {
     n += take_all<palp_dds_HapticFrame>(frames_, [&](const palp_dds_HapticFrame& s) {
       if (h.frame) h.frame(s, now);
     });
+  if (batch_)
+    n += take_all<palp_dds_FrameBatch>(batch_, [&](const palp_dds_FrameBatch& b) {
+      ++batches_;
+      if (!h.frame) return;
+      palp_dds_HapticFrame f{};
+      std::memcpy(f.rig, b.rig, sizeof f.rig);
+      for (std::uint32_t i = 0; i < b.frames._length; ++i) {
+        const palp_dds_BatchFrame& s = b.frames._buffer[i];
+        f.frame_index = s.frame_index, f.seq = s.seq, f.server_time_ns = s.server_time_ns;
+        f.stamp = s.stamp, f.position = s.position, f.orientation = s.orientation;
+        f.force = s.force, f.torque = s.torque, f.u = s.u, f.n_contact = s.n_contact;
+        f.contact_points = s.contact_points, f.tick_status = s.tick_status;
+        f.safety_status = s.safety_status, f.fault = s.fault, f.device_state = s.device_state;
+        h.frame(f, now);
+      }
+    });
   if (pose_)
     n += take_all<geometry_msgs_msg_dds__PoseStamped_>(
         pose_, [&](const geometry_msgs_msg_dds__PoseStamped_& s) {
@@ -102,9 +122,10 @@ std::size_t RigSubscriber::take(const Handlers& h) {
 }
 
 std::uint32_t RigSubscriber::frame_writers() const {
-  if (!frames_) return 0;
+  const dds_entity_t r = batch_ ? batch_ : frames_;
+  if (!r) return 0;
   dds_subscription_matched_status_t st{};
-  if (dds_get_subscription_matched_status(frames_, &st) < 0) return 0;
+  if (dds_get_subscription_matched_status(r, &st) < 0) return 0;
   return st.current_count;
 }
 

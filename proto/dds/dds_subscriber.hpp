@@ -17,16 +17,18 @@ namespace palp::dds {
 struct SubscriberOptions {
   std::uint32_t domain = 0;
   std::string rig = "palp";
-  bool frames = true;               // rt/palp/<rig>/frames
-  bool contacts = false;            // frames_contacts instead (each frame with its contacts)
-  bool ros = false;                 // tool_pose and wrench
+  bool frames = true;     // rt/palp/<rig>/frames
+  bool contacts = false;  // frames_contacts instead (each frame with its contacts)
+  bool batch = false;     // frame_batch instead: each batch's frames handed to Handlers::frame
+  bool ros = false;       // tool_pose and wrench
   bool scene = true, stats = true;  // scene and stats
   bool volume = false;              // volume (the render volume, chunk by chunk)
-  std::int32_t frame_depth = 256;   // frames kept for this reader between two take()s
+  std::int32_t frame_depth = 256;   // frames (batches) kept for this reader between two take()s
 };
 
 struct Handlers {
-  // `rx_ns`: CLOCK_REALTIME when take() got the batch.
+  // `rx_ns`: CLOCK_REALTIME when take() got the batch. With SubscriberOptions::batch, frames
+  // from frame_batch in the same type (rig set, no contacts).
   std::function<void(const palp_dds_HapticFrame&, std::int64_t rx_ns)> frame;
   std::function<void(const geometry_msgs_msg_dds__PoseStamped_&, std::int64_t rx_ns)> pose;
   std::function<void(const geometry_msgs_msg_dds__WrenchStamped_&, std::int64_t rx_ns)> wrench;
@@ -44,15 +46,18 @@ class RigSubscriber {
   bool wait(double timeout_s);
   // Every sample that arrived, oldest first per topic. Returns how many.
   std::size_t take(const Handlers& handlers);
-  // Writers matched on the frames topic now (0: no palpd publishing this rig's frames).
+  // Writers matched on the frames (or frame_batch) topic now (0: no palpd publishing this rig's
+  // frames).
   std::uint32_t frame_writers() const;
   const SubscriberOptions& options() const { return options_; }
+  std::uint64_t batches() const { return batches_; }  // FrameBatches taken so far
 
  private:
   SubscriberOptions options_;
   Entity participant_;
   dds_entity_t waitset_ = 0;
-  dds_entity_t frames_ = 0, pose_ = 0, wrench_ = 0, scene_ = 0, stats_ = 0, volume_ = 0;
+  std::uint64_t batches_ = 0;
+  dds_entity_t batch_ = 0, frames_ = 0, pose_ = 0, wrench_ = 0, scene_ = 0, stats_ = 0, volume_ = 0;
 };
 
 struct RigSeen {

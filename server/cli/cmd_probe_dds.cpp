@@ -29,9 +29,11 @@ delivered fraction, latency from the frames' stamps, the scene and palpd's stats
   --rig NAME              the rig (default: this host's name, as palpd's default)
   --list                  list the rigs announced on the domain (listens --duration, default 2)
   --contacts              read frames_contacts (every frame with its contacts) instead of frames
+  --batch                 read frame_batch (palpd --dds-batch-ms: every frame, a batch of them
+                          per sample, one wake-up per batch) instead of frames
   --ros                   also count the ROS 2 topics (tool_pose, wrench)
   --volume                also receive the render volume (chunks and bytes)
-  --depth N               frames the reader keeps between two takes (256)
+  --depth N               frames (batches with --batch) the reader keeps between two takes (256)
   --warmup S              count nothing for the first S seconds (joining many subscribers at
                           once), then listen --duration seconds (0)
   --take-ms MS            take what arrived every MS ms instead of waking for each sample
@@ -88,7 +90,7 @@ int list(std::uint32_t domain, double duration, bool quiet) {
 
 int cmd_probe_dds(const Arguments& argv_in) {
   const Arguments argv = dds::split_dds_domain(argv_in);
-  const Args args(argv, {"help", "quiet", "dds", "list", "ros", "volume", "contacts"},
+  const Args args(argv, {"help", "quiet", "dds", "list", "ros", "volume", "contacts", "batch"},
                   {"dds-domain", "rig", "duration", "stall", "depth", "take-ms", "warmup"});
   if (args.has("help")) {
     std::cout << "usage: " << (kProbeDdsHelp + 8);  // without the leading "\n       "
@@ -109,6 +111,8 @@ int cmd_probe_dds(const Arguments& argv_in) {
   if (!(warmup >= 0 && warmup <= 3600)) throw UsageError("--warmup must be in 0..3600 s");
   if (!(take_ms >= 0 && take_ms <= 1000)) throw UsageError("--take-ms must be in 0..1000");
   if (args.has("list")) return list(domain, duration, quiet);
+  if (args.has("batch") && args.has("contacts"))
+    throw UsageError("--batch carries frames without contacts: use one of --batch, --contacts");
 
   dds::SubscriberOptions o;
   o.domain = domain;
@@ -116,12 +120,14 @@ int cmd_probe_dds(const Arguments& argv_in) {
   o.ros = args.has("ros");
   o.contacts = args.has("contacts");
   o.volume = args.has("volume");
+  o.batch = args.has("batch");
   o.frame_depth = static_cast<std::int32_t>(depth);
   dds::RigSubscriber sub(o);
 
   std::uint64_t frames = 0, first_index = 0, last_index = 0, gaps = 0, poses = 0, wrenches = 0;
   std::uint64_t volume_chunks = 0, volume_bytes = 0, volume_count = 0, fault_frames = 0;
   std::int64_t first_rx = 0, last_rx = 0, max_silence = 0;
+  std::uint64_t first_take = 0;  // frames taken at first_rx (a batch): not part of the rate
   std::vector<double> latency_us;
   latency_us.reserve(static_cast<std::size_t>(std::min(duration * 20000.0, 2e6)));
   bool have_scene = false, have_stats = false;
@@ -138,6 +144,7 @@ int cmd_probe_dds(const Arguments& argv_in) {
     last_index = std::max(last_index, f.frame_index);
     last_rx = rx;
     ++frames;
+    if (rx == first_rx) ++first_take;
     if (f.fault) ++fault_frames;
     latency_us.push_back(static_cast<double>(rx - dds::from_time(f.stamp)) * 1e-3);
   };
@@ -180,7 +187,8 @@ int cmd_probe_dds(const Arguments& argv_in) {
   if (frames == 0 && failure.empty())
     failure = "no frames (no palpd publishing rig " + o.rig + "?)";
   const double span_s = static_cast<double>(last_rx - first_rx) * 1e-9;
-  const double fps = frames > 1 && span_s > 0 ? static_cast<double>(frames - 1) / span_s : 0.0;
+  const double fps =
+      frames > first_take && span_s > 0 ? static_cast<double>(frames - first_take) / span_s : 0.0;
   const double expected = frames ? static_cast<double>(last_index - first_index + 1) : 0.0;
   const double delivered = expected > 0 ? static_cast<double>(frames) / expected : 0.0;
   const double p50 = percentile(latency_us, 0.5), p90 = percentile(latency_us, 0.9);
@@ -193,10 +201,11 @@ int cmd_probe_dds(const Arguments& argv_in) {
     if (have_scene)
       std::printf("  scene     %s, tool %s, device %s, %.6g Hz\n", scene.source().c_str(),
                   scene.tool().name().c_str(), scene.device().c_str(), scene.tick_rate_hz());
-    std::printf("  frames    %llu at %.1f/s, delivered %.4f (%llu gaps), %llu with a fault\n",
+    std::printf("  frames    %llu at %.1f/s, delivered %.4f (%llu gaps), %llu with a fault%s\n",
                 static_cast<unsigned long long>(frames), fps, delivered,
                 static_cast<unsigned long long>(gaps),
-                static_cast<unsigned long long>(fault_frames));
+                static_cast<unsigned long long>(fault_frames),
+                o.batch ? (", " + std::to_string(sub.batches()) + " batches").c_str() : "");
     std::printf(
         "  latency   p50 %.1f us, p90 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us "
         "(from the stamp, CLOCK_REALTIME)\n",
@@ -227,7 +236,7 @@ int cmd_probe_dds(const Arguments& argv_in) {
       "\"delivered\":%s,\"gaps\":%llu,\"max_interval_ms\":%s,"
       "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
       "\"scene\":%s,\"stats\":%s,\"tool_pose\":%llu,\"wrench\":%llu,\"volume_chunks\":%llu,"
-      "\"server_rate_hz\":%s,\"overruns\":%s,\"subscribers\":%s}\n",
+      "\"server_rate_hz\":%s,\"overruns\":%s,\"subscribers\":%s,\"batches\":%llu}\n",
       failure.empty() && frames > 0 ? "true" : "false", domain, o.rig.c_str(),
       static_cast<unsigned long long>(frames), json_number(fps).c_str(),
       json_number(delivered).c_str(), static_cast<unsigned long long>(gaps),
@@ -238,7 +247,8 @@ int cmd_probe_dds(const Arguments& argv_in) {
       static_cast<unsigned long long>(volume_chunks),
       have_stats ? json_number(stats.rate_hz()).c_str() : "null",
       have_stats ? std::to_string(stats.overruns()).c_str() : "null",
-      have_stats ? std::to_string(stats.clients()).c_str() : "null");
+      have_stats ? std::to_string(stats.clients()).c_str() : "null",
+      static_cast<unsigned long long>(sub.batches()));
   if (!failure.empty()) {
     std::fprintf(stderr, "palp: error: probe --dds: %s\n", failure.c_str());
     return 1;

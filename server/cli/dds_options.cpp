@@ -20,6 +20,9 @@ const char* const kDdsOptionsHelp =
                           or palp; letters, digits, '_')
   --dds-rate HZ           frames per second of loop time on the frame, pose and wrench topics
                           (0 = every tick; default 0)
+  --dds-batch-ms MS       also publish rt/palp/NAME/frame_batch: the frames of MS ms of loop time
+                          per sample, for subscribers that want every tick without waking for
+                          each (palp probe --dds --batch); 0 = off; 1..100, default 10
   --dds-volume-max-dim N  render volume on DDS: at most N voxels per axis (128; 0 = none)
   --dds-control           read device poses from rt/palp/NAME/device_pose (needs --token; each
                           sample must carry it)
@@ -31,13 +34,15 @@ std::vector<std::string> with_dds_flags(std::vector<std::string> flags) {
 }
 
 std::vector<std::string> with_dds_options(std::vector<std::string> valued) {
-  valued.insert(valued.end(), {"dds-domain", "rig", "dds-rate", "dds-volume-max-dim"});
+  valued.insert(valued.end(),
+                {"dds-domain", "rig", "dds-rate", "dds-volume-max-dim", "dds-batch-ms"});
   return valued;
 }
 
 std::unique_ptr<interop::DdsConfig> dds_config_from(const Args& args, double loop_rate_hz) {
   if (!args.has("dds")) {
-    for (const char* key : {"dds-domain", "rig", "dds-rate", "dds-volume-max-dim", "dds-control"})
+    for (const char* key :
+         {"dds-domain", "rig", "dds-rate", "dds-volume-max-dim", "dds-batch-ms", "dds-control"})
       if (args.has(key)) throw UsageError(std::string("--") + key + " needs --dds");
     return nullptr;
   }
@@ -49,6 +54,9 @@ std::unique_ptr<interop::DdsConfig> dds_config_from(const Args& args, double loo
   if (!(config->rate_hz >= 0.0 && config->rate_hz <= 100000.0))
     throw UsageError("--dds-rate must be in [0, 100000] Hz");
   if (config->rate_hz >= loop_rate_hz) config->rate_hz = 0;  // every tick
+  config->batch_ms = args.number("dds-batch-ms", 10.0);
+  if (!(config->batch_ms == 0 || (config->batch_ms >= 1 && config->batch_ms <= 100)))
+    throw UsageError("--dds-batch-ms must be 0 (off) or in 1..100 ms");
   const double dim = args.number("dds-volume-max-dim", 128);
   if (!(dim >= 0 && dim <= 1024) || dim != static_cast<int>(dim))
     throw UsageError("--dds-volume-max-dim must be an integer in 0..1024");
@@ -79,10 +87,11 @@ std::shared_ptr<interop::DdsPublisher> dds_beside(const Args& args,
   if (!quiet) {
     std::printf(
         "palpd: DDS domain %u, rig %s: "
-        "rt/palp/%s/{frames,frames_contacts,tool_pose,wrench,scene,stats%s}"
+        "rt/palp/%s/{frames,frames_contacts%s,tool_pose,wrench,scene,stats%s}"
         "%s at %s\n",
         config->domain, config->rig.c_str(), config->rig.c_str(),
-        config->volume_max_dim ? ",volume" : "", config->control ? ", reading device_pose" : "",
+        config->batch_ms > 0 ? ",frame_batch" : "", config->volume_max_dim ? ",volume" : "",
+        config->control ? ", reading device_pose" : "",
         config->rate_hz > 0 ? (std::to_string(config->rate_hz) + " Hz").c_str() : "every tick");
     std::fflush(stdout);
   }

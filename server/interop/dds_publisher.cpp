@@ -13,6 +13,7 @@
 
 #include "base/errors.hpp"
 #include "dds_common.hpp"
+#include "interop/dds_batch.hpp"
 #include "loop/wake.hpp"
 #include "net/scene_messages.hpp"
 #include "net/token_guard.hpp"
@@ -63,6 +64,14 @@ class DdsPublisher::Impl {
                      config_.depth);
     full_ = writer(&palp_dds_HapticFrame_desc, topic_name(rig, kFramesContacts), QosKind::Stream,
                    config_.depth);
+    if (config_.batch_ms > 0) {
+      batch_ = writer(&palp_dds_FrameBatch_desc, topic_name(rig, kFrameBatch), QosKind::Stream,
+                      config_.depth);
+      const double hz = config_.rate_hz > 0 ? config_.rate_hz : loop.config().rate_hz;
+      batcher_ = std::make_unique<FrameBatcher>(
+          rig, static_cast<std::int64_t>(config_.batch_ms * 1e6 + 0.5),
+          hz > 0 ? static_cast<std::int64_t>(1e9 / hz + 0.5) : 0);
+    }
     pose_ = writer(&geometry_msgs_msg_dds__PoseStamped__desc, topic_name(rig, kToolPose),
                    QosKind::Stream, config_.depth);
     wrench_ = writer(&geometry_msgs_msg_dds__WrenchStamped__desc, topic_name(rig, kWrench),
@@ -123,10 +132,10 @@ class DdsPublisher::Impl {
     if (config_.report) {
       const DdsCounters c = counters();
       std::printf(
-          "palpd: DDS rig %s: %llu frames published, %llu dropped before publishing, %llu "
-          "write errors, %u subscribers at the end\n",
+          "palpd: DDS rig %s: %llu frames published, %llu batches, %llu dropped before "
+          "publishing, %llu write errors, %u subscribers at the end\n",
           config_.rig.c_str(), static_cast<unsigned long long>(c.published),
-          static_cast<unsigned long long>(c.dropped),
+          static_cast<unsigned long long>(c.batches), static_cast<unsigned long long>(c.dropped),
           static_cast<unsigned long long>(c.write_errors), c.subscribers);
       std::fflush(stdout);
     }
@@ -140,8 +149,14 @@ class DdsPublisher::Impl {
       if (next_ns_ <= t) next_ns_ = t + interval_ns_;
     }
     // Every kept snapshot gets the next frame index, published or not: a snapshot dropped here
-    // shows as a gap to subscribers, like one lost on the network.
-    const std::uint64_t index = offered_.fetch_add(1, std::memory_order_relaxed);
+    // shows as a gap to subscribers, like one lost on the network. Publishing every tick, ticks
+    // the loop's ring to the io thread dropped (a jump in seq) take indices too.
+    std::uint64_t skipped = 0;
+    if (interval_ns_ == 0 && seen_ && s.tick.seq > last_seq_ + 1)
+      skipped = s.tick.seq - last_seq_ - 1;
+    seen_ = true, last_seq_ = s.tick.seq;
+    const std::uint64_t index =
+        offered_.fetch_add(1 + skipped, std::memory_order_relaxed) + skipped;
     rt::Snapshot* slot = ring_.claim();
     if (!slot) return;  // counted by the ring
     indices_[claimed_++ & (indices_.size() - 1)] = index;
@@ -160,6 +175,7 @@ class DdsPublisher::Impl {
     c.offered = offered_.load(std::memory_order_relaxed);
     c.dropped = ring_.dropped();
     c.published = published_.load(std::memory_order_relaxed);
+    c.batches = batches_.load(std::memory_order_relaxed);
     c.write_errors = write_errors_.load(std::memory_order_relaxed);
     c.scene_versions = scene_version_.load(std::memory_order_relaxed);
     c.volume_chunks = volume_chunks_;
@@ -168,6 +184,8 @@ class DdsPublisher::Impl {
     dds_publication_matched_status_t st{};
     if (dds_get_publication_matched_status(frames_, &st) >= 0) c.subscribers = st.current_count;
     if (dds_get_publication_matched_status(full_, &st) >= 0) c.subscribers += st.current_count;
+    if (batch_ && dds_get_publication_matched_status(batch_, &st) >= 0)
+      c.subscribers += st.current_count;
     return c;
   }
 
@@ -189,10 +207,14 @@ class DdsPublisher::Impl {
       if (ring_.front()) continue;
       std::int64_t wait_ms = (next_stats - rt::monotonic_ns()) / 1000000 + 1;
       if (control_r_) wait_ms = std::min<std::int64_t>(wait_ms, 5);
+      if (batcher_ && batcher_->size() > 0)
+        wait_ms = std::min<std::int64_t>(wait_ms, static_cast<std::int64_t>(config_.batch_ms) + 1);
       pollfd pfd{signal_.fd(), POLLIN, 0};
       ::poll(&pfd, 1, static_cast<int>(std::clamp<std::int64_t>(wait_ms, 0, 1000)));
       signal_.consume();
     }
+    drain();
+    if (batcher_ && batcher_->size() > 0) write_batch();  // the last, partial batch
   }
 
   void drain() {
@@ -202,6 +224,8 @@ class DdsPublisher::Impl {
     // A topic nobody reads is not written (serialising a frame costs even without readers).
     const bool want_frames = matched(frames_), want_full = matched(full_);
     const bool want_pose = matched(pose_), want_wrench = matched(wrench_);
+    const bool want_batch = batch_ && matched(batch_);
+    if (batcher_ && !want_batch) batcher_->drop();  // its readers left
     while (const rt::Snapshot* s = ring_.front()) {
       const rt::TickRecord& t = s->tick;
       const auto stamp = to_time(t.t_ns + offset);
@@ -231,6 +255,15 @@ class DdsPublisher::Impl {
         count(dds_write(full_, &f));
       }
       published_.fetch_add(1, std::memory_order_relaxed);
+      if (want_batch) {
+        const palp_dds_BatchFrame b{
+            f.frame_index,    f.seq,         f.server_time_ns, f.stamp, f.position,
+            f.orientation,    f.force,       f.torque,         f.u,     f.n_contact,
+            f.contact_points, f.tick_status, f.safety_status,  f.fault, f.device_state};
+        if (batcher_->due_before(b.server_time_ns)) write_batch();
+        batcher_->add(b);
+        if (batcher_->complete()) write_batch();
+      }
 
       // ROS 2: metres, newtons, newton-metres.
       char frame_id[sizeof kFrameId];
@@ -250,6 +283,13 @@ class DdsPublisher::Impl {
       if (want_wrench) count(dds_write(wrench_, &wrench));
       ring_.pop();
     }
+    if (want_batch && batcher_->stale(rt::monotonic_ns())) write_batch();  // no frame coming
+  }
+
+  void write_batch() {
+    count(dds_write(batch_, &batcher_->sample()));
+    batcher_->clear();
+    batches_.fetch_add(1, std::memory_order_relaxed);
   }
 
   static bool matched(dds_entity_t writer) {
@@ -358,9 +398,10 @@ class DdsPublisher::Impl {
   rt::WakeSignal signal_;
   std::vector<std::uint64_t> indices_;  // frame index of each ring slot (same size, same order)
   std::vector<palp_dds_Contact> contacts_;
+  std::unique_ptr<FrameBatcher> batcher_;  // with batch_ms
   palp::dds::Entity participant_;
-  dds_entity_t frames_ = 0, full_ = 0, pose_ = 0, wrench_ = 0, scene_w_ = 0, stats_w_ = 0,
-               rigs_w_ = 0, volume_w_ = 0, control_r_ = 0;
+  dds_entity_t frames_ = 0, full_ = 0, batch_ = 0, pose_ = 0, wrench_ = 0, scene_w_ = 0,
+               stats_w_ = 0, rigs_w_ = 0, volume_w_ = 0, control_r_ = 0;
   std::string host_, tool_, scene_bytes_;
   std::vector<std::vector<std::uint8_t>> volume_;
   std::int64_t started_ns_ = 0;
@@ -370,12 +411,13 @@ class DdsPublisher::Impl {
   std::int64_t interval_ns_ = config_.rate_hz > 0 ? static_cast<std::int64_t>(1e9 / config_.rate_hz)
                                                   : 0;
   std::int64_t next_ns_ = 0;
-  std::uint64_t claimed_ = 0;
+  std::uint64_t claimed_ = 0, last_seq_ = 0;
+  bool seen_ = false;
   std::atomic<std::uint64_t> offered_{0};
   // DDS thread
   std::uint64_t popped_ = 0, stats_version_ = 0, last_ticks_ = 0;
   std::int64_t last_stats_ns_ = 0, last_refusal_log_ns_ = 0;
-  std::atomic<std::uint64_t> published_{0}, write_errors_{0}, scene_version_{0};
+  std::atomic<std::uint64_t> published_{0}, batches_{0}, write_errors_{0}, scene_version_{0};
   std::atomic<std::uint64_t> poses_accepted_{0}, poses_refused_{0};
   std::size_t volume_chunks_ = 0;
 };

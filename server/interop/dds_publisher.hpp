@@ -5,7 +5,8 @@
 //                               0), copies it into a preallocated ring (full: dropped, counted)
 //                               and signals an eventfd; never waits, never allocates
 //   DDS thread                  drains the ring: HapticFrame (without and with contacts),
-//                               PoseStamped and WrenchStamped per snapshot (best-effort,
+//                               PoseStamped and WrenchStamped per snapshot, FrameBatch per
+//                               batch_ms of loop time (dds_batch.hpp) (best-effort,
 //                               keep-last; a topic without readers is skipped); Stats every stats
 //                               interval and SceneInfo again when it changed (reliable,
 //                               transient-local); with control, the device poses of
@@ -30,26 +31,29 @@ namespace palp::interop {
 struct DdsConfig {
   std::uint32_t domain = 0;
   std::string rig = "palp";
-  double rate_hz = 0;                  // frames per second of loop time (0: every tick)
-  std::int32_t depth = 4;              // keep-last depth of the frame, pose and wrench writers
+  double rate_hz = 0;      // frames per second of loop time (0: every tick)
+  std::int32_t depth = 4;  // keep-last depth of the frame, pose and wrench writers
+  double batch_ms = 10;    // frame_batch: the frames of this much loop time per sample (0: none)
   double stats_interval_s = 1.0;       // Stats (and a look for a changed scene) this often
   std::uint32_t volume_max_dim = 128;  // render volume: voxels per axis at most (0: none)
-  std::size_t queue = 256;  // snapshots between the io thread and the DDS thread (256 ms at 1 kHz)
+  std::size_t queue = 1024;  // snapshots between the io thread and the DDS thread (1 s at 1 kHz)
   bool control = false;     // read rt/palp/<rig>/device_pose
   std::string token;        // with control: the token a DevicePose must carry
   bool report = true;       // a line of counters on stdout when it stops
 };
 
 struct DdsCounters {
-  std::uint64_t offered = 0;    // kept by offer() (one per 1/rate of loop time)
+  std::uint64_t offered =
+      0;  // frame indices given: kept by offer(), and every tick ticks lost before
   std::uint64_t dropped = 0;    // the ring to the DDS thread was full
   std::uint64_t published = 0;  // HapticFrames written
+  std::uint64_t batches = 0;    // FrameBatches written
   std::uint64_t write_errors = 0;
   std::uint64_t scene_versions = 0;
   std::uint64_t volume_chunks = 0;
   std::uint64_t poses_accepted = 0;
   std::uint64_t poses_refused = 0;  // wrong token, wrong rig, or a device that is not remote
-  std::uint32_t subscribers = 0;    // readers matched on the two frames topics now
+  std::uint32_t subscribers = 0;    // readers matched on the frames topics now (batch included)
 };
 
 class DdsPublisher {

@@ -90,6 +90,53 @@ TEST_F(PalpdDds, ProbeGetsEveryTopicAndListsTheRig) {
   fs::remove_all(dir);
 }
 
+// frame_batch (--dds-batch-ms): a batch subscriber gets every frame index, in order, each
+// batch at most the frames of 10 ms of loop time, nearly all of them full (the first may be
+// partial: the subscriber joined in it; a late tick may shift a boundary).
+TEST_F(PalpdDds, BatchSubscriberGetsEveryFrameContiguous) {
+  const fs::path dir = temp_dir("batch");
+  const std::string domain = std::to_string(unique_dds_domain());
+  const int port = start_palpd("--scene phantom:cube --device sim --port 0 --duration 8 --dds " +
+                                   domain + " --rig batch --dds-batch-ms 10 --dds-volume-max-dim 0",
+                               dir / "palpd.log");
+  ASSERT_GT(port, 0) << testing::read_text(dir / "palpd.log");
+  EXPECT_NE(testing::read_text(dir / "palpd.log").find("frames_contacts,frame_batch,"),
+            std::string::npos);
+  dds::SubscriberOptions o;
+  o.domain = static_cast<std::uint32_t>(std::stoi(domain));
+  o.rig = "batch";
+  o.batch = true;
+  o.scene = o.stats = false;
+  dds::RigSubscriber sub(o);
+  std::uint64_t frames = 0, first = 0, last = 0, breaks = 0, seq = 0;
+  dds::Handlers h;
+  h.frame = [&](const palp_dds_HapticFrame& f, std::int64_t) {
+    EXPECT_STREQ(f.rig, "batch");
+    if (frames == 0)
+      first = f.frame_index;
+    else if (f.frame_index != last + 1 || f.seq <= seq)
+      ++breaks;
+    last = f.frame_index, seq = f.seq;
+    ++frames;
+  };
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (std::chrono::steady_clock::now() < end) {
+    if (!sub.wait(0.05)) continue;
+    sub.take(h);
+  }
+  sub.take(h);
+  EXPECT_EQ(breaks, 0u) << "frames " << first << ".." << last << ", " << frames << " taken";
+  EXPECT_EQ(frames, last - first + 1);
+  EXPECT_GT(frames, 1000u);  // about 3 s at 1 kHz, after discovery
+  const std::uint64_t batches = sub.batches();
+  EXPECT_GE(frames, 9 * batches) << batches << " batches";
+  EXPECT_LE(frames, 10 * batches) << batches << " batches";
+  EXPECT_TRUE(testing::wait_palpd_exit(dir / "palpd.log"));
+  EXPECT_NE(testing::read_text(dir / "palpd.log").find(" batches, "), std::string::npos)
+      << testing::read_text(dir / "palpd.log");
+  fs::remove_all(dir);
+}
+
 // Writes DevicePoses at `where` with `token` for `seconds` while taking frames; true when a
 // frame showed the device there.
 bool drive(const std::string& domain, const std::string& token, Vec3d where, double seconds) {
@@ -157,6 +204,15 @@ TEST_F(PalpdDds, OptionErrorsSayWhatIsWrong) {
   const auto domain = run_command(palpd + " --scene phantom:cube --device sim --dds 300 2>&1");
   EXPECT_EQ(domain.exit_code, 2);
   EXPECT_NE(domain.output.find("0..232"), std::string::npos) << domain.output;
+  const auto batch =
+      run_command(palpd + " --scene phantom:cube --device sim --dds --dds-batch-ms 101 2>&1");
+  EXPECT_EQ(batch.exit_code, 2);
+  EXPECT_NE(batch.output.find("--dds-batch-ms must be 0 (off) or in 1..100 ms"), std::string::npos)
+      << batch.output;
+  const auto both =
+      run_command(std::string(PALP_CLI_PATH) + " probe --dds 3 --batch --contacts 2>&1");
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_NE(both.output.find("use one of --batch, --contacts"), std::string::npos) << both.output;
   const auto rig = run_command(palpd + " --scene phantom:cube --device sim --dds --rig a-b 2>&1");
   EXPECT_EQ(rig.exit_code, 2);
   EXPECT_NE(rig.output.find("rig name 'a-b'"), std::string::npos) << rig.output;
