@@ -69,6 +69,7 @@ class VolumeCache {
     std::weak_ptr<Frames> frames;
     std::shared_ptr<std::atomic<bool>> done;
   };
+  static void yield_to_live_frames();
   void encode(const std::weak_ptr<Frames>& frames) const;
 
   const SceneDescription& scene_;

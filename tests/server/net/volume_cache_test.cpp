@@ -3,7 +3,11 @@
 #include "net/volume_cache.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <thread>
 
@@ -56,6 +60,19 @@ TEST(VolumeCache, FramesAreTheChunksEncodedOnceAndShared) {
   // The same plan again: the same frames, nothing encoded again.
   EXPECT_EQ(cache.get(cache.plan({1, 0, true, false, true, true})), frames);
   EXPECT_EQ(notified.load(), static_cast<int>(plan.chunks));
+}
+
+TEST(VolumeCache, EncodersRunTenNiceLevelsBelowTheIoThread) {
+  const SceneDescription scene = ball_scene();
+  const int io_nice = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
+  std::atomic<int> encoder_nice{-100};
+  VolumeCache cache(  // notify runs on the encoder thread that finished a chunk
+      scene, 4096, [&] { encoder_nice = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid())); },
+      false, 1);
+  const auto frames = cache.get(cache.plan({1, 0, true, false, true, true}));
+  wait_encoded(*frames);
+  EXPECT_EQ(encoder_nice.load(), std::min(19, io_nice + 10));
+  EXPECT_EQ(getpriority(PRIO_PROCESS, static_cast<id_t>(gettid())), io_nice);  // the caller's kept
 }
 
 TEST(VolumeCache, KeepsAtMostMaxPlansAndAHolderKeepsItsFrames) {
