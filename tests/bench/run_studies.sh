@@ -93,10 +93,10 @@ charts() {
   # The palp model beside the paper's (study_force_model, docs/force_model.md).
   want force_model && for scene in torso ct; do
     grep -q "^$scene," "$data/force_model_contrast_ratio.csv" || continue
-    local what="torso phantom, 4 paths, 3 ribs each" legend=tr
-    [[ $scene == ct ]] && what="real CT (3 mm), lower right ribs" legend=tl
+    local what="torso phantom, 4 paths, 3 ribs each"
+    [[ $scene == ct ]] && what="real CT (3 mm), lower right ribs"
     "$chart" "${c[@]}" --csv "$data/force_model_contrast_ratio.csv" --where scene=$scene \
-      --x depth_mm --y ratio_median --group series --style line --legend $legend \
+      --x depth_mm --y ratio_median --group series --style line --legend tr --logy \
       --xlabel "pad depth under the skin (mm), pressed along the skin normal" \
       --ylabel "pressing force over a rib / over the next space (median)" \
       --title "Rib contrast, $what (goal for palp: >= 1.5 at 6 mm)" \
@@ -197,7 +197,7 @@ if [[ $charts_only == 0 ]]; then
   want passivity && awk '/stable from/ { key = $1 " " $2 " " $3; n[key]++; if ($0 ~ /never/) bad[key]++ }
        END { for (k in n) printf "passivity %-32s %d of %d hand forces unstable at every rate\n",
                                  k, bad[k], n[k] }' "$data/passivity.log" | sort
-  want force_model && { grep -h -E "^  (paper|palp)|^friction|^creep|^bound|^smooth" "$data/force_model.log" || true; }
+  want force_model && { grep -h -E "^  (paper|palp|bone N)|^friction|^creep|^bound|^smooth" "$data/force_model.log" || true; }
   want pop_through && { grep -h "^  tunnel" "$data/pop_through.log" || true; }
   want stability && awk -F, 'NR > 1 && $1 == "all" && $3 >= 1000 {
        printf "stability %-13s %5d Hz: worst p2p %.3g mm (%s), worst step %.3g x bound, %d of %d runs not held\n",

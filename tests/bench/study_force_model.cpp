@@ -13,7 +13,9 @@
 //    normal from 2 mm above the skin to a pad depth of 2..12 mm (0.5 s at 1 kHz) and held 0.1 s;
 //    the pressing force is f_device . n over the last 50 ticks, also with the bone off (CSV).
 //    Ratio: every crest against each neighbouring space; median and smallest over all paths. Beside
-//    palp's own set, palp measured with the bone law reaching 5 (printed), 6 and 10 mm.
+//    palp's own set (reach 9 mm), palp measured with the bone law reaching 5 (printed), 6, 8 and
+//    10 mm. The cost of the reach: the bone's share of the pressing force (force - skin-only
+//    force) at the crests and at the sites with no bone within 20 mm beneath the skin point.
 // 2. Friction  flat skin (1 mm voxels, bone off), finger:1 at 1 kHz unless said: a slide at 4 mm
 //    at 100..800 mm/s (mean lateral force over the second half of 40 mm); the same at 200 and
 //    800 mm/s at 1..10 kHz; press to 1..8 mm, shift sideways by half the model's breakaway
@@ -29,9 +31,9 @@
 // 4. Contact count  a skin ball (R 30 mm): finger:1/7/19/37 pressed along the radius to
 //    2..8 mm, the pressing force against finger:1's (the paper claims independence of the count).
 //
-// Writes force_model_contrast.csv, force_model_contrast_ratio.csv, force_model_friction.csv,
-// force_model_creep.csv, force_model_contacts.csv and force_model_smooth.csv. Skips the CT parts
-// when the file is absent.
+// Writes force_model_contrast.csv, force_model_contrast_ratio.csv, force_model_bone_cost.csv,
+// force_model_friction.csv, force_model_creep.csv, force_model_contacts.csv and
+// force_model_smooth.csv. Skips the CT parts when the file is absent.
 //
 //   study_force_model [--out DIR] [--quick]
 // PALP_CT: the CT (default ../shared/data/ct_abdomen_3mm.nii.gz).
@@ -93,6 +95,9 @@ struct Site {
   bool rib = false;
   SkinFrame frame;
 };
+
+// mm: a site with no bone within this beneath its skin point counts as far from bone.
+constexpr double kFarFromBone = 20.0;
 
 // Rib crests and intercostal spaces along the ribs path, in path order.
 std::vector<Site> find_sites(const FieldSampler& f, const RibsSpec& spec, const BodyAxis& axis) {
@@ -164,7 +169,7 @@ double press_force(const Model& model, State& st, const SkinFrame& frame, double
 
 void contrast(const std::string& scene_name, const std::string& scene,
               const std::vector<RibsSpec>& specs, const std::vector<double>& depths, Csv& csv,
-              Csv& ratio_csv) {
+              Csv& ratio_csv, Csv& cost_csv) {
   const std::vector<Variant> vars = variants_for(scene);
   // Sites per path (ratios only within a path).
   std::vector<std::vector<Site>> paths;
@@ -195,7 +200,7 @@ void contrast(const std::string& scene_name, const std::string& scene,
       series.push_back(
           {&v, prm, std::string(to_string(v.model)) + ", " + tool_name, to_string(v.model)});
       if (v.model != ModelKind::Palp) continue;
-      for (double r : {5.0, 6.0, 10.0}) {
+      for (double r : {5.0, 6.0, 8.0, 10.0}) {
         ForceParams reach = prm;
         reach.bone_reach_mm = r;
         char name[96];
@@ -203,23 +208,37 @@ void contrast(const std::string& scene_name, const std::string& scene,
         series.push_back({&v, reach, name, "palp variant"});
       }
     }
+    // The skin-only force does not depend on the bone's reach: palp's is kept for its variants.
+    std::vector<double> palp_skin;
     for (const Series& se : series) {
       ForceParams skin_only = se.prm;
       skin_only.bone_enabled = false;
       const Model model(se.v->fields, tool, se.prm), skin_model(se.v->fields, tool, skin_only);
       State st = make_state(model), st_skin = make_state(skin_model);
+      const bool variant = se.model == "palp variant";
+      std::size_t skin_i = 0;
+      std::vector<std::string> cost_lines;
       std::printf("  %-46s", se.name.c_str());
       for (double d : depths) {
-        std::vector<double> ratios;
+        std::vector<double> ratios, bone_crest, bone_far;
         for (std::size_t pi = 0; pi < paths.size(); ++pi) {
           const std::vector<Site>& sites = paths[pi];
           std::vector<double> force;
           for (const Site& s : sites) {
             force.push_back(press_force(model, st, s.frame, d, offset));
-            if (se.model == "palp variant") continue;
-            const double skin = press_force(skin_model, st_skin, s.frame, d, offset);
-            csv.row({scene_name, std::string(tool_name), se.model, specs[pi].azimuth_deg, d,
-                     s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin});
+            double skin = 0.0;
+            if (variant) {
+              skin = palp_skin.at(skin_i++);
+            } else {
+              skin = press_force(skin_model, st_skin, s.frame, d, offset);
+              if (se.model == "palp") palp_skin.push_back(skin);
+              csv.row({scene_name, std::string(tool_name), se.model, specs[pi].azimuth_deg, d,
+                       s.rib ? "rib" : "intercostal", s.pos_mm, s.below, force.back(), skin});
+            }
+            // The bone's share of the pressing force, at crests and where no bone lies within
+            // kFarFromBone beneath the skin point (what a longer reach costs).
+            if (s.rib) bone_crest.push_back(force.back() - skin);
+            if (s.below > kFarFromBone) bone_far.push_back(force.back() - skin);
           }
           for (std::size_t i = 0; i < sites.size(); ++i) {
             if (sites[i].rib) continue;
@@ -231,6 +250,16 @@ void contrast(const std::string& scene_name, const std::string& scene,
         ratio_csv.row({scene_name, std::string(tool_name), se.model, se.name, d, med, lo,
                        static_cast<double>(ratios.size())});
         std::printf(" %g:%.2f(%.2f)", d, med, lo);
+        const double far_med = median(bone_far), far_max = percentile(bone_far, 1.0);
+        const double crest_med = median(bone_crest);  // NaN where none
+        const double reach =
+            se.prm.model == ModelKind::Palp ? se.prm.bone_reach_mm : std::nan("");  // paper: none
+        cost_csv.row({scene_name, std::string(tool_name), se.name, reach, d, crest_med,
+                      static_cast<double>(bone_crest.size()), far_med, far_max,
+                      static_cast<double>(bone_far.size())});
+        char line[160];
+        std::snprintf(line, sizeof line, " %g:%.2f/%.2f(%.2f)", d, crest_med, far_med, far_max);
+        cost_lines.emplace_back(line);
       }
       std::printf("   [depth mm: median (smallest) rib / space, %zu pairs]\n", [&] {
         std::size_t n = 0;
@@ -240,6 +269,12 @@ void contrast(const std::string& scene_name, const std::string& scene,
               n += (i > 0 && sites[i - 1].rib) + (i + 1 < sites.size() && sites[i + 1].rib);
         return n;
       }());
+      std::printf("  bone N %-39s", se.name.c_str());
+      for (const std::string& l : cost_lines) std::printf("%s", l.c_str());
+      std::printf(
+          "   [depth mm: bone share of the pressing force, median at crests / median "
+          "(largest) where no bone lies within %g mm beneath]\n",
+          kFarFromBone);
     }
   }
 }
@@ -654,7 +689,11 @@ int main(int argc, char** argv) {
     torso_paths.emplace_back();
     torso_paths.back().azimuth_deg = az;
   }
-  if (want("contrast")) contrast("torso", "phantom:torso", torso_paths, depths, c_csv, r_csv);
+  Csv b_csv(flags.out_dir + "/force_model_bone_cost.csv",
+            {"scene", "tool", "series", "bone_reach_mm", "depth_mm", "crest_bone_median_N",
+             "crests", "far_bone_median_N", "far_bone_max_N", "far_sites"});
+  if (want("contrast"))
+    contrast("torso", "phantom:torso", torso_paths, depths, c_csv, r_csv, b_csv);
   if (have_ct && want("contrast")) {
     std::vector<RibsSpec> ct_paths;
     for (double az = -50.0; az <= 20.0; az += 10.0) {
@@ -663,7 +702,7 @@ int main(int argc, char** argv) {
       ct_paths.back().to = 0.99;
       ct_paths.back().azimuth_deg = az;
     }
-    contrast("ct", ct, ct_paths, depths, c_csv, r_csv);
+    contrast("ct", ct, ct_paths, depths, c_csv, r_csv, b_csv);
   }
   std::printf("contrast: %.1f s\n", now_seconds() - t0);
 

@@ -112,7 +112,7 @@ TEST(PalpModel, BoneIsFeltAlongTheSkinNormalAndFadedIn) {
     State st = make_state(model);
     tick(model, st, press(d));
     const double fade = d >= 4.0 ? 1.0 : (d / 4.0) * (d / 4.0) * (3.0 - 2.0 * d / 4.0);
-    EXPECT_NEAR(st.f_bone[0].z, bone_force((gap - d) * 5.0 / 8.0, 40.0) * fade, 1e-3) << d;
+    EXPECT_NEAR(st.f_bone[0].z, bone_force((gap - d) * 5.0 / 9.0, 40.0) * fade, 1e-3) << d;
     EXPECT_NEAR(st.f_bone[0].x, 0.0, 1e-9) << d;
   }
   // First contact brings no step: 0.01 mm in, the bone adds under 0.001 N (paper: 2.47 N).
@@ -278,6 +278,8 @@ TEST(PalpModel, PaperIsTheDefaultAndPalpIsNamed) {
   EXPECT_EQ(default_params(ToolKind::Finger).model, ModelKind::Paper);
   EXPECT_EQ(palp_params(ToolKind::Finger).model, ModelKind::Palp);
   EXPECT_EQ(palp_params(ToolKind::Finger).bone_mode, BoneMode::Robust);
+  EXPECT_EQ(palp_params(ToolKind::Finger).bone_reach_mm, 9.0);  // the rib-contrast study's choice
+  EXPECT_EQ(palp_params(ToolKind::Probe).bone_reach_mm, 9.0);
   EXPECT_EQ(palp_params(ToolKind::Probe).mu, 0.2);
   EXPECT_EQ(parse_model_kind("palp"), ModelKind::Palp);
   EXPECT_STREQ(to_string(ModelKind::Paper), "paper");
