@@ -94,7 +94,8 @@ struct ForceParams {
   double bone_fade_mm = 4.0;      // palp: skin depth over which the bone force fades in (0: none)
   bool bone_along_normal = true;  // palp: bone distance along the skin normal
   // palp: the printed bone law's 5 mm (f_b = 20 (x / 5)^-3) made this reach, so ribs 15-20 mm
-  // under the skin stand out at working depths (docs/force_model.md, "Rib contrast")
+  // under the skin stand out at working depths (docs/force_model.md, "Rib contrast"). palp's
+  // default is palp_params()'s 9 mm; this 8 mm is what a paper model reports (it never reads it).
   double bone_reach_mm = 8.0;
 };
 
