@@ -187,6 +187,76 @@ TEST(Gzip, ZlibStreamsAsInMetaImageCompressedData) {
                     "img.zraw: truncated zlib stream");
 }
 
+// Reads a stream through DecodedReader in uneven chunks (crossing every member boundary).
+std::vector<std::uint8_t> read_unevenly(DecodedReader& reader) {
+  std::vector<std::uint8_t> out;
+  std::vector<std::uint8_t> chunk(3'000'017);
+  for (std::size_t want = 777;; want = want * 3 % chunk.size() + 1) {
+    const std::size_t got = reader.read(chunk.data(), want);
+    out.insert(out.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(got));
+    if (got < want) return out;
+  }
+}
+
+TEST(Gzip, LibdeflateAndZlibMembersMixInOneStream) {
+  // Three small members (libdeflate decodes them whole), one whose output exceeds the fast
+  // path's 8 MiB buffer (zlib takes over), then a small one (zlib from then on).
+  const auto a = sample_bytes(2'500'000);
+  const auto big = sample_bytes(9'000'000);
+  const auto tail = sample_bytes(1000);
+  GzipOptions options;
+  options.member_bytes = 1 << 20;
+  auto file = gzip_compress(ByteSpan(a), options);
+  const auto big_member = zlib_gzip_member(big);
+  const auto tail_member = gzip_compress(ByteSpan(tail), options);
+  file.insert(file.end(), big_member.begin(), big_member.end());
+  file.insert(file.end(), tail_member.begin(), tail_member.end());
+  auto expected = a;
+  expected.insert(expected.end(), big.begin(), big.end());
+  expected.insert(expected.end(), tail.begin(), tail.end());
+
+  DecodedReader from_memory(file, Compression::gzip, "mem");
+  EXPECT_EQ(read_unevenly(from_memory), expected);
+  TempDir dir;
+  write_bytes(dir.file("mixed.gz"), file);
+  DecodedReader from_file(dir.file("mixed.gz"), 0, Compression::gzip);
+  EXPECT_EQ(read_unevenly(from_file), expected);
+  EXPECT_EQ(from_file.position(), expected.size());
+}
+
+TEST(Gzip, DamageInALaterMemberIsStillReported) {
+  // Four members of 1 MiB written by palp; the third one's CRC, then its data, damaged, then
+  // the file cut inside it: the fast path declines and zlib reports what is wrong.
+  const auto data = sample_bytes(4 << 20);
+  GzipOptions options;
+  options.member_bytes = 1 << 20;
+  std::vector<std::uint8_t> file;
+  std::size_t third_begin = 0, third_end = 0;
+  for (int m = 0; m < 4; ++m) {
+    const auto member =
+        gzip_compress(ByteSpan(data).subspan(std::size_t(m) << 20, 1 << 20), options);
+    if (m == 2) third_begin = file.size(), third_end = file.size() + member.size();
+    file.insert(file.end(), member.begin(), member.end());
+  }
+  ASSERT_EQ(decompress(file, Compression::gzip, data.size(), "mem"), data);
+  TempDir dir;
+  auto crc = file;
+  crc[third_end - 6] ^= 0xff;
+  write_bytes(dir.file("crc.gz"), crc);
+  EXPECT_PALP_ERROR(read_file(dir.file("crc.gz"), data.size()), InputError,
+                    "crc.gz: corrupt gzip data (zlib: incorrect data check)");
+  auto bad = file;
+  for (std::size_t i = third_begin + 40; i < third_begin + 60; ++i) bad[i] ^= 0x5a;
+  write_bytes(dir.file("bad.gz"), bad);
+  EXPECT_PALP_ERROR(read_file(dir.file("bad.gz"), data.size()), InputError,
+                    "bad.gz: corrupt gzip data (zlib: ");
+  auto cut = file;
+  cut.resize((third_begin + third_end) / 2);
+  write_bytes(dir.file("cut.gz"), cut);
+  EXPECT_PALP_ERROR(read_file(dir.file("cut.gz"), data.size()), InputError,
+                    "cut.gz: truncated gzip stream");
+}
+
 TEST(Gzip, MissingFileIsNamed) {
   EXPECT_PALP_ERROR(read_file("/nonexistent/x.gz", 100), InputError,
                     "/nonexistent/x.gz: no such file or directory");
