@@ -1,8 +1,9 @@
-// Streaming inflate for reading (raw, gzip with multiple members, zlib) and parallel libdeflate
-// gzip compression for writing. See gzip.hpp.
+// Streaming inflate for reading (raw, gzip with multiple members, zlib) and parallel gzip
+// compression (ISA-L igzip) for writing. See gzip.hpp.
 #include "io/gzip.hpp"
 
 #include <fcntl.h>
+#include <isa-l/igzip_lib.h>
 #include <libdeflate.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -402,27 +403,56 @@ std::vector<std::uint8_t> decompress(ByteSpan bytes, Compression compression, st
 
 namespace {
 
-class DeflateCompressor {
+// One gzip member per call, by ISA-L's igzip (about 4x faster than libdeflate's level 1 on
+// palp's float maps, within a point of its size); libdeflate when igzip cannot (it never should:
+// the buffer holds stored blocks of any input).
+class MemberCompressor {
  public:
-  explicit DeflateCompressor(int level)
-      : compressor_(libdeflate_alloc_compressor(std::clamp(level, 0, 12))) {
-    if (compressor_ == nullptr) throw ResourceError("cannot allocate a gzip compressor");
+  explicit MemberCompressor(int level) : level_(std::clamp(level, 0, 3)) {
+    const std::size_t level_bytes[4] = {ISAL_DEF_LVL0_DEFAULT, ISAL_DEF_LVL1_DEFAULT,
+                                        ISAL_DEF_LVL2_DEFAULT, ISAL_DEF_LVL3_DEFAULT};
+    level_buffer_.resize(level_bytes[level_]);
   }
-  ~DeflateCompressor() { libdeflate_free_compressor(compressor_); }
-  DeflateCompressor(const DeflateCompressor&) = delete;
-  DeflateCompressor& operator=(const DeflateCompressor&) = delete;
 
   // Compresses `in` as one gzip member into `scratch` and returns an exact-size copy.
   std::vector<std::uint8_t> member(ByteSpan in, std::vector<std::uint8_t>& scratch) {
-    scratch.resize(libdeflate_gzip_compress_bound(compressor_, in.size()));
-    const std::size_t n =
-        libdeflate_gzip_compress(compressor_, in.data(), in.size(), scratch.data(), scratch.size());
-    if (n == 0) throw ResourceError("gzip compression failed");
+    // Stored blocks cost 5 bytes per 64 KiB; the gzip header and trailer 18.
+    scratch.resize(in.size() + in.size() / 1024 + 4096);
+    isal_zstream stream;
+    isal_deflate_stateless_init(&stream);
+    stream.level = static_cast<std::uint32_t>(level_);
+    stream.level_buf = level_buffer_.data();
+    stream.level_buf_size = static_cast<std::uint32_t>(level_buffer_.size());
+    stream.gzip_flag = IGZIP_GZIP;
+    stream.end_of_stream = 1;
+    stream.flush = NO_FLUSH;
+    stream.next_in = const_cast<std::uint8_t*>(in.data());
+    stream.avail_in = static_cast<std::uint32_t>(in.size());
+    stream.next_out = scratch.data();
+    stream.avail_out = static_cast<std::uint32_t>(scratch.size());
+    std::size_t n = 0;
+    if (isal_deflate_stateless(&stream) == COMP_OK) {
+      n = stream.total_out;
+    } else {
+      n = libdeflate_member(in, scratch);
+    }
     return {scratch.begin(), scratch.begin() + static_cast<std::ptrdiff_t>(n)};
   }
 
  private:
-  libdeflate_compressor* compressor_;
+  std::size_t libdeflate_member(ByteSpan in, std::vector<std::uint8_t>& scratch) {
+    libdeflate_compressor* compressor = libdeflate_alloc_compressor(1);
+    if (compressor == nullptr) throw ResourceError("cannot allocate a gzip compressor");
+    scratch.resize(libdeflate_gzip_compress_bound(compressor, in.size()));
+    const std::size_t n =
+        libdeflate_gzip_compress(compressor, in.data(), in.size(), scratch.data(), scratch.size());
+    libdeflate_free_compressor(compressor);
+    if (n == 0) throw ResourceError("gzip compression failed");
+    return n;
+  }
+
+  int level_;
+  std::vector<std::uint8_t> level_buffer_;
 };
 
 // Splits the pieces into member-sized spans; at least one (possibly empty) member.
@@ -446,7 +476,7 @@ std::vector<std::vector<std::uint8_t>> compress_members(const std::vector<ByteSp
   parallel_for_chunks(
       static_cast<std::int64_t>(outputs.size()), 1,
       [&](std::int64_t begin, std::int64_t end) {
-        DeflateCompressor compressor(options.level);
+        MemberCompressor compressor(options.level);
         std::vector<std::uint8_t> scratch;
         for (std::int64_t m = begin; m < end; ++m) {
           const auto index = static_cast<std::size_t>(m);

@@ -74,6 +74,32 @@ TEST(Gzip, ParallelMultiMemberOutputIsReadByZlibAndByTheReader) {
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);
 }
 
+TEST(Gzip, EveryLevelAndIncompressibleDataRoundTripThroughZlib) {
+  // Random bytes cannot shrink: the member must still fit (stored blocks) and decode.
+  std::vector<std::uint8_t> noise(3'000'000);
+  std::uint64_t state = 88172645463325252ull;
+  for (auto& b : noise) {
+    state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+    b = static_cast<std::uint8_t>(state);
+  }
+  std::vector<std::uint8_t> text = sample_bytes(2'000'000);
+  TempDir dir;
+  for (int level = 0; level <= 3; ++level) {
+    for (const std::vector<std::uint8_t>* data : {&noise, &text}) {
+      GzipOptions options;
+      options.level = level;
+      options.member_bytes = 1'000'000;
+      const ByteSpan piece(*data);
+      const std::string path = dir.file("level.gz");  // rewritten each time
+      write_file(path, std::span<const ByteSpan>(&piece, 1), true, options);
+      EXPECT_EQ(zlib_gunzip_file(path), *data) << "level " << level;
+      if (data == &text) {
+        EXPECT_LT(std::filesystem::file_size(path), data->size() / 2) << "level " << level;
+      }
+    }
+  }
+}
+
 TEST(Gzip, PiecesStartNewMembersAndConcatenate) {
   const auto a = sample_bytes(1000);
   const auto b = sample_bytes(3000);
