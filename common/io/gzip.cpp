@@ -403,6 +403,16 @@ std::vector<std::uint8_t> decompress(ByteSpan bytes, Compression compression, st
 
 namespace {
 
+// ISA-L's AVX2 / AVX-512 kernels return without VZEROUPPER (libisal 2.30 has none): the calling
+// thread's SSE code afterwards (the distance maps, on the thread that wrote the previous map)
+// then ran up to several times slower on the development VM. Clearing the upper halves ends that.
+void clear_upper_vector_state() {
+#if defined(__x86_64__)
+  static const bool has_avx = __builtin_cpu_supports("avx");
+  if (has_avx) __asm__ volatile("vzeroupper" ::: "memory");
+#endif
+}
+
 // One gzip member per call, by ISA-L's igzip (about 4x faster than libdeflate's level 1 on
 // palp's float maps, within a point of its size); libdeflate when igzip cannot (it never should:
 // the buffer holds stored blocks of any input).
@@ -431,7 +441,9 @@ class MemberCompressor {
     stream.next_out = scratch.data();
     stream.avail_out = static_cast<std::uint32_t>(scratch.size());
     std::size_t n = 0;
-    if (isal_deflate_stateless(&stream) == COMP_OK) {
+    const int rc = isal_deflate_stateless(&stream);
+    clear_upper_vector_state();
+    if (rc == COMP_OK) {
       n = stream.total_out;
     } else {
       n = libdeflate_member(in, scratch);
