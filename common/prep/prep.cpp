@@ -5,8 +5,11 @@
 //   surface points  CT + masks -> iso-surface points on the masks' edges (subvoxel only; the CT
 //                is released after this stage)
 //   d_surf       body (+ skin points) -> signed distance map, written and released before the next
+//                (or written in the background while d_bone is computed, when memory allows)
 //   d_bone       bone (+ bone points) -> signed distance map
 //   prep.json    grid, parameters, counts, timings, peak memory, cache key
+// The CT copy and the masks are written on a background thread (background_writes.hpp) from the
+// moment each is final, while segmentation goes on; they are waited for before the maps.
 #include "prep/prep.hpp"
 
 #include <algorithm>
