@@ -428,7 +428,11 @@ class MemberCompressor {
   std::vector<std::uint8_t> member(ByteSpan in, std::vector<std::uint8_t>& scratch) {
     // Stored blocks cost 5 bytes per 64 KiB; the gzip header and trailer 18.
     scratch.resize(in.size() + in.size() / 1024 + 4096);
-    isal_zstream stream;
+    // Every member starts from zeroed state: igzip's hash tables would otherwise keep entries of
+    // the member this thread compressed before, and the bytes (not their meaning) would depend
+    // on which thread took which member.
+    std::fill(level_buffer_.begin(), level_buffer_.end(), std::uint8_t{0});
+    isal_zstream stream{};
     isal_deflate_stateless_init(&stream);
     stream.level = static_cast<std::uint32_t>(level_);
     stream.level_buf = level_buffer_.data();
