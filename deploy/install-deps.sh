@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   cmake ninja-build g++ pkg-config
-  zlib1g-dev libdeflate-dev libgdcm-dev nlohmann-json3-dev
+  zlib1g-dev libdeflate-dev libisal-dev libgdcm-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   libprotobuf-dev protobuf-compiler libasio-dev libtomlplusplus-dev
   libvtk9-dev libglfw3-dev xvfb xauth libgl1-mesa-dri

@@ -301,6 +301,12 @@ void write_nifti(const std::string& path, const DistanceMap& volume) {
   write_volume(path, volume, ScalarType::f32);
 }
 
+void write_nifti(const std::string& path, const DistanceMap& volume, float lo, float hi) {
+  const ByteSpan bytes(reinterpret_cast<const std::uint8_t*>(volume.data.data()),
+                       volume.data.size() * sizeof(float));
+  write_nifti_file(path, volume.grid, ScalarType::f32, bytes, lo, hi);
+}
+
 DistanceMap read_nifti_float(const std::string& path) {
   return load_volume<float>(read_nifti_header(path));
 }

@@ -26,6 +26,9 @@ std::string ct_voxel_file(const std::string& path);
 void write_nifti(const std::string& path, const CtVolume& volume);
 void write_nifti(const std::string& path, const Mask& volume);
 void write_nifti(const std::string& path, const DistanceMap& volume);
+// The same, with the display range (cal_min / cal_max: the smallest and largest value) known to
+// the caller, which saves a pass over the voxels.
+void write_nifti(const std::string& path, const DistanceMap& volume, float lo, float hi);
 
 // Reads back a NIfTI written by palp (or any other) as float / uint8, for tests and scenes.
 DistanceMap read_nifti_float(const std::string& path);

@@ -1,12 +1,16 @@
 // File bytes with transparent decompression, and fast gzip writing.
 //
 // Reading: DecodedReader streams a file (from any offset) as raw bytes, a gzip stream (several
-// concatenated members allowed) or a zlib stream, inflating with zlib straight into the caller's
-// buffer. Truncated and corrupt streams throw InputError naming the file.
+// concatenated members allowed) or a zlib stream. Gzip members up to 8 MiB (palp's own files)
+// are decoded whole by libdeflate (2-3x faster than zlib); a larger or damaged member, and every
+// member after it, goes through zlib's streaming inflate, whose messages the errors carry.
+// Truncated and corrupt streams throw InputError naming the file.
 //
 // Writing: gzip output is a concatenation of independent members of about 4 MiB of input each,
-// compressed in parallel with libdeflate. A multi-member gzip file is valid gzip (RFC 1952) and
-// is read by zlib, gzip, ITK and nibabel.
+// compressed in parallel with ISA-L's igzip at level 1 (on palp's float maps 4x faster than
+// libdeflate's level 1, files 1-1.5 points of the raw size larger) and written a batch at a time
+// (the compressed bytes in memory stay a few MiB per thread). A multi-member gzip file is valid
+// gzip (RFC 1952) and is read by zlib, gzip, ITK and nibabel.
 #pragma once
 
 #include <cstddef>
@@ -69,7 +73,7 @@ std::vector<std::uint8_t> decompress(ByteSpan bytes, Compression compression, st
                                      const std::string& what);
 
 struct GzipOptions {
-  int level = 1;                                    // libdeflate level 0..12
+  int level = 1;                                    // ISA-L igzip level 0..3
   std::size_t member_bytes = std::size_t{4} << 20;  // input bytes per gzip member
   unsigned threads = default_thread_count();
 };

@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <cmath>
 #include <cstring>
 #include <numeric>
+#include <optional>
 
 #include "base/errors.hpp"
 #include "support/io_test_util.hpp"
@@ -72,6 +74,80 @@ TEST(Gzip, ParallelMultiMemberOutputIsReadByZlibAndByTheReader) {
   EXPECT_EQ(read_file(path, data.size()), data);
   // No temporary file is left behind.
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);
+}
+
+TEST(Gzip, EveryLevelAndIncompressibleDataRoundTripThroughZlib) {
+  // Random bytes cannot shrink: the member must still fit (stored blocks) and decode.
+  std::vector<std::uint8_t> noise(3'000'000);
+  std::uint64_t state = 88172645463325252ull;
+  for (auto& b : noise) {
+    state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+    b = static_cast<std::uint8_t>(state);
+  }
+  std::vector<std::uint8_t> text = sample_bytes(2'000'000);
+  TempDir dir;
+  for (int level = 0; level <= 3; ++level) {
+    for (const std::vector<std::uint8_t>* data : {&noise, &text}) {
+      GzipOptions options;
+      options.level = level;
+      options.member_bytes = 1'000'000;
+      const ByteSpan piece(*data);
+      const std::string path = dir.file("level.gz");  // rewritten each time
+      write_file(path, std::span<const ByteSpan>(&piece, 1), true, options);
+      EXPECT_EQ(zlib_gunzip_file(path), *data) << "level " << level;
+      if (data == &text) {
+        EXPECT_LT(std::filesystem::file_size(path), data->size() / 2) << "level " << level;
+      }
+    }
+  }
+}
+
+#if defined(__x86_64__)
+// XINUSE (XGETBV with ECX = 1): which register states are not in their initial configuration;
+// bit 2: the upper halves of YMM0-15, bit 6: the upper halves of ZMM0-15. nullopt when the CPU
+// cannot say.
+std::optional<std::uint64_t> vector_state_in_use() {
+  unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+  __asm__("cpuid" : "=a"(eax), "=b"(ebx), "=c"(ecx), "=d"(edx) : "a"(1), "c"(0));
+  if (!(ecx & (1u << 27))) return std::nullopt;  // no OSXSAVE
+  __asm__("cpuid" : "=a"(eax), "=b"(ebx), "=c"(ecx), "=d"(edx) : "a"(0xd), "c"(1));
+  if (!(eax & (1u << 2))) return std::nullopt;  // no XGETBV with ECX = 1
+  unsigned lo = 0, hi = 0;
+  __asm__ volatile("xgetbv" : "=a"(lo), "=d"(hi) : "c"(1));
+  return (std::uint64_t{hi} << 32) | lo;
+}
+
+TEST(Gzip, CompressingLeavesNoUpperVectorStateOnTheCallingThread) {
+  // ISA-L's kernels return with the YMM/ZMM upper halves dirty; the SSE code the thread runs
+  // next (a distance map) then ran several times slower. The writer must clear them.
+  if (!vector_state_in_use()) GTEST_SKIP() << "this CPU does not report XINUSE";
+  const auto data = sample_bytes(3'000'000);
+  GzipOptions options;
+  options.threads = 1;  // every member on this thread
+  options.member_bytes = 1 << 20;
+  const auto packed = gzip_compress(ByteSpan(data), options);
+  const std::uint64_t in_use = *vector_state_in_use();
+  EXPECT_EQ(in_use & ((1u << 2) | (1u << 6)), 0u) << "XINUSE " << in_use;
+  EXPECT_EQ(decompress(packed, Compression::gzip, data.size(), "mem"), data);
+}
+#endif
+
+TEST(Gzip, BytesDoNotDependOnWhichThreadCompressedWhichMember) {
+  // One thread compresses every member after the previous one; four take them as they come.
+  // Float data like the maps (smooth values, repeated runs), where stale hash entries would
+  // find other matches.
+  std::vector<float> values(3'000'000);
+  for (std::size_t i = 0; i < values.size(); ++i)
+    values[i] = (i / 5000) % 3 == 0 ? -60.0f : std::round(std::sin(i * 1e-3) * 30720.0f) / 1024.0f;
+  const ByteSpan bytes(reinterpret_cast<const std::uint8_t*>(values.data()),
+                       values.size() * sizeof(float));
+  GzipOptions one;
+  one.threads = 1;
+  one.member_bytes = 256 << 10;
+  GzipOptions four = one;
+  four.threads = 4;
+  const auto reference = gzip_compress(bytes, one);
+  for (int run = 0; run < 4; ++run) EXPECT_EQ(gzip_compress(bytes, four), reference) << run;
 }
 
 TEST(Gzip, PiecesStartNewMembersAndConcatenate) {
@@ -185,6 +261,76 @@ TEST(Gzip, ZlibStreamsAsInMetaImageCompressedData) {
   packed.resize(packed.size() - 10);
   EXPECT_PALP_ERROR(decompress(packed, Compression::zlib, data.size(), "img.zraw"), InputError,
                     "img.zraw: truncated zlib stream");
+}
+
+// Reads a stream through DecodedReader in uneven chunks (crossing every member boundary).
+std::vector<std::uint8_t> read_unevenly(DecodedReader& reader) {
+  std::vector<std::uint8_t> out;
+  std::vector<std::uint8_t> chunk(3'000'017);
+  for (std::size_t want = 777;; want = want * 3 % chunk.size() + 1) {
+    const std::size_t got = reader.read(chunk.data(), want);
+    out.insert(out.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(got));
+    if (got < want) return out;
+  }
+}
+
+TEST(Gzip, LibdeflateAndZlibMembersMixInOneStream) {
+  // Three small members (libdeflate decodes them whole), one whose output exceeds the fast
+  // path's 8 MiB buffer (zlib takes over), then a small one (zlib from then on).
+  const auto a = sample_bytes(2'500'000);
+  const auto big = sample_bytes(9'000'000);
+  const auto tail = sample_bytes(1000);
+  GzipOptions options;
+  options.member_bytes = 1 << 20;
+  auto file = gzip_compress(ByteSpan(a), options);
+  const auto big_member = zlib_gzip_member(big);
+  const auto tail_member = gzip_compress(ByteSpan(tail), options);
+  file.insert(file.end(), big_member.begin(), big_member.end());
+  file.insert(file.end(), tail_member.begin(), tail_member.end());
+  auto expected = a;
+  expected.insert(expected.end(), big.begin(), big.end());
+  expected.insert(expected.end(), tail.begin(), tail.end());
+
+  DecodedReader from_memory(file, Compression::gzip, "mem");
+  EXPECT_EQ(read_unevenly(from_memory), expected);
+  TempDir dir;
+  write_bytes(dir.file("mixed.gz"), file);
+  DecodedReader from_file(dir.file("mixed.gz"), 0, Compression::gzip);
+  EXPECT_EQ(read_unevenly(from_file), expected);
+  EXPECT_EQ(from_file.position(), expected.size());
+}
+
+TEST(Gzip, DamageInALaterMemberIsStillReported) {
+  // Four members of 1 MiB written by palp; the third one's CRC, then its data, damaged, then
+  // the file cut inside it: the fast path declines and zlib reports what is wrong.
+  const auto data = sample_bytes(4 << 20);
+  GzipOptions options;
+  options.member_bytes = 1 << 20;
+  std::vector<std::uint8_t> file;
+  std::size_t third_begin = 0, third_end = 0;
+  for (int m = 0; m < 4; ++m) {
+    const auto member =
+        gzip_compress(ByteSpan(data).subspan(std::size_t(m) << 20, 1 << 20), options);
+    if (m == 2) third_begin = file.size(), third_end = file.size() + member.size();
+    file.insert(file.end(), member.begin(), member.end());
+  }
+  ASSERT_EQ(decompress(file, Compression::gzip, data.size(), "mem"), data);
+  TempDir dir;
+  auto crc = file;
+  crc[third_end - 6] ^= 0xff;
+  write_bytes(dir.file("crc.gz"), crc);
+  EXPECT_PALP_ERROR(read_file(dir.file("crc.gz"), data.size()), InputError,
+                    "crc.gz: corrupt gzip data (zlib: incorrect data check)");
+  auto bad = file;
+  for (std::size_t i = third_begin + 40; i < third_begin + 60; ++i) bad[i] ^= 0x5a;
+  write_bytes(dir.file("bad.gz"), bad);
+  EXPECT_PALP_ERROR(read_file(dir.file("bad.gz"), data.size()), InputError,
+                    "bad.gz: corrupt gzip data (zlib: ");
+  auto cut = file;
+  cut.resize((third_begin + third_end) / 2);
+  write_bytes(dir.file("cut.gz"), cut);
+  EXPECT_PALP_ERROR(read_file(dir.file("cut.gz"), data.size()), InputError,
+                    "cut.gz: truncated gzip stream");
 }
 
 TEST(Gzip, MissingFileIsNamed) {
