@@ -26,18 +26,27 @@ constexpr std::array<std::int64_t, 3> kDims{256, 256, 200};
 constexpr std::array<double, 3> kSpacing{1.6, 1.6, 2.0};
 constexpr double kCentreX = 204.8, kCentreY = 204.8, kSemiX = 180.0, kSemiY = 130.0;
 
-std::vector<float> body_volume() {
-  std::vector<float> v(static_cast<std::size_t>(kDims[0] * kDims[1] * kDims[2]));
-  for (std::int64_t k = 0; k < kDims[2]; ++k)
-    for (std::int64_t j = 0; j < kDims[1]; ++j)
-      for (std::int64_t i = 0; i < kDims[0]; ++i) {
-        const double x = (i * kSpacing[0] - kCentreX) / kSemiX;
-        const double y = (j * kSpacing[1] - kCentreY) / kSemiY;
-        v[i + kDims[0] * (j + kDims[1] * k)] =
-            x * x + y * y < 1.0 ? static_cast<float>(40.0 + 20.0 * std::sin(0.3 * i + 0.2 * k))
-                                : -1000.0f;
+// The elliptic body (soft tissue with a sine texture, `wave_i` and `wave_k` radians a voxel) in
+// air on a grid of `dims` at `spacing`.
+std::vector<float> ellipse_body(const std::array<std::int64_t, 3>& dims,
+                                const std::array<double, 3>& spacing, double wave_i,
+                                double wave_k) {
+  std::vector<float> v(static_cast<std::size_t>(dims[0] * dims[1] * dims[2]));
+  for (std::int64_t k = 0; k < dims[2]; ++k)
+    for (std::int64_t j = 0; j < dims[1]; ++j)
+      for (std::int64_t i = 0; i < dims[0]; ++i) {
+        const double x = (i * spacing[0] - kCentreX) / kSemiX;
+        const double y = (j * spacing[1] - kCentreY) / kSemiY;
+        v[i + dims[0] * (j + dims[1] * k)] =
+            x * x + y * y < 1.0
+                ? static_cast<float>(40.0 + 20.0 * std::sin(wave_i * i + wave_k * k))
+                : -1000.0f;
       }
   return v;
+}
+
+std::vector<float> body_volume() {
+  return ellipse_body(kDims, kSpacing, 0.3, 0.2);
 }
 
 // Contacts of a finger:n pad pressed along +y into the anterior skin at (cx, y_skin, cz).
@@ -108,19 +117,7 @@ BENCHMARK(BM_SkinDeformMargin)
 // The 512 x 512 x 400 CT at 0.8 x 0.8 x 1 mm: the same body.
 constexpr std::array<std::int64_t, 3> kFullDims{512, 512, 400};
 std::vector<float> full_volume() {
-  constexpr std::array<std::int64_t, 3> dims = kFullDims;
-  constexpr std::array<double, 3> spacing{0.8, 0.8, 1.0};
-  std::vector<float> v(static_cast<std::size_t>(dims[0] * dims[1] * dims[2]));
-  for (std::int64_t k = 0; k < dims[2]; ++k)
-    for (std::int64_t j = 0; j < dims[1]; ++j)
-      for (std::int64_t i = 0; i < dims[0]; ++i) {
-        const double x = (i * spacing[0] - kCentreX) / kSemiX;
-        const double y = (j * spacing[1] - kCentreY) / kSemiY;
-        v[i + dims[0] * (j + dims[1] * k)] =
-            x * x + y * y < 1.0 ? static_cast<float>(40.0 + 20.0 * std::sin(0.6 * i + 0.4 * k))
-                                : -1000.0f;
-      }
-  return v;
+  return ellipse_body(kFullDims, {0.8, 0.8, 1.0}, 0.6, 0.4);
 }
 
 // Full resolution (issue 15): the 512 x 512 x 400 CT at 0.8 x 0.8 x 1 mm, finger:37 pressed

@@ -8,26 +8,13 @@
 
 #include "base/errors.hpp"
 #include "prep/segmentation.hpp"
+#include "support/tissue_scene.hpp"
 
 namespace palp {
 namespace {
 
-// Soft tissue (40 HU) filling x, y in [5, 95) of a 100 x 100 x 60 grid at 1 mm, air around it.
-CtVolume tissue_scene() {
-  Grid g;
-  g.dims = {100, 100, 60};
-  CtVolume ct(g, -1000, "test scene");
-  for (std::int64_t k = 0; k < 60; ++k)
-    for (std::int64_t j = 5; j < 95; ++j)
-      for (std::int64_t i = 5; i < 95; ++i) ct.at(i, j, k) = 40;
-  return ct;
-}
-
-void box(CtVolume& ct, Index3 lo, Index3 hi, std::int16_t hu) {
-  for (std::int64_t k = lo[2]; k < hi[2]; ++k)
-    for (std::int64_t j = lo[1]; j < hi[1]; ++j)
-      for (std::int64_t i = lo[0]; i < hi[0]; ++i) ct.at(i, j, k) = hu;
-}
+using testing::box;
+using testing::tissue_scene;
 
 // A cylinder along k of `radius` voxels around (ci, cj), slices [k0, k1).
 void cylinder(CtVolume& ct, double ci, double cj, double radius, std::int64_t k0, std::int64_t k1,

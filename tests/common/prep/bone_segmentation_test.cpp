@@ -32,36 +32,11 @@ struct Measured {
 // crests: expert bone voxels within 30 mm of the body's outside and not in the posterior 30 % of
 // the body's extent along the posterior axis in their slice (the spine's processes).
 Mask superficial_bone(const Mask& truth_bone, const Mask& body) {
-  const Grid& g = body.grid;
-  const PatientAxes axes = patient_axes(g);
-  Mask outside = body;
-  for (auto& v : outside.data) v = v ? 0 : 1;
-  const std::vector<double> to_outside = testing::squared_distance_to(outside);
-  Mask out(g, 0);
-  for (std::int64_t s = 0; s < g.dims[axes.slice]; ++s) {
-    std::int64_t lo = g.dims[axes.posterior], hi = -1;
-    Index3 at{};
-    at[axes.slice] = s;
-    auto each = [&](auto fn) {
-      for (std::int64_t p = 0; p < g.dims[axes.posterior]; ++p)
-        for (std::int64_t l = 0; l < g.dims[axes.lateral]; ++l) {
-          at[axes.posterior] = p;
-          at[axes.lateral] = l;
-          fn(p, g.linear(at[0], at[1], at[2]));
-        }
-    };
-    each([&](std::int64_t p, std::size_t n) {
-      if (body.data[n]) lo = std::min(lo, p), hi = std::max(hi, p);
-    });
-    if (hi < 0) continue;
-    const double extent = static_cast<double>(hi - lo);
-    each([&](std::int64_t p, std::size_t n) {
-      if (!truth_bone.data[n] || to_outside[n] > 30.0 * 30.0) return;
-      const double towards_back =
-          axes.posterior_increasing ? static_cast<double>(p - lo) : static_cast<double>(hi - p);
-      if (towards_back <= 0.7 * extent) out.data[n] = 1;
-    });
-  }
+  const std::vector<std::uint8_t> region = testing::body_regions(body);
+  Mask out(body.grid, 0);
+  for (std::size_t n = 0; n < out.data.size(); ++n)
+    out.data[n] =
+        truth_bone.data[n] && region[n] == static_cast<std::uint8_t>(testing::Region::superficial);
   return out;
 }
 

@@ -35,7 +35,7 @@ TEST(HuLevels, FindsThePeakAndShiftsTheLevelsByItsOffset) {
   const HuLevels at50 = estimate_hu_levels(ct, body);
   ASSERT_TRUE(at50.peak_found);
   EXPECT_NEAR(at50.soft_peak_hu, 50.0, 4.0);  // the ripple's flat top: its first HU
-  EXPECT_NEAR(at50.peak_share, 0.75, 1e-9);  // the fat column x < 10 is the rest
+  EXPECT_NEAR(at50.peak_share, 0.75, 1e-9);   // the fat column x < 10 is the rest
   const HuLevels at80 = estimate_hu_levels(block(80), body);
   EXPECT_EQ(at80.soft_peak_hu - at50.soft_peak_hu, 30.0);
   EXPECT_EQ(at80.offset_hu, at80.soft_peak_hu - 50.0);
