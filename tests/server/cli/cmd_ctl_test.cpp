@@ -23,7 +23,8 @@ TEST(CmdCtl, ATrialFromOneConsole) {
   fs::create_directories(dir);
   const fs::path log = dir / "palpd.log", rec = dir / "recordings";  // made by palpd
   const int port = testing::start_palpd(
-      "--scene phantom:sphere --device sim --port 0 --duration 8 "
+      // 20 s: the trial's ten console commands took 8.5 s on a loaded machine, past an 8 s palpd
+      "--scene phantom:sphere --device sim --port 0 --duration 20 "
       "--no-realtime --record-dir " +
           rec.string(),
       log);
