@@ -67,10 +67,15 @@ void ChainMail::resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h
       link_min_[c][a] = c == a ? (params_.min_stretch - 1.0) * h[a] : -params_.max_shear * h[a];
       link_max_[c][a] = c == a ? (params_.max_stretch - 1.0) * h[a] : params_.max_shear * h[a];
     }
-  const auto count = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
-  for (auto& d : disp_) d.resize(count, 0.0);
-  upper_.resize(count);
-  lower_.resize(count);
+  count_ = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
+  reserve(count_);  // the buffers never shrink: a box that grows back costs no zeroing
+}
+
+void ChainMail::reserve(std::size_t elements) {
+  if (disp_[0].size() >= elements) return;
+  for (auto& d : disp_) d.resize(elements, 0.0);  // beyond the box: 0, as the box's own
+  upper_.resize(elements);
+  lower_.resize(elements);
 }
 
 void ChainMail::reset() {

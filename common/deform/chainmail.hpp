@@ -56,10 +56,10 @@ class ChainMail {
   explicit ChainMail(ChainMailParams params = {});
 
   // A box of dims elements at rest spacing h (mm), every element at rest. Keeps the allocation
-  // when it shrinks. `origin`: the box's first element in a larger lattice (a region of interest
-  // that moves with the tool): the red-black colours of the relaxation follow the parity of
-  // origin + local index, so where the box starts does not change the result. UsageError for a
-  // non-positive dimension or spacing.
+  // (and its size: every element beyond the box stays at rest) when it shrinks. `origin`: the box's
+  // first element in a larger lattice (a region of interest that moves with the tool): the
+  // red-black colours of the relaxation follow the parity of origin + local index, so where the box
+  // starts does not change the result. UsageError for a non-positive dimension or spacing.
   void resize(std::array<std::int64_t, 3> dims, std::array<double, 3> h,
               std::array<std::int64_t, 3> origin = {});
   // Every element back to rest.
@@ -74,7 +74,12 @@ class ChainMail {
 
   Vec3d displacement(std::int64_t i, std::int64_t j, std::int64_t k) const;
   // Component c (0 = x, 1 = y, 2 = z) of every element's displacement, i fastest.
-  std::span<const double> displacement_component(int c) const { return disp_[c]; }
+  std::span<const double> displacement_component(int c) const {
+    return std::span<const double>(disp_[c]).first(count_);
+  }
+  // Allocates (and touches) room for `elements` elements now, so that a box of up to that size
+  // later costs no allocation or page faults in resize() (the first press of a session).
+  void reserve(std::size_t elements);
   // The largest amount (mm) by which any link violates its bounds (0 when all hold).
   double max_violation() const;
 
@@ -108,6 +113,7 @@ class ChainMail {
 
   ChainMailParams params_;
   std::array<std::int64_t, 3> dims_{};
+  std::size_t count_ = 0;  // elements in the box (the buffers may hold more: they never shrink)
   std::array<double, 3> h_{1, 1, 1};
   std::int64_t origin_parity_ = 0;  // (origin[0] + origin[1] + origin[2]) & 1
   std::array<std::array<double, 3>, 3> link_min_{}, link_max_{};  // [component][axis]

@@ -428,7 +428,8 @@ TEST(ChainMail, RelaxationOnEachComponentsBoxEqualsTheWholeBox) {
 }
 
 // resize() to a new layout zeroes only the moved box: every element is at rest afterwards, in a
-// smaller and in a larger box, and a solve there equals a fresh ChainMail's bit for bit.
+// smaller and in a larger box, and a solve there equals a fresh ChainMail's bit for bit, and a
+// ChainMail that reserved more room than the box beforehand (the buffers never shrink).
 TEST(ChainMail, ResizeToANewLayoutStartsAtRest) {
   const std::array<double, 3> h{1.6, 1.6, 1.0};
   ChainMail mail;
@@ -442,13 +443,20 @@ TEST(ChainMail, ResizeToANewLayoutStartsAtRest) {
       for (double v : mail.displacement_component(c)) ASSERT_EQ(v, 0.0);
     const ChainMailAnchor anchor{{10, 12, 13}, {-1.5, 0.5, 4.0}};
     mail.solve({&anchor, 1});
-    ChainMail fresh;
+    ChainMail fresh, reserved;
     fresh.resize(dims, h);
     fresh.solve({&anchor, 1});
+    reserved.reserve(std::size_t{1} << 16);  // more room than the box: the same result
+    reserved.resize(dims, h);
+    reserved.solve({&anchor, 1});
     for (int c = 0; c < 3; ++c) {
-      const auto a = mail.displacement_component(c), b = fresh.displacement_component(c);
+      const auto a = mail.displacement_component(c), b = fresh.displacement_component(c),
+                 r = reserved.displacement_component(c);
+      ASSERT_EQ(a.size(), static_cast<std::size_t>(dims[0] * dims[1] * dims[2]));
       ASSERT_EQ(a.size(), b.size());
+      ASSERT_EQ(r.size(), b.size());
       for (std::size_t n = 0; n < a.size(); ++n) ASSERT_EQ(a[n], b[n]);
+      for (std::size_t n = 0; n < r.size(); ++n) ASSERT_EQ(r[n], b[n]);
     }
     EXPECT_EQ(mail.active_lo(), fresh.active_lo());
     EXPECT_EQ(mail.active_hi(), fresh.active_hi());
