@@ -1,10 +1,11 @@
-// A small CT scene for bone-mask tests: soft tissue in air, with boxes of other HU painted in
-// (bone_marrow_test, bone_enclosure_test).
+// A small CT scene for bone-mask tests: soft tissue in air, with boxes of other HU painted in,
+// its bone mask and voxel counts (bone_marrow_test, bone_enclosure_test).
 #pragma once
 
 #include <cstdint>
 
 #include "base/volume.hpp"
+#include "prep/segmentation.hpp"
 
 namespace palp::testing {
 
@@ -24,6 +25,21 @@ inline void box(CtVolume& ct, Index3 lo, Index3 hi, std::int16_t hu) {
   for (std::int64_t k = lo[2]; k < hi[2]; ++k)
     for (std::int64_t j = lo[1]; j < hi[1]; ++j)
       for (std::int64_t i = lo[0]; i < hi[0]; ++i) ct.at(i, j, k) = hu;
+}
+
+// The bone mask segment_bone makes of `ct` within its body.
+inline Mask bone_of(const CtVolume& ct, const SegmentationParams& params = {}) {
+  const Mask body = segment_body(ct, params);
+  return segment_bone(ct, body, params);
+}
+
+// Voxels set in `m` within [lo, hi).
+inline std::int64_t count_in(const Mask& m, Index3 lo, Index3 hi) {
+  std::int64_t n = 0;
+  for (std::int64_t k = lo[2]; k < hi[2]; ++k)
+    for (std::int64_t j = lo[1]; j < hi[1]; ++j)
+      for (std::int64_t i = lo[0]; i < hi[0]; ++i) n += m.at(i, j, k) != 0;
+  return n;
 }
 
 }  // namespace palp::testing

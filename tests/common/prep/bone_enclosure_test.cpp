@@ -14,21 +14,10 @@
 namespace palp {
 namespace {
 
+using testing::bone_of;
 using testing::box;
+using testing::count_in;
 using testing::tissue_scene;
-
-Mask bone_of(const CtVolume& ct, const SegmentationParams& params = {}) {
-  const Mask body = segment_body(ct, params);
-  return segment_bone(ct, body, params);
-}
-
-std::int64_t count_in(const Mask& m, Index3 lo, Index3 hi) {
-  std::int64_t n = 0;
-  for (std::int64_t k = lo[2]; k < hi[2]; ++k)
-    for (std::int64_t j = lo[1]; j < hi[1]; ++j)
-      for (std::int64_t i = lo[0]; i < hi[0]; ++i) n += m.at(i, j, k) != 0;
-  return n;
-}
 
 // A bone 24 x 20 x 14 mm (cortex 2 mm, 700 HU) around fatty marrow (-30 HU), with a foramen of
 // 4 x 4 mm through the middle of each of its six walls: every axial, coronal and sagittal plane

@@ -13,7 +13,9 @@
 namespace palp {
 namespace {
 
+using testing::bone_of;
 using testing::box;
+using testing::count_in;
 using testing::tissue_scene;
 
 // A cylinder along k of `radius` voxels around (ci, cj), slices [k0, k1).
@@ -23,19 +25,6 @@ void cylinder(CtVolume& ct, double ci, double cj, double radius, std::int64_t k0
     for (std::int64_t j = 0; j < 100; ++j)
       for (std::int64_t i = 0; i < 100; ++i)
         if ((i - ci) * (i - ci) + (j - cj) * (j - cj) <= radius * radius) ct.at(i, j, k) = hu;
-}
-
-Mask bone_of(const CtVolume& ct, const SegmentationParams& params = {}) {
-  const Mask body = segment_body(ct, params);
-  return segment_bone(ct, body, params);
-}
-
-std::int64_t count_in(const Mask& m, Index3 lo, Index3 hi) {
-  std::int64_t n = 0;
-  for (std::int64_t k = lo[2]; k < hi[2]; ++k)
-    for (std::int64_t j = lo[1]; j < hi[1]; ++j)
-      for (std::int64_t i = lo[0]; i < hi[0]; ++i) n += m.at(i, j, k) != 0;
-  return n;
 }
 
 // A vertebral body: a cortex shell 2 voxels thick around fatty marrow at -30 HU (below every
