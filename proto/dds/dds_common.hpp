@@ -92,4 +92,19 @@ inline std::string text(const char* s) {
   return s ? std::string(s) : std::string();
 }
 
+// A haptic frame as a frame_batch entry (palpd), and back (subscribers): the fields both types
+// carry, kept in one place so the two directions change together. Contacts are not batched.
+inline palp_dds_BatchFrame batch_frame_of(const palp_dds_HapticFrame& f) {
+  return {f.frame_index,    f.seq,         f.server_time_ns, f.stamp, f.position,
+          f.orientation,    f.force,       f.torque,         f.u,     f.n_contact,
+          f.contact_points, f.tick_status, f.safety_status,  f.fault, f.device_state};
+}
+inline void set_from_batch_frame(const palp_dds_BatchFrame& b, palp_dds_HapticFrame& f) {
+  f.frame_index = b.frame_index, f.seq = b.seq, f.server_time_ns = b.server_time_ns;
+  f.stamp = b.stamp, f.position = b.position, f.orientation = b.orientation;
+  f.force = b.force, f.torque = b.torque, f.u = b.u, f.n_contact = b.n_contact;
+  f.contact_points = b.contact_points, f.tick_status = b.tick_status;
+  f.safety_status = b.safety_status, f.fault = b.fault, f.device_state = b.device_state;
+}
+
 }  // namespace palp::dds

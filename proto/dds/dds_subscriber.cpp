@@ -99,12 +99,7 @@ std::size_t RigSubscriber::take(const Handlers& h) {
       palp_dds_HapticFrame f{};
       std::memcpy(f.rig, b.rig, sizeof f.rig);
       for (std::uint32_t i = 0; i < b.frames._length; ++i) {
-        const palp_dds_BatchFrame& s = b.frames._buffer[i];
-        f.frame_index = s.frame_index, f.seq = s.seq, f.server_time_ns = s.server_time_ns;
-        f.stamp = s.stamp, f.position = s.position, f.orientation = s.orientation;
-        f.force = s.force, f.torque = s.torque, f.u = s.u, f.n_contact = s.n_contact;
-        f.contact_points = s.contact_points, f.tick_status = s.tick_status;
-        f.safety_status = s.safety_status, f.fault = s.fault, f.device_state = s.device_state;
+        set_from_batch_frame(b.frames._buffer[i], f);
         h.frame(f, now);
       }
     });

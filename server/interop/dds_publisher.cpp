@@ -256,10 +256,7 @@ class DdsPublisher::Impl {
       }
       published_.fetch_add(1, std::memory_order_relaxed);
       if (want_batch) {
-        const palp_dds_BatchFrame b{
-            f.frame_index,    f.seq,         f.server_time_ns, f.stamp, f.position,
-            f.orientation,    f.force,       f.torque,         f.u,     f.n_contact,
-            f.contact_points, f.tick_status, f.safety_status,  f.fault, f.device_state};
+        const palp_dds_BatchFrame b = batch_frame_of(f);
         if (batcher_->due_before(b.server_time_ns)) write_batch();
         batcher_->add(b);
         if (batcher_->complete()) write_batch();
