@@ -162,14 +162,10 @@ struct DecodedReader::Impl {
     return zs.avail_in >= 2 && zs.next_in[0] == 0x1f && zs.next_in[1] == 0x8b;
   }
 
-  // Tops the window up: as much unconsumed input as the buffer (or memory) holds.
+  // Tops the window up to kFastWindowBytes of unconsumed input (a file's buffer holds that much
+  // while the fast path is on; memory is extended in place).
   void fill_window() {
-    if (fd < 0) {
-      while (zs.avail_in < kFastWindowBytes && refill()) {
-      }
-      return;
-    }
-    while (zs.avail_in < input.size() && refill()) {
+    while (zs.avail_in < kFastWindowBytes && refill()) {
     }
   }
 

@@ -154,30 +154,23 @@ nlohmann::json params_json(const PrepParams& params) {
 // The sub-voxel band on this grid: the parameter, or twice the coarsest spacing.
 double subvoxel_band_mm(const SurfaceParams& surface, const Grid& grid) {
   if (surface.band_mm > 0.0) return surface.band_mm;
-  return 2.0 * std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
+  return 2.0 * grid.max_spacing();
 }
 
 // The reach of d_surf's projection onto the HU iso-surface: the parameter, or three coarsest
 // spacings (a pad 6 mm deep on a 3 mm CT reads nodes up to 9 mm deep).
 double skin_projection_mm(const SurfaceParams& surface, const Grid& grid) {
   if (surface.skin_projection_mm >= 0.0) return surface.skin_projection_mm;
-  return 3.0 * std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
+  return 3.0 * grid.max_spacing();
 }
 
 // Writes to a temporary name and renames, so an interrupted run never leaves a half file
 // under the final name.
-template <class V>
-void write_atomically(const fs::path& path, const V& volume) {
+// `extra`: what else write_nifti takes (a map's value range, found already).
+template <class V, class... Extra>
+void write_atomically(const fs::path& path, const V& volume, const Extra&... extra) {
   const fs::path partial = path.string() + ".partial.nii.gz";
-  write_nifti(partial.string(), volume);
-  std::error_code ec;
-  fs::rename(partial, path, ec);
-  if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
-}
-
-void write_atomically(const fs::path& path, const DistanceMap& map, const float range[2]) {
-  const fs::path partial = path.string() + ".partial.nii.gz";
-  write_nifti(partial.string(), map, range[0], range[1]);
+  write_nifti(partial.string(), volume, extra...);
   std::error_code ec;
   fs::rename(partial, path, ec);
   if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
@@ -387,8 +380,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   // buffer serves both maps, each written before the next is computed.
   DistanceMap map;
   const double band = subvoxel_band_mm(params.surface, result.grid);
-  const double coarsest =
-      std::max({result.grid.spacing[0], result.grid.spacing[1], result.grid.spacing[2]});
+  const double coarsest = result.grid.max_spacing();
   IsoProjectionStats projected;
   auto distance_stage = [&](const char* name, const char* file, const Mask& mask,
                             SurfacePoints& points, float* range, bool last) {
@@ -414,12 +406,12 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
       map = DistanceMap{};
       writes.add(std::string("bg write ") + name,
                  [owner, path = dir / file, lo = range[0], hi = range[1]] {
-                   const float owned_range[2] = {lo, hi};
-                   write_atomically(path, *owner, owned_range);
+                   write_atomically(path, *owner, lo, hi);
                  });
       return;
     }
-    stage(std::string("write ") + name, [&] { write_atomically(dir / file, map, range); });
+    stage(std::string("write ") + name,
+          [&] { write_atomically(dir / file, map, range[0], range[1]); });
   };
   distance_stage("d_surf", kSurfaceDistanceFile, body, skin_points, surf_range, false);
   distance_stage("d_bone", kBoneDistanceFile, bone, bone_points, bone_range, true);
