@@ -207,6 +207,51 @@ inline FieldSample sample(const Geometry& g, const MapView<T>& m, const Vec3d& x
   return out;
 }
 
+// Both maps at x from Interleaved records with precomputed gradients, [Ds, Db, gsx, gsy, gsz,
+// gbx, gby, gbz] per voxel: one cell and one pass over its 8 corners for the 8 channels, each
+// interpolated as trilinear() does, so the result equals sample<PrecomputedField> of each map
+// bit for bit (the channels are independent lanes a compiler may vectorise).
+inline constexpr std::size_t kPairRecord = 8;
+inline void sample_pair(const Geometry& g, const float* records, const Vec3d& x, FieldSample& surf,
+                        FieldSample& bone) {
+  const double u[3] = {(x.x - g.origin[0]) * g.inv_spacing[0], (x.y - g.origin[1]) * g.inv_spacing[1],
+                       (x.z - g.origin[2]) * g.inv_spacing[2]};
+  if (!in_box(g, u)) {
+    surf = FieldSample{};
+    bone = FieldSample{};
+    return;
+  }
+  const Cell cell = cell_at(g, u);
+  const std::size_t sx = g.step[0], sy = g.step[1], sz = g.step[2];
+  const std::size_t b = cell.base;
+  const float* corner[8] = {records + b * kPairRecord,
+                            records + (b + sx) * kPairRecord,
+                            records + (b + sy) * kPairRecord,
+                            records + (b + sx + sy) * kPairRecord,
+                            records + (b + sz) * kPairRecord,
+                            records + (b + sx + sz) * kPairRecord,
+                            records + (b + sy + sz) * kPairRecord,
+                            records + (b + sx + sy + sz) * kPairRecord};
+  const double t0 = cell.t[0], t1 = cell.t[1], t2 = cell.t[2];
+  double r[kPairRecord];
+  for (std::size_t ch = 0; ch < kPairRecord; ++ch) {
+    double c[8];
+    for (int k = 0; k < 8; ++k) c[k] = static_cast<double>(corner[k][ch]);
+    const double c00 = c[0] + (c[1] - c[0]) * t0;
+    const double c10 = c[2] + (c[3] - c[2]) * t0;
+    const double c01 = c[4] + (c[5] - c[4]) * t0;
+    const double c11 = c[6] + (c[7] - c[6]) * t0;
+    const double c0 = c00 + (c10 - c00) * t1;
+    const double c1 = c01 + (c11 - c01) * t1;
+    r[ch] = c0 + (c1 - c0) * t2;
+  }
+  surf.inside = bone.inside = true;
+  surf.value = 1.0 * r[0];  // (the float maps' scale, as sample() applies it)
+  bone.value = 1.0 * r[1];
+  surf.grad = {r[2], r[3], r[4]};
+  bone.grad = {r[5], r[6], r[7]};
+}
+
 }  // namespace sampling
 
 // What the tick sees: both maps behind one compile-time scheme and element type.
@@ -218,8 +263,20 @@ struct FieldAccess {
   // The bone-beneath map (model/bone_beneath.hpp) once prepared, else value == nullptr.
   sampling::MapView<float> beneath;
 
+  // Interleaved records with precomputed gradients (sampling::sample_pair), else nullptr.
+  const float* pair_records = nullptr;
+
   FieldSample surf_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, surf, x); }
   FieldSample bone_at(const Vec3d& x) const { return sampling::sample<G>(*geometry, bone, x); }
+  // Both at x: one pass over the cell where the records allow it, else one sample of each.
+  void surf_and_bone_at(const Vec3d& x, FieldSample& s, FieldSample& b) const {
+    if (pair_records != nullptr) {
+      sampling::sample_pair(*geometry, pair_records, x, s, b);
+    } else {
+      s = surf_at(x);
+      b = bone_at(x);
+    }
+  }
   // D_bone(x) without its gradient (8 fetches), kOutsideValue outside the box.
   double bone_value_at(const Vec3d& x) const { return sampling::value(*geometry, bone, x); }
   // Distance along the skin's inward normal to bone (mm), kOutsideValue outside the box.
@@ -325,6 +382,10 @@ class FieldSampler {
     a.bone = view<T>(true);
     a.has_bone = has_bone_;
     a.beneath.value = bone_beneath_data();
+    if constexpr (G == GradientScheme::PrecomputedField && std::is_same_v<T, float>) {
+      if (config_.storage == Storage::Interleaved && record_ == sampling::kPairRecord)
+        a.pair_records = interleaved_.data();
+    }
     return a;
   }
 

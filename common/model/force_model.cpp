@@ -98,7 +98,13 @@ template <class Access>
 void palp_point(const Access& fields, const ForceParams& prm, State& st, std::size_t i,
                 const Vec3d& x, const Vec3d& xd, bool bone_on, double bone_step,
                 std::uint32_t& status, TickSums& sums) {
-  const FieldSample skin_x = fields.surf_at(x);
+  // D_surf (and D_bone) at x: one pass over the cell where the maps are interleaved
+  FieldSample skin_x, bone_x;
+  if (bone_on) {
+    fields.surf_and_bone_at(x, skin_x, bone_x);
+  } else {
+    skin_x = fields.surf_at(x);
+  }
   if (!skin_x.inside) status |= kTickOutsideGrid;
   if (!(skin_x.value > 0.0)) {
     clear_contact(st, i, x);
@@ -126,7 +132,7 @@ void palp_point(const Access& fields, const ForceParams& prm, State& st, std::si
   double k_struct = 0.0;
   bool latched = false, inside_x = false;
   if (bone_on) {
-    const FieldSample bone = fields.bone_at(x);
+    const FieldSample& bone = bone_x;
     const double bone_grad_norm = norm(bone.grad);
     const bool has_vb = bone_grad_norm >= prm.grad_epsilon;
     const Vec3d v_b = has_vb ? bone.grad * (-1.0 / bone_grad_norm) : Vec3d{};

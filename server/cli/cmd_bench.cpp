@@ -49,6 +49,9 @@ constexpr const char* kBenchOptions =
   --window-mm M           keep only the maps' window the path can reach: the box of its device
                           positions widened by the tool's reach and M mm (docs/tuning.md); the
                           JSON's maps_mib is then the window's, whole_maps_mib the scene's
+  --ticks-csv FILE        also write every timed tick as CSV (tick, pose, ns, status,
+                          in_contact; status as in force_model.hpp): where the tail comes from
+                          (tests/bench/tick_tail.py reads it)
   -q, --quiet             print only the JSON line
   -h, --help              show this help
 )";
@@ -102,6 +105,9 @@ double clock_pair_ns() {
 
 struct Timings {
   std::vector<std::int64_t> ns;  // per timed tick
+  std::vector<std::size_t> pose;  // its index in the path
+  std::vector<std::uint32_t> status;
+  std::vector<int> in_contact;
   double in_contact_sum = 0.0;
   std::size_t ticks_touching = 0;
 };
@@ -113,16 +119,33 @@ Timings time_ticks(const Model& model, const Trajectory& path, std::size_t warmu
   for (std::size_t i = 0; i < warmup; ++i) tick(model, state, path[ping_pong(i, n)].pose);
   Timings out;
   out.ns.resize(ticks);
+  out.pose.resize(ticks);
+  out.status.resize(ticks);
+  out.in_contact.resize(ticks);
   for (std::size_t i = 0; i < ticks; ++i) {
-    const Pose& pose = path[ping_pong(warmup + i, n)].pose;
+    out.pose[i] = ping_pong(warmup + i, n);
+    const Pose& pose = path[out.pose[i]].pose;
     const auto t0 = Clock::now();
     tick(model, state, pose);
     const auto t1 = Clock::now();
     out.ns[i] = std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
+    out.status[i] = state.status;
+    out.in_contact[i] = state.n_contact;
     out.in_contact_sum += state.n_contact;
     out.ticks_touching += state.n_contact > 0;
   }
   return out;
+}
+
+void write_ticks_csv(const std::string& path, const Timings& t) {
+  if (path.empty()) throw UsageError("--ticks-csv needs a file");
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) throw InputError("bench: cannot write " + path);
+  std::fprintf(f, "tick,pose,ns,status,in_contact\n");
+  for (std::size_t i = 0; i < t.ns.size(); ++i)
+    std::fprintf(f, "%zu,%zu,%lld,%u,%d\n", i, t.pose[i], static_cast<long long>(t.ns[i]),
+                 t.status[i], t.in_contact[i]);
+  if (std::fclose(f) != 0) throw InputError("bench: cannot write " + path);
 }
 
 struct Summary {
@@ -173,7 +196,7 @@ int cmd_bench(const Arguments& argv_in) {
   Arguments argv = argv_in;
   const std::vector<std::string> assignments = take_repeated(argv, "param");
   std::vector<std::string> valued = kSceneOptions;
-  valued.insert(valued.end(), {"tool", "ticks", "warmup", "trajectory", "window-mm"});
+  valued.insert(valued.end(), {"tool", "ticks", "warmup", "trajectory", "window-mm", "ticks-csv"});
   const Args args(argv, {"help", "quiet"}, valued);
   if (args.has("help")) {
     std::cout << kBenchUsage << kSceneOptionsHelp << kBenchOptions;
@@ -228,6 +251,7 @@ int cmd_bench(const Arguments& argv_in) {
   const double clock_ns = clock_pair_ns();
   const Timings timings = time_ticks(model, path, warmup, ticks);
   const Summary s = summarize(timings.ns);
+  if (const auto csv = args.get("ticks-csv")) write_ticks_csv(*csv, timings);
   const double in_contact_mean = timings.in_contact_sum / static_cast<double>(ticks);
   const double touching = static_cast<double>(timings.ticks_touching) / static_cast<double>(ticks);
   const char* scheme = to_string(scene.fields->config().gradient);

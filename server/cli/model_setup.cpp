@@ -35,9 +35,13 @@ ModelKind model_kind(const Args& args) {
 
 SceneOptions scene_options(const Args& args) {
   SceneOptions options;
-  // palp's continuous normals: the precomputed gradient, trilinearly interpolated
-  if (model_kind(args) == ModelKind::Palp)
+  // palp's continuous normals: the precomputed gradient, trilinearly interpolated, with both maps
+  // and gradients in one record per voxel so the tick samples them in one pass (same outputs as
+  // float32, bit for bit; docs/force_model.md "Tick cost")
+  if (model_kind(args) == ModelKind::Palp) {
     options.sampler.gradient = GradientScheme::PrecomputedField;
+    options.sampler.storage = Storage::Interleaved;
+  }
   if (const auto scheme = args.get("scheme"))
     options.sampler.gradient = parse_gradient_scheme(*scheme);
   if (const auto storage = args.get("storage")) options.sampler.storage = parse_storage(*storage);

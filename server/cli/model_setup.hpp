@@ -25,7 +25,8 @@ inline constexpr const char* kSceneOptionsHelp =
                           paper's equations as printed, bit for bit)
   --scheme NAME           gradient: analytic, central, precomputed (default: precomputed for
                           --model palp, analytic for --model paper)
-  --storage NAME          maps in memory: float32 (default), int16, interleaved
+  --storage NAME          maps in memory: float32, int16, interleaved (default: interleaved
+                          for --model palp, float32 for --model paper)
   --cache-dir DIR         scene cache (default $PALP_SCENE_CACHE, else
                           $XDG_CACHE_HOME/palp/scenes, else ~/.cache/palp/scenes)
 )";

@@ -2,7 +2,10 @@
 // mistakes are one-line errors with exit code 2.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -53,6 +56,46 @@ TEST(CmdBench, TimesAGivenTrajectory) {
   const auto json = nlohmann::json::parse(last_line(r.output));
   EXPECT_EQ(json["contacts"], 9);
   EXPECT_EQ(json["ticks"], 1000);
+}
+
+TEST(CmdBench, WritesEveryTimedTickAsCsv) {
+  // --ticks-csv: one row per timed tick, pose indices running back and forth over the path,
+  // the JSON's contact mean recomputed from the rows.
+  const fs::path csv = shared_cli_dir() / "bench_ticks.csv";
+  const auto r = run_palp_cli("bench --scene phantom:cube --tool finger:7 --ticks 500 --warmup 0 "
+                              "-q --ticks-csv " +
+                                  csv.string(),
+                              cache(), true);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto json = nlohmann::json::parse(last_line(r.output));
+  std::ifstream in(csv);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line, "tick,pose,ns,status,in_contact");
+  int rows = 0;
+  double contacts = 0;
+  long long max_ns = 0;
+  while (std::getline(in, line)) {
+    long long tick = -1, pose = -1, ns = -1, in_contact = -1;
+    unsigned status = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lld,%lld,%lld,%u,%lld", &tick, &pose, &ns, &status,
+                          &in_contact),
+              5)
+        << line;
+    EXPECT_EQ(tick, rows);
+    if (rows == 0) {
+      EXPECT_EQ(pose, 0);  // no warm-up: the path's first pose
+    }
+    EXPECT_GE(ns, 0);
+    EXPECT_GE(in_contact, 0);
+    EXPECT_LE(in_contact, 7);
+    contacts += static_cast<double>(in_contact);
+    max_ns = std::max(max_ns, ns);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 500);
+  EXPECT_NEAR(contacts / rows, json["in_contact_mean"].get<double>(), 1e-3);
+  EXPECT_EQ(static_cast<double>(max_ns), json["tick_ns_max"].get<double>());
 }
 
 TEST(CmdBench, HelpAndUsageMistakes) {

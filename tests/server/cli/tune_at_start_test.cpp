@@ -76,7 +76,7 @@ TEST(TuneAtStart, TunesOnceCachesReportsAndKeepsItsBudget) {
   EXPECT_EQ(tight.exit_code, 0) << tight.output;
   EXPECT_NE(tight.output.find("over the time budget of 0.001 s"), std::string::npos)
       << tight.output;
-  EXPECT_NE(tight.output.find("running the defaults (finger:7 precomputed float32)"),
+  EXPECT_NE(tight.output.find("running the defaults (finger:7 precomputed interleaved)"),
             std::string::npos)
       << tight.output;
   entries = 0;
