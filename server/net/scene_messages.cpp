@@ -110,6 +110,11 @@ VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& reque
         std::max({box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]});
     step = static_cast<std::uint32_t>((largest + request.max_dim - 1) / request.max_dim);
     step = std::clamp<std::uint32_t>(step, 1, 1024);
+    // Maps on a refinement of the CT's grid: by default no finer than the CT (its nodes).
+    if (const Refinement r = scene.ct ? refinement_between(scene.ct->grid, grid) : Refinement{};
+        r[0] > 0)
+      step =
+          std::max<std::uint32_t>(step, static_cast<std::uint32_t>(std::min({r[0], r[1], r[2]})));
     // The alignment can add one voxel: coarser until every axis is within max_dim.
     while (step < 1024 && std::max({extent(0, step), extent(1, step), extent(2, step)}) >
                               static_cast<std::int64_t>(request.max_dim))

@@ -89,6 +89,11 @@ TEST(SceneMessages, MapsOnARefinedGridShipTheCtsNearestNode) {
   const VolumePlan cropped = plan_volume(scene, {1, 0, true, false, false, true}, 1 << 20, &crop);
   EXPECT_EQ(cropped.offset, (std::array<std::int64_t, 3>{4, 6, 8}));
   EXPECT_EQ(cropped.dims, (std::array<std::int64_t, 3>{15, 15, 15}));  // (hi - 1) * 2 + 1 - lo
+  // Asked for no step (palpview's default), the volume is no finer than the CT: its nodes.
+  const VolumePlan automatic = plan_volume(scene, {0, 256, true, false, true}, 1 << 20);
+  EXPECT_EQ(automatic.step, 2u);
+  EXPECT_EQ(automatic.dims, (std::array<std::int64_t, 3>{32, 32, 32}));
+  EXPECT_EQ(plan_volume(coarse, {0, 256, true, false, true}, 1 << 20).step, 1u);
   // A grid that is not the CT's nor a refinement of it: no HU.
   scene.grid.dims[0] = 64;
   EXPECT_FALSE(plan_volume(scene, {1, 0, true, false, false}, 1 << 20).hu);
