@@ -37,8 +37,12 @@ TEST(MapRefine, FactorsFollowTheCoarsestSpacings) {
   // The torso phantom (1.25 x 1.25 x 2 mm) and the prep benchmarks' grids are not refined.
   EXPECT_EQ(map_refinement(grid_of({384, 256, 96}, {1.25, 1.25, 2.0}), kDefaultMapSpacingMm),
             (Refinement{1, 1, 1}));
-  EXPECT_EQ(map_refinement(grid_of({512, 512, 400}, {0.8, 0.8, 1.5}), 1.5), (Refinement{1, 1, 1}));
-  EXPECT_EQ(map_refinement(grid_of({512, 512, 400}, {0.8, 0.8, 1.0}), 1.5), (Refinement{1, 1, 1}));
+  for (const double limit : {kDefaultMapSpacingMm, 1.5}) {
+    EXPECT_EQ(map_refinement(grid_of({384, 384, 160}, {0.8, 0.8, 1.5}), limit),
+              (Refinement{1, 1, 1}));
+    EXPECT_EQ(map_refinement(grid_of({512, 512, 400}, {0.8, 0.8, 1.0}), limit),
+              (Refinement{1, 1, 1}));
+  }
   // Per axis: thick slices only along their axis; an axis of one voxel never.
   EXPECT_EQ(map_refinement(grid_of({64, 64, 20}, {0.7, 0.7, 5.0}), 2.0), (Refinement{1, 1, 3}));
   EXPECT_EQ(map_refinement(grid_of({64, 1, 20}, {3.0, 3.0, 3.0}), 2.0), (Refinement{2, 1, 2}));
