@@ -12,6 +12,7 @@
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
+#include "prep/map_refine.hpp"
 
 namespace palp {
 namespace {
@@ -175,9 +176,10 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
                                             double max_change_mm, double clamp_mm, DistanceMap& map,
                                             unsigned threads) {
   const Grid& grid = map.grid;
-  if (ct.grid.dims != grid.dims || mask.grid.dims != grid.dims ||
-      ct.data.size() != grid.voxel_count() || mask.data.size() != grid.voxel_count() ||
-      map.data.size() != grid.voxel_count()) {
+  // The map lies on the CT's grid or on its aligned refinement (prep/map_refine.hpp).
+  const Refinement refine = refinement_between(ct.grid, grid);
+  if (refine[0] == 0 || mask.grid.dims != ct.grid.dims || ct.data.size() != ct.grid.voxel_count() ||
+      mask.data.size() != ct.grid.voxel_count() || map.data.size() != grid.voxel_count()) {
     throw UsageError("iso-surface projection: the CT, the mask and the map differ in grid");
   }
   IsoProjectionStats stats;
@@ -204,13 +206,26 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
               const double d = map.data[v];
               if (!(d <= reach_mm && d >= -outside_mm) || std::abs(d) >= clamp_mm) continue;
               ++seen;
-              const bool inside = mask.data[v] != 0;
-              if ((ct.data[v] - iso_hu >= 0.0) != inside) continue;  // the mask overrides the HU
-              double nd[3];
-              if (!map_gradient(map, i, j, k, nd)) continue;
               const double q[3] = {static_cast<double>(i) * grid.spacing[0],
                                    static_cast<double>(j) * grid.spacing[1],
                                    static_cast<double>(k) * grid.spacing[2]};
+              bool inside;
+              if (i % refine[0] == 0 && j % refine[1] == 0 && k % refine[2] == 0) {
+                const std::size_t c = ct.grid.linear(i / refine[0], j / refine[1], k / refine[2]);
+                inside = mask.data[c] != 0;
+                if ((ct.data[c] - iso_hu >= 0.0) != inside) continue;  // the mask overrides the HU
+              } else {
+                // Between the CT's nodes: the upsampled map's sign, unless the cell is cut by
+                // the mask, where the trilinear HU's own sign says which side the node is on.
+                const Sample at_q = hu.at(q);
+                inside = d > 0.0;
+                if ((at_q.f >= 0.0) != inside) {
+                  if (!cell_cut_by_mask(mask, at_q.cell)) continue;
+                  inside = at_q.f >= 0.0;
+                }
+              }
+              double nd[3];
+              if (!map_gradient(map, i, j, k, nd)) continue;
               double x[3] = {q[0] - d * nd[0], q[1] - d * nd[1], q[2] - d * nd[2]};
               const double dist = closest_point(hu, q, x);
               if (!(dist >= 0.0)) continue;

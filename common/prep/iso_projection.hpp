@@ -20,7 +20,9 @@
 //   - the node's own HU lies on the mask's side of the level;
 //   - the new distance differs from the map's by at most `max_change_mm` (the start was the
 //     right sheet of the surface).
-// Elsewhere the map keeps its value. Values are rounded to 1/1024 mm and clamped to +-clamp_mm,
+// Elsewhere the map keeps its value. The map may lie on the CT's grid refined by integer factors
+// (prep/map_refine.hpp): its nodes between the CT's take the upsampled map's sign (the HU's
+// where the mask cuts their cell and the two disagree) and their HU by trilinear interpolation. Values are rounded to 1/1024 mm and clamped to +-clamp_mm,
 // as the sub-voxel map is.
 #pragma once
 

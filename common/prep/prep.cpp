@@ -32,6 +32,7 @@
 #include "prep/background_writes.hpp"
 #include "prep/ct_check.hpp"
 #include "prep/iso_projection.hpp"
+#include "prep/map_refine.hpp"
 #include "prep/output_guard.hpp"
 #include "prep/reorient.hpp"
 #include "prep/subvoxel_distance.hpp"
@@ -45,8 +46,9 @@ using Clock = std::chrono::steady_clock;
 // Bump when the algorithms change what prep writes, so old caches are not reused.
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
 // bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
-// edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp)
-constexpr int kPrepAlgorithmVersion = 8;
+// edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp); 9: maps on a refined grid
+// on coarse CTs (map_refine.hpp)
+constexpr int kPrepAlgorithmVersion = 9;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
@@ -148,6 +150,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_iso_hu", params.surface.bone_hu},
           {"subvoxel_band_mm", params.surface.band_mm},
           {"skin_projection_mm", params.surface.skin_projection_mm},
+          {"map_spacing_mm", params.map_spacing_mm},
           {"bone_levels", params.adapt_bone_levels ? "adapted" : "as given"}};
 }
 
@@ -268,6 +271,11 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     result.from_cache = true;
     result.grid.dims = cached["grid"]["dimensions"].get<Index3>();
     result.grid.spacing = cached["grid"]["spacing_mm"].get<Vec3>();
+    result.map_grid = result.grid;
+    if (cached.contains("map_grid")) {
+      result.map_grid.dims = cached["map_grid"]["dimensions"].get<Index3>();
+      result.map_grid.spacing = cached["map_grid"]["spacing_mm"].get<Vec3>();
+    }
     result.stats.body_voxels = cached["voxels"]["body"].get<std::uint64_t>();
     result.stats.bone_voxels = cached["voxels"]["bone"].get<std::uint64_t>();
     result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -382,20 +390,23 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   const double band = subvoxel_band_mm(params.surface, result.grid);
   const double coarsest = result.grid.max_spacing();
   IsoProjectionStats projected;
+  const Refinement refine = map_refinement(result.grid, params.map_spacing_mm);
+  result.map_grid = refined_grid(result.grid, refine);
   auto distance_stage = [&](const char* name, const char* file, const Mask& mask,
                             SurfacePoints& points, float* range, bool last) {
     stage(name, [&] {
       if (subvoxel) {
         subvoxel_signed_distance(points, mask, band, params.distance.band_mm, map,
                                  params.distance.threads);
-        if (&mask == &body && hu_for_projection) {
-          projected = project_onto_iso_surface(
-              *hu_for_projection, body, params.surface.skin_hu, projection, coarsest,
-              0.25 * coarsest, params.distance.band_mm, map, params.distance.threads);
-          hu_for_projection.reset();  // the HU are not needed past this
-        }
       } else {
         signed_distance(mask, params.distance, map);
+      }
+      if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
+      if (subvoxel && &mask == &body && hu_for_projection) {
+        projected = project_onto_iso_surface(*hu_for_projection, body, params.surface.skin_hu,
+                                             projection, coarsest, 0.25 * coarsest,
+                                             params.distance.band_mm, map, params.distance.threads);
+        hu_for_projection.reset();  // the HU are not needed past this
       }
     });
     points = SurfacePoints{};
@@ -427,6 +438,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   json["input"] = input;
   json["cache_key"] = result.cache_key;
   json["grid"] = grid_json(result.grid);
+  json["map_grid"] = grid_json(result.map_grid);  // d_surf, d_bone: the grid refined by
+  json["map_refinement"] = refine;                // these factors (prep/map_refine.hpp)
   json["patient"] = {{"input_orientation", result.orientation},
                      {"input_obliquity_deg", result.obliquity_deg},
                      {"reoriented", result.reoriented},

@@ -1,6 +1,7 @@
 // The preprocessing pipeline: CT -> body and bone masks -> signed distance maps, written as
 //   body.nii.gz, bone.nii.gz (uint8 0/1), d_surf.nii.gz, d_bone.nii.gz (float32 mm), prep.json
-// on the input grid voxel for voxel (spec "Files"). Results are cached by input content and
+// on the input grid voxel for voxel (spec "Files"; on a CT coarser than map_spacing_mm the two
+// maps lie on its aligned refinement, map_refine.hpp). Results are cached by input content and
 // parameters: a second run on the same input into the same directory only verifies the cache.
 #pragma once
 
@@ -12,6 +13,7 @@
 #include "base/volume.hpp"
 #include "prep/distance_transform.hpp"
 #include "prep/hu_levels.hpp"
+#include "prep/map_refine.hpp"
 #include "prep/segmentation.hpp"
 
 namespace palp {
@@ -42,6 +44,9 @@ struct PrepParams {
   // The bone levels (segmentation's bone_seed_hu, bone_grow_hu and the surface's bone_hu) follow
   // the scan's soft-tissue peak (prep/hu_levels.hpp); false: used as given.
   bool adapt_bone_levels = true;
+  // On a CT coarser than this (mm, any axis), the maps lie on its grid refined to at most this
+  // spacing, nodes aligned (prep/map_refine.hpp); 0 = the CT's own grid.
+  double map_spacing_mm = kDefaultMapSpacingMm;
   bool use_cache = true;
   // Prep a volume that does not look like a CT in HU (prep/ct_check.hpp) instead of refusing it.
   // Not part of the cache key: it changes whether prep runs, never what it writes.
@@ -58,6 +63,7 @@ struct PrepResult {
   std::string input;
   std::string out_dir;
   Grid grid;
+  Grid map_grid;  // d_surf's and d_bone's: `grid`, or its aligned refinement (map_spacing_mm)
   SegmentationStats stats;
   std::vector<StageTiming> stages;  // in order; empty when served from the cache
   double total_seconds = 0.0;
@@ -91,7 +97,8 @@ inline constexpr const char* kBoneFile = "bone.nii.gz";
 inline constexpr const char* kSurfaceDistanceFile = "d_surf.nii.gz";
 inline constexpr const char* kBoneDistanceFile = "d_bone.nii.gz";
 inline constexpr const char* kPrepJsonFile = "prep.json";
-// The CT itself (int16 HU, after reorientation: on the maps' grid), for palpd's render volume.
+// The CT itself (int16 HU, after reorientation: on the masks' grid, which the maps' is or refines),
+// for palpd's render volume.
 inline constexpr const char* kCtFile = "ct.nii.gz";
 
 }  // namespace palp

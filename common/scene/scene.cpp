@@ -13,6 +13,7 @@
 
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
+#include "prep/map_refine.hpp"
 
 namespace palp {
 namespace {
@@ -109,7 +110,8 @@ Scene load_scene(const std::string& scene, const SceneOptions& options) {
       fs::is_regular_file(dir / kBodyFile, ec)) {
     auto ct = std::make_shared<CtVolume>(read_ct((dir / kCtFile).string()));
     auto body = std::make_shared<Mask>(read_nifti_mask((dir / kBodyFile).string()));
-    if (ct->grid.dims == out.grid.dims && body->grid.dims == out.grid.dims) {
+    // On the maps' grid, or on the CT grid the maps refine (prep/map_refine.hpp).
+    if (refinement_between(ct->grid, out.grid)[0] != 0 && body->grid.dims == ct->grid.dims) {
       out.ct = std::move(ct);
       out.body = std::move(body);
     }

@@ -33,7 +33,8 @@ struct Scene {
   double load_seconds = 0.0;
   std::shared_ptr<const FieldSampler> fields;
   // With SceneOptions::load_ct, from a prep directory that has them (null otherwise): the CT's
-  // HU and the body mask on the maps' grid.
+  // HU and the body mask on the maps' grid, or on the coarse CT grid the maps refine
+  // (prep/map_refine.hpp).
   std::shared_ptr<const CtVolume> ct;
   std::shared_ptr<const Mask> body;
 };

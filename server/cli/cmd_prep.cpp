@@ -43,6 +43,9 @@ Options:
   --bone-hu HU            iso level of the bone surface for subvoxel (default %g)
   --skin-projection MM    subvoxel: d_surf within MM inside the skin takes the distance to the
                           trilinear HU's own iso-surface (0: off; default three coarsest spacings)
+  --map-spacing MM        on a CT coarser than MM along an axis, d_surf and d_bone lie on its grid
+                          refined by a whole factor per axis to at most MM, nodes aligned
+                          (default %g; 0: the CT's own grid)
   --threads N             worker threads (default: all cores, here %u)
   --body-threshold HU     voxels above this are not air (default %g)
   --min-body-part ML      drop separate parts smaller than this, except the patient (default %g)
@@ -59,9 +62,10 @@ Options:
   -q, --quiet             print only errors
   -h, --help              show this help
 )",
-                dist.band_mm, surface.skin_hu, surface.bone_hu, default_thread_count(),
-                seg.body_threshold_hu, seg.min_body_part_ml, seg.max_table_thickness_mm,
-                seg.bone_seed_hu, seg.bone_grow_hu, seg.min_bone_island_ml);
+                dist.band_mm, surface.skin_hu, surface.bone_hu, kDefaultMapSpacingMm,
+                default_thread_count(), seg.body_threshold_hu, seg.min_body_part_ml,
+                seg.max_table_thickness_mm, seg.bone_seed_hu, seg.bone_grow_hu,
+                seg.min_bone_island_ml);
   return text;
 }
 
@@ -71,7 +75,7 @@ int cmd_prep(const Arguments& argv) {
   const Args args(argv, {"help", "no-cache", "quiet", "not-hu-ok"},
                   {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
                    "bone-grow", "min-bone-island", "max-table-thickness", "surface", "skin-hu",
-                   "bone-hu", "bone-levels", "skin-projection"});
+                   "bone-hu", "bone-levels", "skin-projection", "map-spacing"});
   if (args.has("help")) {
     std::cout << prep_usage();
     return 0;
@@ -100,6 +104,9 @@ int cmd_prep(const Arguments& argv) {
     if (!(params.surface.skin_projection_mm >= 0.0 && params.surface.skin_projection_mm <= 100.0))
       throw UsageError("--skin-projection must be in [0, 100] mm");
   }
+  params.map_spacing_mm = args.number("map-spacing", params.map_spacing_mm);
+  if (!(params.map_spacing_mm >= 0.0 && params.map_spacing_mm <= 100.0))
+    throw UsageError("--map-spacing must be in [0, 100] mm");
   if (const auto levels = args.get("bone-levels")) {
     if (*levels != "adapt" && *levels != "given")
       throw UsageError("--bone-levels must be adapt or given, not '" + *levels + "'");
@@ -137,6 +144,11 @@ int cmd_prep(const Arguments& argv) {
   std::printf("  grid      %lld x %lld x %lld voxels of %s mm\n", static_cast<long long>(d[0]),
               static_cast<long long>(d[1]), static_cast<long long>(d[2]),
               format_triple(r.grid.spacing).c_str());
+  if (r.map_grid.dims != r.grid.dims)
+    std::printf(
+        "  maps      %lld x %lld x %lld nodes of %s mm (refined, --map-spacing)\n",
+        static_cast<long long>(r.map_grid.dims[0]), static_cast<long long>(r.map_grid.dims[1]),
+        static_cast<long long>(r.map_grid.dims[2]), format_triple(r.map_grid.spacing).c_str());
   if (!r.from_cache) {
     std::printf("  patient   stored %s", r.orientation.c_str());
     if (r.reoriented)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "net/protocol.hpp"
+#include "prep/map_refine.hpp"
 #include "safety/virtual_coupling.hpp"
 #include "wire/messages.hpp"
 #include "wire/volume_codec.hpp"
@@ -84,17 +85,18 @@ VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& reque
   VolumePlan plan;
   const Grid& grid = scene.grid;
   const Index3 dims = grid.dims;
-  plan.hu = request.hu && scene.ct && scene.body && scene.ct->grid.dims == dims &&
-            scene.body->grid.dims == dims;
+  plan.hu = request.hu && scene.ct && scene.body && scene.body->grid.dims == scene.ct->grid.dims &&
+            refinement_between(scene.ct->grid, grid)[0] != 0;  // the maps' grid or one they refine
   plan.bone = request.bone && scene.fields->has_bone();
   plan.deflate = request.deflate;
   plan.voxel_bytes = sizeof(float) * (plan.bone ? 2 : 1) + (plan.hu ? 3 : 0);
   // The box that goes out: the whole grid, or the crop (clamped to the grid).
   VoxelBox box{{0, 0, 0}, {dims[0], dims[1], dims[2]}};
   if (request.crop && plan.hu && crop && !crop->empty()) {
+    const Refinement r = refinement_between(scene.ct->grid, grid);  // the crop is in CT voxels
     for (int a = 0; a < 3; ++a) {
-      box.lo[a] = std::clamp<std::int64_t>(crop->lo[a], 0, dims[a] - 1);
-      box.hi[a] = std::clamp<std::int64_t>(crop->hi[a], box.lo[a] + 1, dims[a]);
+      box.lo[a] = std::clamp<std::int64_t>(crop->lo[a] * r[a], 0, dims[a] - 1);
+      box.hi[a] = std::clamp<std::int64_t>((crop->hi[a] - 1) * r[a] + 1, box.lo[a] + 1, dims[a]);
     }
   }
   // Sampled voxels along axis a at step s: from lo aligned down to s, every s-th below hi.
@@ -108,6 +110,11 @@ VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& reque
         std::max({box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]});
     step = static_cast<std::uint32_t>((largest + request.max_dim - 1) / request.max_dim);
     step = std::clamp<std::uint32_t>(step, 1, 1024);
+    // Maps on a refinement of the CT's grid: by default no finer than the CT (its nodes).
+    if (const Refinement r = scene.ct ? refinement_between(scene.ct->grid, grid) : Refinement{};
+        r[0] > 0)
+      step =
+          std::max<std::uint32_t>(step, static_cast<std::uint32_t>(std::min({r[0], r[1], r[2]})));
     // The alignment can add one voxel: coarser until every axis is within max_dim.
     while (step < 1024 && std::max({extent(0, step), extent(1, step), extent(2, step)}) >
                               static_cast<std::int64_t>(request.max_dim))
@@ -173,6 +180,9 @@ std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan&
   std::vector<std::uint8_t> body(plan.hu ? n : 0);
   const Vec3 sp = grid.spacing;
   const std::int64_t st = plan.step;
+  // HU and body from the CT's nearest node when the maps refine its grid (prep/map_refine.hpp).
+  const Refinement r = plan.hu ? refinement_between(scene.ct->grid, grid) : Refinement{1, 1, 1};
+  const Index3 ct_dims = plan.hu ? scene.ct->grid.dims : grid.dims;
   std::size_t v = 0;
   for (std::uint32_t k = 0; k < k_count; ++k)
     for (std::int64_t j = 0; j < plan.dims[1]; ++j)
@@ -184,8 +194,9 @@ std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan&
         surf[v] = static_cast<float>(fields.sample_surf(x).value);
         if (plan.bone) bone[v] = static_cast<float>(fields.sample_bone(x).value);
         if (plan.hu) {
-          const std::size_t g =
-              static_cast<std::size_t>(gi + grid.dims[0] * (gj + grid.dims[1] * gk));
+          const std::int64_t ci = (gi + r[0] / 2) / r[0], cj = (gj + r[1] / 2) / r[1],
+                             ck = (gk + r[2] / 2) / r[2];
+          const auto g = static_cast<std::size_t>(ci + ct_dims[0] * (cj + ct_dims[1] * ck));
           hu[v] = scene.ct->data[g];
           body[v] = scene.body->data[g] ? 1 : 0;
         }

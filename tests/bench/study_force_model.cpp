@@ -25,7 +25,8 @@
 // 3. Smoothness  the real CT, bone off, finger:1 slid at 20 mm/s (1 kHz) along the anterior
 //    abdomen (azimuth 90 deg, 0.30-0.60 of the body axis) at a constant true depth (2, 4, 6 mm)
 //    below the -500 HU iso-surface of the trilinearly interpolated CT, along its normal (-grad HU
-//    by central differences over 1.5 mm): |f_device| detrended by a centred 10 mm moving
+//    by central differences over 1.5 mm; PALP_SMOOTH_PATH=exact: the pad then moved along it
+//    onto the exact depth): |f_device| detrended by a centred 10 mm moving
 //    average, its standard deviation and the largest change between two ticks.
 //
 // 4. Contact count  a skin ball (R 30 mm): finger:1/7/19/37 pressed along the radius to
@@ -37,6 +38,9 @@
 //
 //   study_force_model [--out DIR] [--quick]
 // PALP_CT: the CT (default ../shared/data/ct_abdomen_3mm.nii.gz).
+// PALP_MAP_SPACING: prep's --map-spacing for the CT (0: the CT's own grid; default prep's).
+// PALP_SMOOTH_PATH=exact: the smoothness path's pad moved along the normal onto the exact depth
+// (default: the depth along the normal only).
 // PALP_STUDY_PARTS: the parts to run (names among contrast, friction, contacts, smooth; all
 // when unset).
 #include <cmath>
@@ -56,6 +60,7 @@
 #include "model/force_model.hpp"
 #include "model/tool.hpp"
 #include "prep/iso_projection.hpp"
+#include "prep/map_refine.hpp"
 #include "scene/scene.hpp"
 #include "scene/trajectory_gen.hpp"
 
@@ -70,6 +75,9 @@ struct Variant {
 std::shared_ptr<const FieldSampler> load_fields(const std::string& scene, GradientScheme g) {
   SceneOptions options;
   options.sampler.gradient = g;
+  // PALP_MAP_SPACING: prep's --map-spacing for a CT scene (default its default).
+  if (const char* spacing = std::getenv("PALP_MAP_SPACING"))
+    options.prep.map_spacing_mm = std::strtod(spacing, nullptr);
   return load_scene(scene, options).fields;
 }
 
@@ -468,9 +476,9 @@ struct Hu {
     const double d = distance_to_iso_surface(ct, -500.0, q, x);
     return at(p) >= -500.0 ? d : -d;
   }
-  // The trilinear interpolation at p of the exact distances at the 8 grid nodes around it.
-  double interpolated_node_distance(const Vec3d& p, const Vec3d& near) const {
-    const Grid& g = ct.grid;
+  // The trilinear interpolation at p of the exact distances at the 8 nodes of grid g (the maps')
+  // around it.
+  double interpolated_node_distance(const Grid& g, const Vec3d& p, const Vec3d& near) const {
     double out = 0.0;
     const double u[3] = {p.x / g.spacing[0], p.y / g.spacing[1], p.z / g.spacing[2]};
     double t[3], base[3];
@@ -532,10 +540,15 @@ double gradient_corrected_surf(const FieldSampler& fields, const Grid& g, const 
 void smoothness(const std::string& ct_path, Csv& csv) {
   const std::vector<Variant> vars = variants_for(ct_path);
   Hu hu{read_ct(ct_path)};
-  if (hu.ct.grid.dims != vars[0].fields->grid().dims) {
+  // The maps lie on the CT's grid or on its aligned refinement (prep/map_refine.hpp).
+  const Grid& map_grid = vars[0].fields->grid();
+  if (refinement_between(hu.ct.grid, map_grid)[0] == 0) {
     std::printf("smooth: the CT was resampled by prep (grids differ): skipped\n");
     return;
   }
+  std::printf("smooth: maps on %lld x %lld x %lld nodes of %g mm\n",
+              static_cast<long long>(map_grid.dims[0]), static_cast<long long>(map_grid.dims[1]),
+              static_cast<long long>(map_grid.dims[2]), map_grid.spacing[0]);
   RibsSpec spec;
   spec.azimuth_deg = 90.0;  // anterior
   spec.from = 0.30;
@@ -543,6 +556,8 @@ void smoothness(const std::string& ct_path, Csv& csv) {
   const BodyAxis axis = ribs_body_axis(*vars[0].fields, spec);
   const Tool tool = parse_tool("finger:1");
   const double offset = pad_offset(tool);
+  const char* path_env = std::getenv("PALP_SMOOTH_PATH");
+  const bool true_depth = path_env && std::string(path_env) == "exact";
   const double rate = 1000.0, speed = 20.0;
   const double len = (spec.to - spec.from) * axis.extent;
   const int n = static_cast<int>(len / speed * rate);
@@ -564,25 +579,34 @@ void smoothness(const std::string& ct_path, Csv& csv) {
         skin_gap = std::max(skin_gap, std::fabs(v.fields->sample_surf(skin).value));
         const Vec3d nrm = hu.normal(skin);
         const Quat q = surface_orientation(nrm, axis.superior);
-        tick(m, st, pad_pose(skin - depth * nrm, nrm, q, offset));
+        // The pad `depth` along the normal; PALP_SMOOTH_PATH=exact: then moved along it until its
+        // exact distance to the iso-surface is `depth` (the offset alone wanders by 0.04 mm std
+        // at 6 mm where the skin curves or the normal's estimate tilts, but the exact depth's
+        // closest point can switch between two sheets, a step of the path itself).
+        Vec3d pad = skin - depth * nrm;
+        if (true_depth)
+          for (int it = 0; it < 3; ++it) pad = pad - (depth - hu.distance(pad, skin)) * nrm;
+        tick(m, st, pad_pose(pad, nrm, q, offset));
         f.push_back(norm(st.f_device));
-        map_depth.push_back(v.fields->sample_surf(skin - depth * nrm).value);
+        map_depth.push_back(v.fields->sample_surf(pad).value);
         // The exact distance from the pad centre to the trilinear HU's iso-surface, and the
         // trilinear interpolation of the exact distances at the 8 grid nodes around it: what the
         // tick would read from a map exact at its nodes.
-        const Vec3d pad = skin - depth * nrm;
         exact_depth.push_back(hu.distance(pad, skin));
-        exact_nodes_depth.push_back(hu.interpolated_node_distance(pad, skin));
-        corrected_depth.push_back(gradient_corrected_surf(*v.fields, hu.ct.grid, pad));
+        exact_nodes_depth.push_back(hu.interpolated_node_distance(map_grid, pad, skin));
+        corrected_depth.push_back(gradient_corrected_surf(*v.fields, map_grid, pad));
       }
       double sq = 0.0, step = 0.0, mean = 0.0, sq_depth = 0.0, sq_err = 0.0, sq_nodes = 0.0,
-             sq_corrected = 0.0;
+             sq_corrected = 0.0, sq_path = 0.0;
       int cnt = 0;
       for (int t = half; t + half < static_cast<int>(f.size()); ++t) {
-        double avg = 0.0, avg_depth = 0.0;
-        for (int j = t - half; j <= t + half; ++j) avg += f[j], avg_depth += map_depth[j];
+        double avg = 0.0, avg_depth = 0.0, avg_path = 0.0;
+        for (int j = t - half; j <= t + half; ++j)
+          avg += f[j], avg_depth += map_depth[j], avg_path += exact_depth[j];
         avg /= 2 * half + 1;
         avg_depth /= 2 * half + 1;
+        avg_path /= 2 * half + 1;
+        sq_path += (exact_depth[t] - avg_path) * (exact_depth[t] - avg_path);
         sq += (f[t] - avg) * (f[t] - avg);
         sq_depth += (map_depth[t] - avg_depth) * (map_depth[t] - avg_depth);
         sq_err += (map_depth[t] - exact_depth[t]) * (map_depth[t] - exact_depth[t]);
@@ -597,16 +621,17 @@ void smoothness(const std::string& ct_path, Csv& csv) {
       const double sd = std::sqrt(sq / cnt), sd_depth = std::sqrt(sq_depth / cnt);
       const double err = std::sqrt(sq_err / cnt), nodes_err = std::sqrt(sq_nodes / cnt);
       const double corrected_err = std::sqrt(sq_corrected / cnt);
+      const double sd_path = std::sqrt(sq_path / cnt);
       csv.row({std::string(to_string(v.model)), depth, mean / cnt, sd, step, skin_gap, sd_depth,
-               err, nodes_err, corrected_err});
+               err, nodes_err, corrected_err, sd_path});
       std::printf(
           "smooth %-5s finger:1 %g mm true depth, %.0f mm at 20 mm/s: mean %.3f N, detrended "
           "std %.3f N, largest tick step %.3f N (|D_surf| on the iso-surface up to %.2f mm; "
           "D_surf at the pad centre: detrended std %.3f mm, against the exact distance rms "
           "%.3f mm; exact nodes interpolated: rms %.3f mm; the map gradient-corrected: rms %.3f "
-          "mm)\n",
+          "mm; the path's exact depth: detrended std %.4f mm)\n",
           to_string(v.model), depth, len, mean / cnt, sd, step, skin_gap, sd_depth, err, nodes_err,
-          corrected_err);
+          corrected_err, sd_path);
     }
 }
 
@@ -720,7 +745,7 @@ int main(int argc, char** argv) {
   Csv s_csv(flags.out_dir + "/force_model_smooth.csv",
             {"model", "depth_mm", "mean_N", "detrended_std_N", "max_step_N", "map_skin_error_mm",
              "map_depth_std_mm", "map_vs_exact_rms_mm", "exact_nodes_interp_rms_mm",
-             "gradient_corrected_vs_exact_rms_mm"});
+             "gradient_corrected_vs_exact_rms_mm", "path_depth_std_mm"});
   if (have_ct && want("smooth")) smoothness(ct, s_csv);
   std::printf("force_model: %.1f s\n", now_seconds() - t0);
   return 0;

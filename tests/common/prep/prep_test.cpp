@@ -16,6 +16,7 @@
 #include "io/phantom.hpp"
 #include "prep/distance_transform.hpp"
 #include "prep/iso_projection.hpp"
+#include "prep/map_refine.hpp"
 #include "prep/segmentation.hpp"
 #include "prep/subvoxel_distance.hpp"
 
@@ -57,9 +58,11 @@ TEST_F(PrepTest, WritesAllOutputsOnTheInputGridWithItsWorldPlacement) {
   PrepParams params;
   params.distance.threads = 2;
   params.surface.method = SurfaceMethod::mask;
+  params.map_spacing_mm = 0.0;  // the CT's own grid (its 2.5 mm slices would be refined)
   const PrepResult result = run_prep(input, (dir_ / "out").string(), params);
   EXPECT_FALSE(result.from_cache);
   EXPECT_EQ(result.grid.dims, ct.grid.dims);
+  EXPECT_EQ(result.map_grid.dims, ct.grid.dims);
 
   const Mask body = read_nifti_mask((dir_ / "out" / kBodyFile).string());
   const Mask bone = read_nifti_mask((dir_ / "out" / kBoneFile).string());
@@ -103,6 +106,7 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   PrepParams params;
   EXPECT_EQ(params.surface.method, SurfaceMethod::subvoxel);
   params.surface.skin_hu = -400.0;
+  params.map_spacing_mm = 0.0;  // the CT's own grid (MapsOfACoarseCtLieOnItsAlignedRefinement)
   run_prep(input, (dir_ / "out").string(), params);
   const Mask body = read_nifti_mask((dir_ / "out" / kBodyFile).string());
   const DistanceMap d_surf = read_nifti_float((dir_ / "out" / kSurfaceDistanceFile).string());
@@ -148,6 +152,64 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   EXPECT_NE(prep_cache_key(input, params), prep_cache_key(input, mask_params));
   EXPECT_EQ(parse_surface_method("mask"), SurfaceMethod::mask);
   EXPECT_THROW(parse_surface_method("voxel"), UsageError);
+}
+
+// The small CT's 2.5 mm slices exceed the default map spacing (2 mm): the maps lie on its grid
+// refined by 2 along k, nodes aligned; the masks and the CT copy stay on the CT's grid.
+TEST_F(PrepTest, MapsOfACoarseCtLieOnItsAlignedRefinement) {
+  CtVolume ct;
+  const std::string input = write_small_ct(dir_, &ct);
+  PrepParams params;
+  EXPECT_EQ(params.map_spacing_mm, kDefaultMapSpacingMm);
+  const PrepResult result = run_prep(input, (dir_ / "out").string(), params);
+  const Grid fine = refined_grid(ct.grid, {1, 1, 2});
+  EXPECT_EQ(result.grid.dims, ct.grid.dims);
+  EXPECT_EQ(result.map_grid.dims, (Index3{50, 48, 91}));
+  EXPECT_EQ(result.map_grid.spacing, (Vec3{2.0, 2.0, 1.25}));
+  const DistanceMap d_surf = read_nifti_float((dir_ / "out" / kSurfaceDistanceFile).string());
+  const DistanceMap d_bone = read_nifti_float((dir_ / "out" / kBoneDistanceFile).string());
+  const Mask body = read_nifti_mask((dir_ / "out" / kBodyFile).string());
+  EXPECT_EQ(body.grid.dims, ct.grid.dims);
+  EXPECT_EQ(read_ct((dir_ / "out" / kCtFile).string()).grid.dims, ct.grid.dims);
+  for (const DistanceMap* m : {&d_surf, &d_bone}) {
+    EXPECT_EQ(m->grid.dims, fine.dims);
+    EXPECT_EQ(m->grid.spacing, fine.spacing);
+    EXPECT_EQ(refinement_between(body.grid, m->grid), (Refinement{1, 1, 2}));
+  }
+  // d_surf: the CT grid's sub-voxel map upsampled, then projected on the fine nodes.
+  PrepParams coarse = params;
+  coarse.map_spacing_mm = 0.0;
+  coarse.surface.skin_projection_mm = 0.0;
+  run_prep(input, (dir_ / "coarse").string(), coarse);
+  const DistanceMap discs = read_nifti_float((dir_ / "coarse" / kSurfaceDistanceFile).string());
+  DistanceMap expected = upsample_aligned(discs, {1, 1, 2});
+  const IsoProjectionStats moved = project_onto_iso_surface(
+      ct, body, -500.0, 3.0 * 2.5, 2.5, 0.25 * 2.5, params.distance.band_mm, expected);
+  EXPECT_GT(moved.projected, 0u);
+  EXPECT_EQ(d_surf.data, expected.data);
+  EXPECT_EQ(
+      d_bone.data,
+      upsample_aligned(read_nifti_float((dir_ / "coarse" / kBoneDistanceFile).string()), {1, 1, 2})
+          .data);
+
+  std::ifstream json_file(dir_ / "out" / kPrepJsonFile);
+  const auto json = nlohmann::json::parse(json_file);
+  EXPECT_EQ(json["grid"]["dimensions"], nlohmann::json({50, 48, 46}));
+  EXPECT_EQ(json["map_grid"]["dimensions"], nlohmann::json({50, 48, 91}));
+  EXPECT_EQ(json["map_grid"]["spacing_mm"], nlohmann::json({2.0, 2.0, 1.25}));
+  EXPECT_EQ(json["map_grid"]["origin_lps_mm"], json["grid"]["origin_lps_mm"]);
+  EXPECT_EQ(json["map_refinement"], nlohmann::json({1, 1, 2}));
+  EXPECT_EQ(json["parameters"]["map_spacing_mm"], kDefaultMapSpacingMm);
+  EXPECT_EQ(json["skin_projection"]["nodes"][1], moved.projected);
+  // The map spacing is part of the cache key, and a cached result names its map grid.
+  EXPECT_NE(prep_cache_key(input, params), prep_cache_key(input, coarse));
+  PrepParams other = params;
+  other.map_spacing_mm = 1.0;
+  EXPECT_NE(prep_cache_key(input, params), prep_cache_key(input, other));
+  const PrepResult cached = run_prep(input, (dir_ / "out").string(), params);
+  EXPECT_TRUE(cached.from_cache);
+  EXPECT_EQ(cached.map_grid.dims, result.map_grid.dims);
+  EXPECT_EQ(cached.map_grid.spacing, result.map_grid.spacing);
 }
 
 TEST_F(PrepTest, SecondRunIsServedFromTheCacheUntilInputOrParametersChange) {
@@ -294,8 +356,11 @@ TEST_F(PrepTest, OutputsAreByteIdenticalForAnyThreadCount) {
     if (method == SurfaceMethod::mask) {
       DistanceParams one;
       one.threads = 1;
+      // On the CT's grid refined by 2 (its 2.5-3 mm exceed the default map spacing).
+      const Refinement k = map_refinement(bone.grid, kDefaultMapSpacingMm);
+      ASSERT_EQ(k, (Refinement{2, 2, 2}));
       EXPECT_EQ(read_nifti_float((outs[3] / kBoneDistanceFile).string()).data,
-                signed_distance(bone, one).data);
+                upsample_aligned(signed_distance(bone, one), k).data);
     }
     fs::remove_all(outs[1]);
     fs::remove_all(outs[3]);

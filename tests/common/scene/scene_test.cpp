@@ -54,6 +54,36 @@ TEST(Scene, LoadsAPrepDirectory) {
   EXPECT_LT(scene.fields->sample_surf({0.0, 0.0, 0.0}).value, 0.0);
 }
 
+// A CT coarser than the map spacing: the scene's grid is the maps' (refined, aligned), the CT and
+// body mask load on their own grid beside it, and the scene frame is the CT's.
+TEST(Scene, MapsOnARefinedGridLoadWithTheirCt) {
+  TempDir dir;
+  PhantomOptions options;
+  options.dims = Index3{30, 30, 30};
+  options.spacing = Vec3{3.0, 3.0, 3.0};
+  const std::string ct_path = dir.file("cube3.nii.gz");
+  write_nifti(ct_path, make_phantom("cube", options));
+  const std::string prep = dir.file("prep");
+  run_prep(ct_path, prep, PrepParams{});
+  SceneOptions load;
+  load.load_ct = true;
+  const Scene scene = load_scene(prep, load);
+  EXPECT_EQ(scene.grid.dims, (Index3{59, 59, 59}));
+  EXPECT_EQ(scene.grid.spacing, (Vec3{1.5, 1.5, 1.5}));
+  ASSERT_TRUE(scene.ct && scene.body);
+  EXPECT_EQ(scene.ct->grid.dims, (Index3{30, 30, 30}));
+  EXPECT_EQ(scene.body->grid.dims, (Index3{30, 30, 30}));
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(scene.grid.extent_mm()[a], 87.0, 1e-9);
+  // The same maps on the CT's own grid sample the same function away from the skin band.
+  PrepParams coarse;
+  coarse.map_spacing_mm = 0.0;
+  run_prep(ct_path, dir.file("coarse"), coarse);
+  const Scene own = load_scene(dir.file("coarse"), load);
+  EXPECT_EQ(own.grid.dims, (Index3{30, 30, 30}));
+  for (const Vec3d x : {Vec3d{43.5, 43.5, 43.5}, Vec3d{10.2, 40.7, 61.3}, Vec3d{1.0, 2.0, 3.0}})
+    EXPECT_NEAR(scene.fields->sample_bone(x).value, own.fields->sample_bone(x).value, 1e-5);
+}
+
 TEST(Scene, CtInputIsPreppedOnceIntoTheCache) {
   TempDir dir;
   const std::string ct = write_small_cube(dir);

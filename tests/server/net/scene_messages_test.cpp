@@ -6,6 +6,7 @@
 
 #include <cstring>
 
+#include "prep/map_refine.hpp"
 #include "support/palpd_test_util.hpp"
 #include "wire/volume_codec.hpp"
 
@@ -60,6 +61,42 @@ TEST(SceneMessages, ShipsTheCtAtTheStepAskedDeflated) {
     k += got;
   }
   EXPECT_EQ(k, 16u);
+}
+
+// Maps on the CT's grid refined by 2 (prep/map_refine.hpp): the HU and body go out from the CT's
+// nearest node, and the body's crop box (in CT voxels) is scaled onto the maps' grid.
+TEST(SceneMessages, MapsOnARefinedGridShipTheCtsNearestNode) {
+  const SceneDescription coarse = ct_scene();
+  SceneDescription scene = coarse;
+  scene.grid = refined_grid(coarse.grid, {2, 2, 2});  // 63^3 nodes of half the spacing
+  DistanceMap fine(scene.grid, 0.0f, "fine");
+  scene.fields = std::make_shared<const FieldSampler>(fine);
+  const VolumePlan plan = plan_volume(scene, {1, 0, true, false, false}, 1 << 20);
+  ASSERT_TRUE(plan.hu);
+  EXPECT_EQ(plan.dims, (std::array<std::int64_t, 3>{63, 63, 63}));
+  v1::VolumeChunk chunk;
+  const std::uint32_t got = fill_volume_chunk(scene, plan, 0, 0, &chunk);
+  ASSERT_GT(got, 3u);
+  const std::string& hu = chunk.hu();
+  for (const auto [i, j, k] :
+       {std::array<std::int64_t, 3>{0, 0, 0}, {4, 6, 2}, {5, 3, 1}, {62, 61, 3}}) {
+    std::int16_t h;
+    std::memcpy(&h, hu.data() + 2 * (i + 63 * (j + 63 * k)), 2);
+    const std::int64_t ci = (i + 1) / 2, cj = (j + 1) / 2, ck = (k + 1) / 2;  // nearest node
+    EXPECT_EQ(h, ci + 32 * cj + 1024 * ck - 16000) << i << " " << j << " " << k;
+  }
+  const VoxelBox crop{{2, 3, 4}, {10, 11, 12}};  // CT voxels
+  const VolumePlan cropped = plan_volume(scene, {1, 0, true, false, false, true}, 1 << 20, &crop);
+  EXPECT_EQ(cropped.offset, (std::array<std::int64_t, 3>{4, 6, 8}));
+  EXPECT_EQ(cropped.dims, (std::array<std::int64_t, 3>{15, 15, 15}));  // (hi - 1) * 2 + 1 - lo
+  // Asked for no step (palpview's default), the volume is no finer than the CT: its nodes.
+  const VolumePlan automatic = plan_volume(scene, {0, 256, true, false, true}, 1 << 20);
+  EXPECT_EQ(automatic.step, 2u);
+  EXPECT_EQ(automatic.dims, (std::array<std::int64_t, 3>{32, 32, 32}));
+  EXPECT_EQ(plan_volume(coarse, {0, 256, true, false, true}, 1 << 20).step, 1u);
+  // A grid that is not the CT's nor a refinement of it: no HU.
+  scene.grid.dims[0] = 64;
+  EXPECT_FALSE(plan_volume(scene, {1, 0, true, false, false}, 1 << 20).hu);
 }
 
 TEST(SceneMessages, NoHuWhenTheSceneHasNoCtAndRawWithoutDeflate) {
