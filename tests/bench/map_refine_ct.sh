@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The real CT's maps on its own 3 mm grid (--map-spacing 0) against the default refinement
+# The real CT's maps on its own 3 mm grid (--map-spacing 0, the default) against refinement
 # (--map-spacing 2: 1.5 mm nodes) and 1 mm (--map-spacing 1): prep's wall time and peak memory,
 # the maps' size, palpd's resident memory with the sim device, `palp run`'s peak memory, and
 # palp bench's tick (finger:37, paper and palp) on each (docs/prep.md, "Finer maps for coarse

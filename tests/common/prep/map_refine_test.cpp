@@ -28,16 +28,17 @@ Grid grid_of(Index3 dims, Vec3 spacing) {
 }
 
 TEST(MapRefine, FactorsFollowTheCoarsestSpacings) {
-  // The real CT (3 mm): 2 per axis at the default, 3 at 1 mm; its own grid at 0.
+  // The real CT (3 mm): 2 per axis at 2 mm, 3 at 1 mm; its own grid at 0, the default.
   const Grid ct = grid_of({122, 101, 112}, {3.0, 3.0, 3.0});
-  EXPECT_EQ(map_refinement(ct, kDefaultMapSpacingMm), (Refinement{2, 2, 2}));
+  EXPECT_EQ(map_refinement(ct, kSuggestedMapSpacingMm), (Refinement{2, 2, 2}));
   EXPECT_EQ(map_refinement(ct, 1.0), (Refinement{3, 3, 3}));
   EXPECT_EQ(map_refinement(ct, 0.0), (Refinement{1, 1, 1}));
+  EXPECT_EQ(map_refinement(ct, kDefaultMapSpacingMm), (Refinement{1, 1, 1}));
   EXPECT_FALSE(is_refined(map_refinement(ct, 0.0)));
   // The torso phantom (1.25 x 1.25 x 2 mm) and the prep benchmarks' grids are not refined.
-  EXPECT_EQ(map_refinement(grid_of({384, 256, 96}, {1.25, 1.25, 2.0}), kDefaultMapSpacingMm),
+  EXPECT_EQ(map_refinement(grid_of({384, 256, 96}, {1.25, 1.25, 2.0}), kSuggestedMapSpacingMm),
             (Refinement{1, 1, 1}));
-  for (const double limit : {kDefaultMapSpacingMm, 1.5}) {
+  for (const double limit : {kSuggestedMapSpacingMm, 1.5}) {
     EXPECT_EQ(map_refinement(grid_of({384, 384, 160}, {0.8, 0.8, 1.5}), limit),
               (Refinement{1, 1, 1}));
     EXPECT_EQ(map_refinement(grid_of({512, 512, 400}, {0.8, 0.8, 1.0}), limit),

@@ -154,13 +154,18 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   EXPECT_THROW(parse_surface_method("voxel"), UsageError);
 }
 
-// The small CT's 2.5 mm slices exceed the default map spacing (2 mm): the maps lie on its grid
-// refined by 2 along k, nodes aligned; the masks and the CT copy stay on the CT's grid.
+// By default the maps lie on the CT's grid voxel for voxel (the spec's outputs). With a map
+// spacing of 2 mm the small CT's 2.5 mm slices are exceeded: the maps lie on its grid refined
+// by 2 along k, nodes aligned; the masks and the CT copy stay on the CT's grid.
 TEST_F(PrepTest, MapsOfACoarseCtLieOnItsAlignedRefinement) {
   CtVolume ct;
   const std::string input = write_small_ct(dir_, &ct);
   PrepParams params;
-  EXPECT_EQ(params.map_spacing_mm, kDefaultMapSpacingMm);
+  const PrepResult by_default = run_prep(input, (dir_ / "default").string(), params);
+  EXPECT_EQ(by_default.map_grid.dims, ct.grid.dims);
+  EXPECT_EQ(read_nifti_float((dir_ / "default" / kSurfaceDistanceFile).string()).grid.dims,
+            ct.grid.dims);
+  params.map_spacing_mm = kSuggestedMapSpacingMm;
   const PrepResult result = run_prep(input, (dir_ / "out").string(), params);
   const Grid fine = refined_grid(ct.grid, {1, 1, 2});
   EXPECT_EQ(result.grid.dims, ct.grid.dims);
@@ -199,7 +204,7 @@ TEST_F(PrepTest, MapsOfACoarseCtLieOnItsAlignedRefinement) {
   EXPECT_EQ(json["map_grid"]["spacing_mm"], nlohmann::json({2.0, 2.0, 1.25}));
   EXPECT_EQ(json["map_grid"]["origin_lps_mm"], json["grid"]["origin_lps_mm"]);
   EXPECT_EQ(json["map_refinement"], nlohmann::json({1, 1, 2}));
-  EXPECT_EQ(json["parameters"]["map_spacing_mm"], kDefaultMapSpacingMm);
+  EXPECT_EQ(json["parameters"]["map_spacing_mm"], kSuggestedMapSpacingMm);
   EXPECT_EQ(json["skin_projection"]["nodes"][1], moved.projected);
   // The map spacing is part of the cache key, and a cached result names its map grid.
   EXPECT_NE(prep_cache_key(input, params), prep_cache_key(input, coarse));
@@ -356,11 +361,10 @@ TEST_F(PrepTest, OutputsAreByteIdenticalForAnyThreadCount) {
     if (method == SurfaceMethod::mask) {
       DistanceParams one;
       one.threads = 1;
-      // On the CT's grid refined by 2 (its 2.5-3 mm exceed the default map spacing).
-      const Refinement k = map_refinement(bone.grid, kDefaultMapSpacingMm);
-      ASSERT_EQ(k, (Refinement{2, 2, 2}));
+      // On the CT's own grid (the default map spacing), voxel for voxel.
+      ASSERT_EQ(map_refinement(bone.grid, kDefaultMapSpacingMm), (Refinement{1, 1, 1}));
       EXPECT_EQ(read_nifti_float((outs[3] / kBoneDistanceFile).string()).data,
-                upsample_aligned(signed_distance(bone, one), k).data);
+                signed_distance(bone, one).data);
     }
     fs::remove_all(outs[1]);
     fs::remove_all(outs[3]);

@@ -11,6 +11,7 @@
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
 #include "io/phantom.hpp"
+#include "prep/map_refine.hpp"
 #include "support/io_test_util.hpp"
 
 namespace palp {
@@ -54,7 +55,7 @@ TEST(Scene, LoadsAPrepDirectory) {
   EXPECT_LT(scene.fields->sample_surf({0.0, 0.0, 0.0}).value, 0.0);
 }
 
-// A CT coarser than the map spacing: the scene's grid is the maps' (refined, aligned), the CT and
+// A CT coarser than an asked map spacing: the scene's grid is the maps' (refined, aligned), the CT and
 // body mask load on their own grid beside it, and the scene frame is the CT's.
 TEST(Scene, MapsOnARefinedGridLoadWithTheirCt) {
   TempDir dir;
@@ -64,7 +65,9 @@ TEST(Scene, MapsOnARefinedGridLoadWithTheirCt) {
   const std::string ct_path = dir.file("cube3.nii.gz");
   write_nifti(ct_path, make_phantom("cube", options));
   const std::string prep = dir.file("prep");
-  run_prep(ct_path, prep, PrepParams{});
+  PrepParams refined;
+  refined.map_spacing_mm = kSuggestedMapSpacingMm;  // 3 mm -> 1.5 mm nodes
+  run_prep(ct_path, prep, refined);
   SceneOptions load;
   load.load_ct = true;
   const Scene scene = load_scene(prep, load);
