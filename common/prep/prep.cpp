@@ -45,8 +45,8 @@ using Clock = std::chrono::steady_clock;
 // Bump when the algorithms change what prep writes, so old caches are not reused.
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
 // bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
-// edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp); 9: a leak's contact dropped
-// with it, edge trim at 0.2
+// edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp); 9: a leak's contact with the
+// bone dropped with it
 constexpr int kPrepAlgorithmVersion = 9;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).

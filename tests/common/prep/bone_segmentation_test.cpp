@@ -151,16 +151,16 @@ TEST(BoneSegmentation, AgainstExpertLabelsOfTheSharedCt) {
   EXPECT_EQ(m.organ_voxels_outside_body, 0);
   EXPECT_GT(m.superficial_voxels, 1000);
   if (fixed) return;
-  // What the method achieves (docs/prep.md: Dice 0.890, precision 0.907, 1.19 mm, rib region
-  // 0.877; 0.887 and 1.20 mm with the edge trim at 0.3). The goal, Dice >= 0.90 and
-  // <= 1.0 mm, is not met on the whole scan; away from the prosthesis, where the labels hold the
-  // bone, the ASSD goal is met and Dice falls short (0.897).
-  EXPECT_GE(m.dice, 0.889);
-  EXPECT_LE(m.assd_mm, 1.195);
-  EXPECT_GE(m.superficial_recall, 0.876);
+  // What the method achieves (docs/prep.md: Dice 0.887, precision 0.912, 1.20 mm, rib region
+  // 0.871). The goal, Dice >= 0.90 and <= 1.0 mm, is not met on the whole scan; away from
+  // the prosthesis, where the labels hold the bone, the surface distance goal is met (0.97 mm) and
+  // Dice falls short (0.893).
+  EXPECT_GE(m.dice, 0.886);
+  EXPECT_LE(m.assd_mm, 1.205);
+  EXPECT_GE(m.superficial_recall, 0.87);
   if (d.metal_margin_mm == kMetalMarginMm) {
-    EXPECT_GE(m.dice_away, 0.896);
-    EXPECT_LE(m.assd_away_mm, 0.955);
+    EXPECT_GE(m.dice_away, 0.892);
+    EXPECT_LE(m.assd_away_mm, 0.975);
   }
   EXPECT_GE(m.precision, 0.89);  // over-segmentation (vessels, calcifications, table) stays rare
 }
@@ -175,10 +175,10 @@ TEST(BoneSegmentation, VariantsTable) {
       "| variant | Dice | precision | recall | ASSD mm | rib recall | Dice away from metal | ASSD "
       "away mm |\n");
   const SegmentationParams base;
-  print_row("default: grow 150, 2 of 3 planes, enclosure 12 mm 10 of 13, edge 0.2",
+  print_row("default: grow 150, 2 of 3 planes, enclosure 12 mm 10 of 13, edge 0.3",
             measure(d, base));
   print_row("the same, levels not adapted", measure(d, base, false));
-  for (const double edge : {0.0, 0.1, 0.3, 0.4, 0.5}) {
+  for (const double edge : {0.0, 0.1, 0.2, 0.4, 0.5}) {
     SegmentationParams p = base;
     p.bone_edge_fraction = edge;
     const std::string name = "edge " + std::to_string(edge).substr(0, 3);
