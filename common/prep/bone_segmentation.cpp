@@ -63,7 +63,9 @@ bool any_face_neighbour(const Grid& g, std::size_t n, Pred pred) {
 
 // Leak removal: the grown voxels below the seed level that are not next to a seed form pieces;
 // a piece that touches the seeds' rim with fewer than `fraction` of its voxels hangs on the bone by
-// a narrow contact — a contrast-filled vessel or an enhancing organ — and is dropped.
+// a narrow contact — a contrast-filled vessel or an enhancing organ — and is dropped, and with it
+// the contact itself: the grown voxels of the rim that touch a dropped piece are the vessel's wall
+// against the bone (its HU, not bone's), which the edge trim would otherwise have to remove.
 void remove_leaks(double fraction, Mask& bone) {
   const Grid& g = bone.grid;
   const auto is_seed = [&](std::int64_t m) { return bone.data[m] == 2; };
@@ -88,6 +90,12 @@ void remove_leaks(double fraction, Mask& bone) {
     std::fill_n(bone.data.begin() + static_cast<std::ptrdiff_t>(first),
                 runs.runs[r].end - runs.runs[r].begin, std::uint8_t{0});
   });
+  const auto dropped = [&](std::int64_t m) { return piece.data[m] && !bone.data[m]; };
+  Mask wall(g, 0, "bone leak contact");
+  for_each_nonzero(bone, [&](std::size_t n) {
+    if (bone.data[n] == 1 && !piece.data[n] && any_face_neighbour(g, n, dropped)) wall.data[n] = 1;
+  });
+  for_each_nonzero(wall, [&](std::size_t n) { bone.data[n] = 0; });
 }
 
 // Cavities: regions outside the bone (6-connected) that do not reach the volume's border and hold

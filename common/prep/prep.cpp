@@ -47,8 +47,8 @@ using Clock = std::chrono::steady_clock;
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
 // bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
 // edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp); 9: maps on a refined grid
-// on coarse CTs (map_refine.hpp)
-constexpr int kPrepAlgorithmVersion = 9;
+// on coarse CTs (map_refine.hpp); 10: a leak's contact with the bone dropped with it
+constexpr int kPrepAlgorithmVersion = 10;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {

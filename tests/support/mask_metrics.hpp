@@ -93,16 +93,30 @@ inline std::vector<double> squared_distance_to(const Mask& set) {
 }
 
 // Mean symmetric distance (mm) between the surfaces of two masks.
-inline double mean_surface_distance(const Mask& a, const Mask& b) {
+// With `region` (same grid), only the surface voxels inside it are averaged; their distances are
+// still to the whole of the other surface.
+inline double mean_surface_distance(const Mask& a, const Mask& b, const Mask* region = nullptr) {
   const Mask sa = surface(a), sb = surface(b);
   const std::vector<double> to_a = squared_distance_to(sa), to_b = squared_distance_to(sb);
   double sum = 0.0;
   std::int64_t n = 0;
   for (std::size_t i = 0; i < sa.size(); ++i) {
+    if (region && !region->data[i]) continue;
     if (sa.data[i]) sum += std::sqrt(to_b[i]), ++n;
     if (sb.data[i]) sum += std::sqrt(to_a[i]), ++n;
   }
   return sum / static_cast<double>(n);
+}
+
+// Dice counted only inside `region` (same grid).
+inline double dice_within(const Mask& a, const Mask& b, const Mask& region) {
+  std::int64_t both = 0, total = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!region.data[i]) continue;
+    both += a.data[i] && b.data[i];
+    total += (a.data[i] != 0) + (b.data[i] != 0);
+  }
+  return 2.0 * static_cast<double>(both) / static_cast<double>(total);
 }
 
 }  // namespace palp::testing

@@ -26,7 +26,28 @@ struct Measured {
   double superficial_recall = 0.0;  // see below
   std::int64_t superficial_voxels = 0;
   std::int64_t organ_voxels_outside_body = 0;
+  // The same away from the hip prosthesis (see far_from_metal): Dice and ASSD.
+  double dice_away = 0.0;
+  double assd_away_mm = 0.0;
 };
+
+// HU no bone reaches (cortical bone stays below ~2000 HU): a metal implant.
+constexpr double kMetalHu = 2500.0;
+// Around the shared CT's right hip prosthesis the experts' labels hold the implant (93 % of its
+// voxels >= 2500 HU are bone) but not the proximal femur around it: the ring of 150-650 HU
+// around the stem and the trochanter lateral to it, a region the size and place of the left
+// proximal femur, which they label whole; it reaches about 45 mm from the metal. That region is
+// measured apart: voxels farther than this from any metal voxel.
+constexpr double kMetalMarginMm = 50.0;
+
+Mask far_from_metal(const CtVolume& ct, double margin_mm) {
+  Mask metal(ct.grid, 0);
+  for (std::size_t n = 0; n < metal.data.size(); ++n) metal.data[n] = ct.data[n] >= kMetalHu;
+  const std::vector<double> d2 = testing::squared_distance_to(metal);
+  Mask far(ct.grid, 0);
+  for (std::size_t n = 0; n < far.data.size(); ++n) far.data[n] = d2[n] > margin_mm * margin_mm;
+  return far;
+}
 
 // Superficial anterolateral bone, where palpation feels ribs, costal cartilage and the iliac
 // crests: expert bone voxels within 30 mm of the body's outside and not in the posterior 30 % of
@@ -42,8 +63,9 @@ Mask superficial_bone(const Mask& truth_bone, const Mask& body) {
 
 struct SharedCt {
   CtVolume ct;
-  Mask body, truth_bone, organs, superficial;
+  Mask body, truth_bone, organs, superficial, away_from_metal;
   HuLevels levels;
+  double metal_margin_mm = 0.0;
 };
 
 // The shared CT, its body mask and the expert labels; false when the data is absent.
@@ -65,6 +87,10 @@ bool load_shared_ct(SharedCt& d) {
     d.organs.data[n] = labels.data[n] == 1.0f;
   }
   d.superficial = superficial_bone(d.truth_bone, d.body);
+  // PALP_BONE_METAL_MARGIN_MM=X: another margin (docs/prep.md lists 30, 50 and 80 mm).
+  const char* margin = std::getenv("PALP_BONE_METAL_MARGIN_MM");
+  d.metal_margin_mm = margin ? std::atof(margin) : kMetalMarginMm;
+  d.away_from_metal = far_from_metal(d.ct, d.metal_margin_mm);
   return true;
 }
 
@@ -83,6 +109,8 @@ Measured measure(const SharedCt& d, SegmentationParams params, bool adapt = true
   m.precision = both / static_cast<double>(testing::count(bone));
   m.recall = both / static_cast<double>(testing::count(d.truth_bone));
   m.organ_voxels_outside_body = testing::count_and_not(d.organs, d.body);
+  m.dice_away = testing::dice_within(bone, d.truth_bone, d.away_from_metal);
+  m.assd_away_mm = testing::mean_surface_distance(bone, d.truth_bone, &d.away_from_metal);
   m.superficial_voxels = testing::count(d.superficial);
   m.superficial_recall = static_cast<double>(testing::count_both(d.superficial, bone)) /
                          static_cast<double>(m.superficial_voxels);
@@ -90,8 +118,8 @@ Measured measure(const SharedCt& d, SegmentationParams params, bool adapt = true
 }
 
 void print_row(const char* name, const Measured& m) {
-  std::printf("| %s | %.3f | %.3f | %.3f | %.2f | %.3f |\n", name, m.dice, m.precision, m.recall,
-              m.assd_mm, m.superficial_recall);
+  std::printf("| %s | %.3f | %.3f | %.3f | %.2f | %.3f | %.3f | %.2f |\n", name, m.dice,
+              m.precision, m.recall, m.assd_mm, m.superficial_recall, m.dice_away, m.assd_away_mm);
 }
 
 TEST(BoneSegmentation, AgainstExpertLabelsOfTheSharedCt) {
@@ -111,15 +139,29 @@ TEST(BoneSegmentation, AgainstExpertLabelsOfTheSharedCt) {
       m.dice, m.precision, m.recall, m.assd_mm, m.superficial_recall,
       static_cast<long long>(m.superficial_voxels),
       static_cast<long long>(m.organ_voxels_outside_body));
+  std::int64_t metal = 0, metal_bone = 0;
+  for (std::size_t n = 0; n < d.ct.data.size(); ++n) {
+    metal += d.ct.data[n] >= kMetalHu;
+    metal_bone += d.ct.data[n] >= kMetalHu && d.truth_bone.data[n];
+  }
+  std::printf("metal (>= %.0f HU): %lld voxels, %lld of them bone in the labels\n", kMetalHu,
+              static_cast<long long>(metal), static_cast<long long>(metal_bone));
+  std::printf("farther than %.0f mm from metal: Dice %.3f, ASSD %.2f mm\n", d.metal_margin_mm,
+              m.dice_away, m.assd_away_mm);
   EXPECT_EQ(m.organ_voxels_outside_body, 0);
   EXPECT_GT(m.superficial_voxels, 1000);
   if (fixed) return;
   // What the method achieves (docs/prep.md: Dice 0.887, precision 0.912, 1.20 mm, rib region
-  // 0.871; 0.876 and 1.27 mm before the marrow between cortices). The goal, Dice >= 0.90
-  // and <= 1.0 mm, is not met.
+  // 0.871). The goal, Dice >= 0.90 and <= 1.0 mm, is not met on the whole scan; away from
+  // the prosthesis, where the labels hold the bone, the surface distance goal is met (0.97 mm) and
+  // Dice falls short (0.893).
   EXPECT_GE(m.dice, 0.886);
   EXPECT_LE(m.assd_mm, 1.205);
   EXPECT_GE(m.superficial_recall, 0.87);
+  if (d.metal_margin_mm == kMetalMarginMm) {
+    EXPECT_GE(m.dice_away, 0.892);
+    EXPECT_LE(m.assd_away_mm, 0.975);
+  }
   EXPECT_GE(m.precision, 0.89);  // over-segmentation (vessels, calcifications, table) stays rare
 }
 
@@ -129,7 +171,9 @@ TEST(BoneSegmentation, VariantsTable) {
   if (std::getenv("PALP_BONE_VARIANTS") == nullptr) GTEST_SKIP() << "set PALP_BONE_VARIANTS=1";
   SharedCt d;
   if (!load_shared_ct(d)) GTEST_SKIP() << "the shared CT or its labels are not in the data folder";
-  std::printf("| variant | Dice | precision | recall | ASSD mm | rib recall |\n");
+  std::printf(
+      "| variant | Dice | precision | recall | ASSD mm | rib recall | Dice away from metal | ASSD "
+      "away mm |\n");
   const SegmentationParams base;
   print_row("default: grow 150, 2 of 3 planes, enclosure 12 mm 10 of 13, edge 0.3",
             measure(d, base));

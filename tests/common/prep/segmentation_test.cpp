@@ -316,6 +316,29 @@ TEST(SegmentBone, DoesNotGrowIntoAContrastBlobTouchingBone) {
   EXPECT_EQ(block, 30 * 20 * 40);
 }
 
+TEST(SegmentBone, ALeakIsDroppedWithItsContactEvenWithoutEdgeTrim) {
+  // The blob's voxels against the block's face sit next to seeds, so they are not part of the
+  // leak piece; they go with it (the edge trim is off here, so nothing else removes them).
+  CtVolume ct = bone_scene();
+  box(ct, {20, 40, 10}, {50, 60, 50}, 800);  // a bone block
+  ball(ct, {61, 50, 30}, 11, 250);           // contrast-filled vessel touching its face at i = 50
+  SegmentationParams no_trim;
+  no_trim.bone_edge_fraction = 0.0;
+  const Segmented s = segment(ct, no_trim);
+  std::int64_t contact = 0;
+  for (std::int64_t k = 0; k < 60; ++k)
+    for (std::int64_t j = 0; j < 100; ++j) contact += ct.at(50, j, k) == 250;
+  ASSERT_GT(contact, 0);  // the ball does touch the face
+  EXPECT_EQ(count(s.bone), 30 * 20 * 40);
+  for (std::int64_t k = 0; k < 60; ++k)
+    for (std::int64_t j = 0; j < 100; ++j) EXPECT_FALSE(s.bone.at(50, j, k)) << j << " " << k;
+  // A grown region that rests on the bone across a broad face is bone, contact and all.
+  CtVolume broad = bone_scene();
+  box(broad, {20, 40, 10}, {50, 60, 50}, 800);
+  box(broad, {50, 40, 10}, {54, 60, 50}, 250);  // a 4-voxel layer of lower-HU bone on the face
+  EXPECT_EQ(count(segment(broad, no_trim).bone), 34 * 20 * 40);
+}
+
 TEST(SegmentBone, DropsSmallIslandsAndStaysInsideTheBody) {
   CtVolume ct = bone_scene();
   box(ct, {20, 20, 20}, {40, 40, 40}, 800);  // 8 ml of bone
