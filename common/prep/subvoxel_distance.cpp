@@ -142,11 +142,19 @@ struct Parabolas {
       std::fill(f, f + n, kNone);
       return;
     }
-    std::size_t segment = 0;
-    for (std::int64_t x = 0; x < n; ++x) {
-      while (bounds[segment + 1] < static_cast<double>(x)) ++segment;
-      const double c = static_cast<double>(x - sites[segment]);
-      f[x] = static_cast<float>(site_f[segment] + w2 * c * c);
+    // Site s is the lowest at the x with bounds[s] < x <= bounds[s + 1] (the bounds rise).
+    std::int64_t x = 0;
+    for (std::size_t segment = 0; segment < count && x < n; ++segment) {
+      const double bound = bounds[segment + 1];
+      const std::int64_t end = bound >= static_cast<double>(n - 1) ? n
+                               : bound < 0.0                       ? 0
+                                             : static_cast<std::int64_t>(std::floor(bound)) + 1;
+      const double height = site_f[segment];
+      const std::int64_t q = sites[segment];
+      for (; x < end; ++x) {
+        const double c = static_cast<double>(x - q);
+        f[x] = static_cast<float>(height + w2 * c * c);
+      }
     }
   }
 };
