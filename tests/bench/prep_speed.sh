@@ -32,7 +32,7 @@ while [ $# -gt 0 ]; do
     --work) work=$2; shift 2 ;;
     --scipy-s) scipy_s=$2; shift 2 ;;
     --before) before=$2; shift 2 ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "prep_speed.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
