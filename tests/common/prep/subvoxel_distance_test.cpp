@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <random>
 
@@ -240,6 +241,29 @@ TEST(SubvoxelDistance, FarFieldIsTheExactDistanceToThePoints) {
         ASSERT_NEAR(map.at(i, j, k), expected, 1.0 / 2048 + 1e-4 * (1.0 + best))
             << i << " " << j << " " << k;
       }
+}
+
+// The far field and the band run over slices in parallel (the points along k by their columns):
+// the map is the same, bit for bit, for any thread count, on an anisotropic grid with several
+// surfaces along each column.
+TEST(SubvoxelDistance, MapIsBitIdenticalForAnyThreadCount) {
+  const Shape shape = [](double x, double y, double z) {
+    const double a = 9.0 - std::hypot(x - 14.2, y - 15.1, z - 12.7);
+    const double b = 5.0 - std::hypot(x - 15.4, y - 14.3, z - 32.1);
+    return std::max(a, b);
+  };
+  Phantom p = render(shape, 16, 2.5, 9u);
+  p.ct.grid.spacing = p.mask.grid.spacing = {2.5, 2.0, 3.0};
+  const SurfacePoints points = surface_points(p.ct, p.mask, kIso, 1);
+  DistanceMap one, other;
+  subvoxel_signed_distance(points, p.mask, 4.0, 60.0, one, 1);
+  for (const unsigned threads : {2u, 3u, 7u}) {
+    EXPECT_EQ(surface_points(p.ct, p.mask, kIso, threads).points.size(), points.points.size());
+    subvoxel_signed_distance(points, p.mask, 4.0, 60.0, other, threads);
+    ASSERT_EQ(other.data.size(), one.data.size());
+    EXPECT_EQ(0, std::memcmp(other.data.data(), one.data.data(), one.data.size() * sizeof(float)))
+        << threads << " threads";
+  }
 }
 
 }  // namespace
