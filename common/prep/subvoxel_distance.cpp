@@ -118,9 +118,13 @@ struct Parabolas {
         site_value(static_cast<std::size_t>(n)) {}
 
   void solve(float* f, std::int64_t n, double w2, double reach2) {
+    // f <= reach2 exactly when f <= the largest float not above reach2 (a float compare).
+    float reach2f = static_cast<float>(reach2);
+    if (static_cast<double>(reach2f) > reach2)
+      reach2f = std::nextafter(reach2f, -std::numeric_limits<float>::infinity());
     std::size_t count = 0;
     for (std::int64_t q = 0; q < n; ++q) {
-      if (!(f[q] <= reach2)) continue;
+      if (!(f[q] <= reach2f)) continue;
       const double fq = f[q] + w2 * static_cast<double>(q) * static_cast<double>(q);
       while (count > 0) {
         const auto p = sites[count - 1];
