@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -440,6 +441,19 @@ SurfacePoints surface_points(const CtVolume& ct, const Mask& mask, double iso_hu
             const std::uint8_t* next_slice =
                 k + 1 < n[2] ? &mask.data[grid.linear(0, j, k + 1)] : nullptr;
             for (std::int64_t i = 0; i < n[0]; ++i) {
+              // Eight voxels at once where no edge can change (most of the grid): the same bytes
+              // one voxel on, in the next row and in the next slice.
+              if (next_row != nullptr && next_slice != nullptr && i + 9 <= n[0]) {
+                std::uint64_t here, on, up, above;
+                std::memcpy(&here, row + i, 8);
+                std::memcpy(&on, row + i + 1, 8);
+                std::memcpy(&up, next_row + i, 8);
+                std::memcpy(&above, next_slice + i, 8);
+                if (here == on && here == up && here == above) {
+                  i += 7;
+                  continue;
+                }
+              }
               const bool in = row[i] != 0;
               const bool differs[3] = {i + 1 < n[0] && (row[i + 1] != 0) != in,
                                        next_row && (next_row[i] != 0) != in,
