@@ -181,7 +181,11 @@ Volume<Out> load_volume(const StoredImage& image) {
   Volume<Out> volume;
   volume.grid = image.grid;
   // palp's own gzip files say where each member lies: decoded on all cores (gzip_index.hpp).
-  if (v.compression == Compression::gzip && v.file_offset == 0 && !v.at_end_of_file) {
+  // The volume is then allocated whole before the members are checked, so only for a claim
+  // within the room the streaming reader would reserve at once (16:1; palp's CT and maps are
+  // 2-5:1): a lying header still costs no more than that.
+  if (v.compression == Compression::gzip && v.file_offset == 0 && !v.at_end_of_file &&
+      need + v.skip <= compressed * kFirstRoomRatio) {
     if (read_indexed_gzip(
             v.path, v.skip, need, element, default_thread_count(),
             [&] { volume.data.resize(static_cast<std::size_t>(count)); },
