@@ -16,6 +16,7 @@
 #include <limits>
 
 #include "base/errors.hpp"
+#include "io/gzip_index.hpp"
 
 namespace palp {
 namespace {
@@ -26,6 +27,8 @@ constexpr std::size_t kMaxZlibChunk = std::size_t{1} << 30;  // fits zlib's uInt
 // this window and its output this buffer (palp writes members of 4 MiB input; others fall back).
 constexpr std::size_t kFastWindowBytes = std::size_t{8} << 20;
 constexpr std::size_t kFastMemberBytes = std::size_t{8} << 20;
+// Larger members are written without their length (they never are: members hold 4 MiB).
+constexpr std::size_t kMaxIndexedMemberInput = std::size_t{64} << 20;
 
 std::string errno_text(int error) {
   return std::strerror(error);
@@ -433,18 +436,23 @@ class MemberCompressor {
     stream.level = static_cast<std::uint32_t>(level_);
     stream.level_buf = level_buffer_.data();
     stream.level_buf_size = static_cast<std::uint32_t>(level_buffer_.size());
-    stream.gzip_flag = IGZIP_GZIP;
+    // Members a reader may decode in parallel carry their length (gzip_index.hpp): igzip writes
+    // the deflate data and the trailer, the header with the length goes in front.
+    const bool indexed = in.size() <= kMaxIndexedMemberInput;
+    const std::size_t header = indexed ? kIndexedHeaderBytes : 0;
+    stream.gzip_flag = indexed ? IGZIP_GZIP_NO_HDR : IGZIP_GZIP;
     stream.end_of_stream = 1;
     stream.flush = NO_FLUSH;
     stream.next_in = const_cast<std::uint8_t*>(in.data());
     stream.avail_in = static_cast<std::uint32_t>(in.size());
-    stream.next_out = scratch.data();
-    stream.avail_out = static_cast<std::uint32_t>(scratch.size());
+    stream.next_out = scratch.data() + header;
+    stream.avail_out = static_cast<std::uint32_t>(scratch.size() - header);
     std::size_t n = 0;
     const int rc = isal_deflate_stateless(&stream);
     clear_upper_vector_state();
     if (rc == COMP_OK) {
-      n = stream.total_out;
+      n = header + stream.total_out;
+      if (indexed) write_indexed_header(scratch.data(), static_cast<std::uint32_t>(n));
     } else {
       n = libdeflate_member(in, scratch);
     }

@@ -1,15 +1,17 @@
 // Preprocessing pipeline (see prep.hpp). Stages and their data flow:
 //   read CT      input file / DICOM dir / phantom -> CtVolume (HU)
 //   body mask    CT -> body (patient only, internal air filled)
-//   bone mask    CT + body -> bone
-//   surface points  CT + masks -> iso-surface points on the masks' edges (subvoxel only; the CT
-//                is released after this stage)
-//   d_surf       body (+ skin points) -> signed distance map, written and released before the next
-//                (or written in the background while d_bone is computed, when memory allows)
-//   d_bone       bone (+ bone points) -> signed distance map
-//   prep.json    grid, parameters, counts, timings, peak memory, cache key
+//   then two threads at once:
+//     surf_job   skin points (CT + body -> iso-surface points on the mask's edges, subvoxel
+//                only), d_surf (body + skin points -> signed distance map, projected onto the
+//                HU iso-surface), write d_surf; the job holds the CT until its projection is done
+//     this one   HU levels, bone mask (CT + body -> bone), bone points (subvoxel only), then
+//                waits for surf_job
+//   d_bone       bone (+ bone points) -> signed distance map, in d_surf's buffer; write d_bone
+//   prep.json    grid, parameters, counts, timings, CPU seconds, peak memory, cache key
 // The CT copy and the masks are written on a background thread (background_writes.hpp) from the
-// moment each is final, while segmentation goes on; they are waited for before the maps.
+// moment each is final; they are waited for before d_bone. Bone segmentation runs mostly on one
+// core, so d_surf on the other costs little wall time.
 #include "prep/prep.hpp"
 
 #include <algorithm>
@@ -17,6 +19,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -179,6 +182,13 @@ void write_atomically(const fs::path& path, const V& volume, const Extra&... ext
   if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
 }
 
+// CPU seconds of the whole process so far (all threads).
+double process_cpu_seconds() {
+  timespec t{};
+  if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) != 0) return 0.0;
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 // The smallest and largest value of a map, in parallel (the maps hold 10^8 voxels).
 void value_range(const DistanceMap& map, float range[2], unsigned threads) {
   if (threads == 0) threads = default_thread_count();
@@ -201,10 +211,6 @@ void value_range(const DistanceMap& map, float range[2], unsigned threads) {
     range[1] = std::max(range[1], hi);
   }
 }
-
-// d_surf is written while d_bone is computed only when the process's peak memory so far plus a
-// second map stays within this (the budget is 1.5 GB at 512x512x400).
-constexpr std::size_t kOverlapMemoryBytes = std::size_t{1200} << 20;
 
 // True when out_dir holds a complete result of this cache key.
 bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::json* cached) {
@@ -290,9 +296,10 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   auto stage = [&](const std::string& name, auto&& work) {
     if (progress) progress(name, false, 0.0);
     const auto t0 = Clock::now();
+    const double cpu0 = process_cpu_seconds();
     work();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    result.stages.push_back({name, seconds, peak_rss_bytes()});
+    result.stages.push_back({name, seconds, peak_rss_bytes(), process_cpu_seconds() - cpu0});
     if (progress) progress(name, true, seconds);
   };
 
@@ -344,6 +351,58 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
           ". To prep it anyway: palp prep --not-hu-ok INPUT --out DIR (then use DIR as the "
           "scene)");
   }
+  // d_surf needs only the CT, the body mask and the skin level: it is computed and written on a
+  // thread of its own (`surf_job`) while this one segments the bone (mostly one core), then its
+  // buffer serves d_bone.
+  const bool subvoxel = params.surface.method == SurfaceMethod::subvoxel;
+  const double band = subvoxel_band_mm(params.surface, ct.grid);
+  const double coarsest = ct.grid.max_spacing();
+  const double projection = skin_projection_mm(params.surface, ct.grid);
+  DistanceMap map;
+  SurfacePoints skin_points, bone_points;
+  nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
+  IsoProjectionStats projected;
+  std::size_t skin_count[2] = {0, 0};  // the skin's points, and how many the HU placed
+  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
+  // The maps' grid: the CT's, or its aligned refinement (--map-spacing; prep/map_refine.hpp).
+  const Refinement refine = map_refinement(result.grid, params.map_spacing_mm);
+  result.map_grid = refined_grid(result.grid, refine);
+  // The map of `mask` into `map` on the CT's grid, upsampled to the maps' grid when refined, then
+  // (the skin's, when `hu`) projected onto the HU iso-surface at the maps' nodes.
+  auto compute_map = [&](const Mask& mask, const SurfacePoints& points, const CtVolume* hu) {
+    if (subvoxel) {
+      subvoxel_signed_distance(points, mask, band, params.distance.band_mm, map,
+                               params.distance.threads);
+    } else {
+      signed_distance(mask, params.distance, map);
+    }
+    if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
+    if (subvoxel && hu != nullptr)
+      projected = project_onto_iso_surface(*hu, mask, params.surface.skin_hu, projection, coarsest,
+                                           0.25 * coarsest, params.distance.band_mm, map,
+                                           params.distance.threads);
+  };
+  // The HU are needed by d_surf past the bone's points only for its projection onto their
+  // iso-surface; the job drops them after it. Nobody changes them: the writers read them.
+  std::shared_ptr<const CtVolume> surf_ct = ct_owner;
+  BackgroundWrites surf_job;  // after everything its jobs use, so it ends before they do
+  if (subvoxel) {
+    surf_job.add("skin points", [&] {
+      skin_points = surface_points(*surf_ct, body, params.surface.skin_hu, params.distance.threads);
+      skin_count[0] = skin_points.points.size();
+      skin_count[1] = skin_points.interpolated;
+    });
+  }
+  surf_job.add("d_surf", [&] {
+    compute_map(body, skin_points, subvoxel && projection != 0.0 ? surf_ct.get() : nullptr);
+    surf_ct.reset();
+    skin_points = SurfacePoints{};
+    value_range(map, surf_range, params.distance.threads);
+  });
+  surf_job.add("write d_surf", [&] {
+    write_atomically(dir / kSurfaceDistanceFile, map, surf_range[0], surf_range[1]);
+  });
+
   // The bone levels, shifted with the scan's soft-tissue peak unless given (prep/hu_levels.hpp).
   SegmentationParams segmentation = params.segmentation;
   SurfaceParams surface = params.surface;
@@ -358,77 +417,30 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   });
   stage("bone mask", [&] { *bone_owner = segment_bone(ct, body, segmentation, &result.stats); });
   write_in_background("bg write bone", kBoneFile, bone_owner);
-  const bool subvoxel = params.surface.method == SurfaceMethod::subvoxel;
-  SurfacePoints skin_points, bone_points;
-  nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
   if (subvoxel) {
-    stage("surface points", [&] {
-      skin_points = surface_points(ct, body, params.surface.skin_hu, params.distance.threads);
+    stage("bone points", [&] {
       bone_points = surface_points(ct, bone, surface.bone_hu, params.distance.threads);
-      point_counts = {{"skin", {skin_points.points.size(), skin_points.interpolated}},
-                      {"bone", {bone_points.points.size(), bone_points.interpolated}}};
     });
   }
-  // The HU are needed past here only by d_surf's projection onto their iso-surface; without it
-  // the writer frees them once the copy is written. Nobody changes them: the writer reads them.
-  const double projection = skin_projection_mm(params.surface, result.grid);
-  std::shared_ptr<const CtVolume> hu_for_projection;
-  if (subvoxel && projection != 0.0) hu_for_projection = ct_owner;
   ct_owner.reset();
   result.stats.body_voxels = count_nonzero(body);
   result.stats.bone_voxels = count_nonzero(bone);
-  // The maps need their memory: the CT's copy must be out first (it usually is by now).
   std::vector<BackgroundWrites::Done> written;
+  stage("wait d_surf", [&] { written = surf_job.wait(); });
+  report_background(written);
+  if (subvoxel) {
+    point_counts = {{"skin", {skin_count[0], skin_count[1]}},
+                    {"bone", {bone_points.points.size(), bone_points.interpolated}}};
+  }
+  // The CT's copy and the masks are out by now (they usually are long before).
   stage("wait CT+masks", [&] { written = writes.wait(); });
   report_background(written);
 
-  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
-  // d_surf is written in the background while d_bone is computed when a second map fits the
-  // memory budget (the 384x384x160 benchmark); otherwise (512x512x400: 1.09 GiB + 0.4 GiB) one
-  // buffer serves both maps, each written before the next is computed.
-  DistanceMap map;
-  const double band = subvoxel_band_mm(params.surface, result.grid);
-  const double coarsest = result.grid.max_spacing();
-  IsoProjectionStats projected;
-  const Refinement refine = map_refinement(result.grid, params.map_spacing_mm);
-  result.map_grid = refined_grid(result.grid, refine);
-  auto distance_stage = [&](const char* name, const char* file, const Mask& mask,
-                            SurfacePoints& points, float* range, bool last) {
-    stage(name, [&] {
-      if (subvoxel) {
-        subvoxel_signed_distance(points, mask, band, params.distance.band_mm, map,
-                                 params.distance.threads);
-      } else {
-        signed_distance(mask, params.distance, map);
-      }
-      if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
-      if (subvoxel && &mask == &body && hu_for_projection) {
-        projected = project_onto_iso_surface(*hu_for_projection, body, params.surface.skin_hu,
-                                             projection, coarsest, 0.25 * coarsest,
-                                             params.distance.band_mm, map, params.distance.threads);
-        hu_for_projection.reset();  // the HU are not needed past this
-      }
-    });
-    points = SurfacePoints{};
-    value_range(map, range, params.distance.threads);
-    const std::size_t map_bytes = map.data.size() * sizeof(float);
-    if (!last && peak_rss_bytes() + map_bytes <= kOverlapMemoryBytes) {
-      auto owner = std::make_shared<const DistanceMap>(std::move(map));
-      map = DistanceMap{};
-      writes.add(std::string("bg write ") + name,
-                 [owner, path = dir / file, lo = range[0], hi = range[1]] {
-                   write_atomically(path, *owner, lo, hi);
-                 });
-      return;
-    }
-    stage(std::string("write ") + name,
-          [&] { write_atomically(dir / file, map, range[0], range[1]); });
-  };
-  distance_stage("d_surf", kSurfaceDistanceFile, body, skin_points, surf_range, false);
-  distance_stage("d_bone", kBoneDistanceFile, bone, bone_points, bone_range, true);
-  written.clear();
-  stage("wait d_surf", [&] { written = writes.wait(); });
-  report_background(written);
+  stage("d_bone", [&] { compute_map(bone, bone_points, nullptr); });
+  bone_points = SurfacePoints{};
+  value_range(map, bone_range, params.distance.threads);
+  stage("write d_bone",
+        [&] { write_atomically(dir / kBoneDistanceFile, map, bone_range[0], bone_range[1]); });
 
   result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.peak_rss_bytes = peak_rss_bytes();
@@ -479,6 +491,11 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   for (const auto& s : result.stages) timings[s.name] = s.seconds;
   timings["total"] = result.total_seconds;
   json["timings_s"] = timings;
+  nlohmann::json cpu = nlohmann::json::object();
+  for (const auto& s : result.stages)
+    if (s.cpu_seconds > 0.0) cpu[s.name] = s.cpu_seconds;
+  cpu["total"] = process_cpu_seconds();
+  json["cpu_seconds"] = cpu;
   json["peak_memory_bytes"] = result.peak_rss_bytes;
   nlohmann::json stage_peaks = nlohmann::json::object();
   for (const auto& s : result.stages) stage_peaks[s.name] = s.peak_rss_bytes;

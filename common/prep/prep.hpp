@@ -57,6 +57,9 @@ struct StageTiming {
   std::string name;
   double seconds = 0.0;
   std::size_t peak_rss_bytes = 0;  // the process's peak resident memory when the stage ended
+  // CPU seconds of the whole process (every thread, a background write included) during the
+  // stage: steadier than the wall clock on a shared machine. 0 for background writes.
+  double cpu_seconds = 0.0;
 };
 
 struct PrepResult {

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -104,27 +105,31 @@ SurfacePoint edge_point(const CtVolume& ct, std::int64_t i, std::int64_t j, std:
 
 constexpr float kNone = std::numeric_limits<float>::infinity();
 
-// Lower envelope of y = f[q] + w2 (x - q)^2 over the q with finite f, written over f.
+// Lower envelope of y = f[q] + w2 (x - q)^2 over the q with finite f, written over f. Each site
+// keeps its f and f + w2 q^2, so f itself can be overwritten without a copy of it.
 struct Parabolas {
   std::vector<std::int32_t> sites;
   std::vector<double> bounds;
-  std::vector<float> in;
+  std::vector<double> site_f;      // f[q] of each site in the envelope
+  std::vector<double> site_value;  // f[q] + w2 q^2 of each site in the envelope
   explicit Parabolas(std::int64_t n)
       : sites(static_cast<std::size_t>(n)),
         bounds(static_cast<std::size_t>(n) + 1),
-        in(static_cast<std::size_t>(n)) {}
+        site_f(static_cast<std::size_t>(n)),
+        site_value(static_cast<std::size_t>(n)) {}
 
   void solve(float* f, std::int64_t n, double w2, double reach2) {
+    // f <= reach2 exactly when f <= the largest float not above reach2 (a float compare).
+    float reach2f = static_cast<float>(reach2);
+    if (static_cast<double>(reach2f) > reach2)
+      reach2f = std::nextafter(reach2f, -std::numeric_limits<float>::infinity());
     std::size_t count = 0;
     for (std::int64_t q = 0; q < n; ++q) {
-      in[static_cast<std::size_t>(q)] = f[q];
-      if (!(f[q] <= reach2)) continue;
+      if (!(f[q] <= reach2f)) continue;
       const double fq = f[q] + w2 * static_cast<double>(q) * static_cast<double>(q);
       while (count > 0) {
         const auto p = sites[count - 1];
-        const double fp =
-            in[static_cast<std::size_t>(p)] + w2 * static_cast<double>(p) * static_cast<double>(p);
-        const double s = (fq - fp) / (2.0 * w2 * static_cast<double>(q - p));
+        const double s = (fq - site_value[count - 1]) / (2.0 * w2 * static_cast<double>(q - p));
         if (s > bounds[count - 1]) {
           bounds[count] = s;
           break;
@@ -133,6 +138,8 @@ struct Parabolas {
       }
       if (count == 0) bounds[0] = -std::numeric_limits<double>::infinity();
       sites[count] = static_cast<std::int32_t>(q);
+      site_f[count] = f[q];
+      site_value[count] = fq;
       ++count;
       bounds[count] = std::numeric_limits<double>::infinity();
     }
@@ -140,12 +147,19 @@ struct Parabolas {
       std::fill(f, f + n, kNone);
       return;
     }
-    std::size_t segment = 0;
-    for (std::int64_t x = 0; x < n; ++x) {
-      while (bounds[segment + 1] < static_cast<double>(x)) ++segment;
-      const auto q = sites[segment];
-      const double c = static_cast<double>(x - q);
-      f[x] = static_cast<float>(in[static_cast<std::size_t>(q)] + w2 * c * c);
+    // Site s is the lowest at the x with bounds[s] < x <= bounds[s + 1] (the bounds rise).
+    std::int64_t x = 0;
+    for (std::size_t segment = 0; segment < count && x < n; ++segment) {
+      const double bound = bounds[segment + 1];
+      const std::int64_t end = bound >= static_cast<double>(n - 1) ? n
+                               : bound < 0.0                       ? 0
+                                             : static_cast<std::int64_t>(std::floor(bound)) + 1;
+      const double height = site_f[segment];
+      const std::int64_t q = sites[segment];
+      for (; x < end; ++x) {
+        const double c = static_cast<double>(x - q);
+        f[x] = static_cast<float>(height + w2 * c * c);
+      }
     }
   }
 };
@@ -153,6 +167,12 @@ struct Parabolas {
 // 1D pass along a line: on entry f[q] holds the fraction t of the point on the edge (q, q+1), or
 // a negative value for none; on exit the squared distance (mm^2) to the nearest point, or kNone.
 void nearest_on_line(float* f, std::int64_t n, double w, std::vector<float>& scratch) {
+  // A line without points (most of them) is kNone throughout.
+  const float* first = std::find_if(f, f + n, [](float t) { return t >= 0.0f; });
+  if (first == f + n) {
+    std::fill(f, f + n, kNone);
+    return;
+  }
   scratch.assign(f, f + n);
   double last = -std::numeric_limits<double>::infinity();  // position of the nearest point left
   for (std::int64_t x = 0; x < n; ++x) {
@@ -249,20 +269,89 @@ void along_rows(float* slice, std::int64_t n0, std::int64_t n1, Fn fn) {
   for (std::int64_t j = 0; j < n1; ++j) fn(slice + j * n0, n0);
 }
 
+// The points on edges along axis 2, grouped by column (i, j) and ordered by k within each: the
+// 1D pass along axis 2 needs, for a voxel, only the nearest of them below and above it in its
+// column, so it is evaluated slice by slice without a volume of its own.
+struct Columns {
+  std::vector<std::uint32_t> begin;  // column c = j * n0 + i: entries [begin[c], begin[c + 1])
+  std::vector<std::int32_t> k;       // the edge's lower voxel along axis 2
+  std::vector<float> t;              // the point's fraction along the edge
+
+  explicit Columns(const SurfacePoints& surface) {
+    const Index3 n = surface.grid.dims;
+    const std::size_t columns = static_cast<std::size_t>(n[0] * n[1]);
+    begin.assign(columns + 1, 0);
+    for (const SurfacePoint& p : surface.points)
+      if (p.axis == 2) ++begin[column(p, n) + 1];
+    for (std::size_t c = 0; c < columns; ++c) begin[c + 1] += begin[c];
+    k.resize(begin[columns]);
+    t.resize(begin[columns]);
+    std::vector<std::uint32_t> fill(begin.begin(), begin.end() - 1);
+    for (const SurfacePoint& p : surface.points) {  // in order of k: each column comes out sorted
+      if (p.axis != 2) continue;
+      const std::uint32_t at = fill[column(p, n)]++;
+      k[at] = p.k;
+      t[at] = p.t;
+    }
+  }
+  static std::size_t column(const SurfacePoint& p, const Index3& n) {
+    return static_cast<std::size_t>(p.j) * static_cast<std::size_t>(n[0]) +
+           static_cast<std::size_t>(p.i);
+  }
+  // First entry of column c at or above slice z (cursor: the column's entries below z skipped).
+  std::uint32_t first_at_or_above(std::size_t c, std::int64_t z) const {
+    return static_cast<std::uint32_t>(
+        std::lower_bound(k.begin() + begin[c], k.begin() + begin[c + 1], z) - k.begin());
+  }
+};
+
+// One slice of the 1D pass along axis 2 (what nearest_on_line would give along each column):
+// the squared distance (mm^2) to the nearest axis-2 point of the voxel's column, kNone where
+// the column has none. `cursor[c]` is column c's first entry at or above slice z - 1 on entry,
+// z on exit.
+void nearest_along_columns(const Columns& columns, std::int64_t z, double w,
+                           std::vector<std::uint32_t>& cursor, float* slice) {
+  const std::size_t count = cursor.size();
+  for (std::size_t c = 0; c < count; ++c) {
+    const std::uint32_t b = columns.begin[c], e = columns.begin[c + 1];
+    if (b == e) {
+      slice[c] = kNone;
+      continue;
+    }
+    std::uint32_t at = cursor[c];
+    while (at < e && columns.k[at] < z) ++at;
+    cursor[c] = at;
+    const double x = static_cast<double>(z);
+    float f = kNone;
+    if (at > b) {  // the nearest point below: on edge (q, q + 1) with q < z
+      const double last = static_cast<double>(columns.k[at - 1]) + columns.t[at - 1];
+      const double d = (x - last) * w;
+      f = static_cast<float>(d * d);
+    }
+    if (at < e) {  // the nearest at or above: q >= z
+      const double next = static_cast<double>(columns.k[at]) + columns.t[at];
+      const double d = (next - x) * w;
+      f = std::min(f, static_cast<float>(d * d));
+    }
+    slice[c] = f;
+  }
+}
+
 // out = squared distance to the points (mm^2), capped at reach2 (kNone beyond).
 // The envelope passes are min-plus convolutions, so they distribute over a minimum: the points
 // on edges along axes 0 and 1 share their pass along axis 2. Order of work:
 //   per slice   axis-0 points: nearest along 0, envelope along 1; axis-1 points: nearest along
 //               1, envelope along 0; out = the minimum of the two
 //   whole grid  envelope of out along 2
-//   whole grid  axis-2 points in g: nearest along 2
-//   per slice   g: envelopes along 0 and 1; out = min(out, g)
-// The per-slice steps work in cache-sized buffers; only three passes touch the whole grid.
+//   per slice   axis-2 points: nearest along 2 (from their columns), envelopes along 0 and 1;
+//               out = min(out, that); then finish(k, slice of out), the slice being final
+// The per-slice steps work in cache-sized buffers; only one pass touches the whole grid, and
+// no second volume is needed.
+template <class Finish>
 void squared_point_distance(const SurfacePoints& surface, double reach2, std::vector<float>& out,
-                            std::vector<float>& g, unsigned threads) {
+                            unsigned threads, Finish finish) {
   const Grid& grid = surface.grid;
   const Index3 n = grid.dims;
-  const std::size_t count = grid.voxel_count();
   const std::size_t slice_size = static_cast<std::size_t>(n[0] * n[1]);
   const double s0 = grid.spacing[0], s1 = grid.spacing[1], s2 = grid.spacing[2];
   auto envelope = [reach2](double w2) {
@@ -306,20 +395,22 @@ void squared_point_distance(const SurfacePoints& surface, double reach2, std::ve
       threads);
   over_lines(out, n, 2, threads, envelope(s2 * s2));
 
-  g.assign(count, -1.0f);
-  for (const SurfacePoint& p : surface.points)
-    if (p.axis == 2) g[grid.linear(p.i, p.j, p.k)] = p.t;
-  over_lines(g, n, 2, threads, nearest(s2));
+  const Columns columns(surface);
+  // Chunks of several slices, so a chunk's cursors are searched once and then advanced.
+  const std::int64_t grain = std::max<std::int64_t>(1, n[2] / (8 * std::max(1u, threads)));
   parallel_for_chunks(
-      n[2], 1,
+      n[2], grain,
       [&](std::int64_t k0, std::int64_t k1) {
-        std::vector<float> column;
+        std::vector<float> slice(slice_size), column;
+        std::vector<std::uint32_t> cursor(slice_size);
+        for (std::size_t c = 0; c < slice_size; ++c) cursor[c] = columns.first_at_or_above(c, k0);
         for (std::int64_t k = k0; k < k1; ++k) {
-          float* slice = &g[grid.linear(0, 0, k)];
-          along_rows(slice, n[0], n[1], envelope(s0 * s0));
-          along_columns(slice, n[0], n[1], column, envelope(s1 * s1));
+          nearest_along_columns(columns, k, s2, cursor, slice.data());
+          along_rows(slice.data(), n[0], n[1], envelope(s0 * s0));
+          along_columns(slice.data(), n[0], n[1], column, envelope(s1 * s1));
           float* target = &out[grid.linear(0, 0, k)];
           for (std::size_t v = 0; v < slice_size; ++v) target[v] = std::min(target[v], slice[v]);
+          finish(k, target);
         }
       },
       threads);
@@ -350,6 +441,19 @@ SurfacePoints surface_points(const CtVolume& ct, const Mask& mask, double iso_hu
             const std::uint8_t* next_slice =
                 k + 1 < n[2] ? &mask.data[grid.linear(0, j, k + 1)] : nullptr;
             for (std::int64_t i = 0; i < n[0]; ++i) {
+              // Eight voxels at once where no edge can change (most of the grid): the same bytes
+              // one voxel on, in the next row and in the next slice.
+              if (next_row != nullptr && next_slice != nullptr && i + 9 <= n[0]) {
+                std::uint64_t here, on, up, above;
+                std::memcpy(&here, row + i, 8);
+                std::memcpy(&on, row + i + 1, 8);
+                std::memcpy(&up, next_row + i, 8);
+                std::memcpy(&above, next_slice + i, 8);
+                if (here == on && here == up && here == above) {
+                  i += 7;
+                  continue;
+                }
+              }
               const bool in = row[i] != 0;
               const bool differs[3] = {i + 1 < n[0] && (row[i + 1] != 0) != in,
                                        next_row && (next_row[i] != 0) != in,
@@ -487,20 +591,17 @@ void subvoxel_signed_distance(const SurfacePoints& surface, const Mask& mask, do
     out = DistanceMap(grid, 0.0f, "distance map");
   }
   out.grid = grid;
-  {
-    std::vector<float> scratch;
-    squared_point_distance(surface, clamp_mm * clamp_mm, out.data, scratch, threads);
-  }
+  // Each slice, once final, becomes the distance, clamped and signed by the mask.
   const float clamp = static_cast<float>(clamp_mm);
-  parallel_for_chunks(
-      grid.dims[2], 4,
-      [&](std::int64_t k0, std::int64_t k1) {
-        for (std::size_t v = grid.linear(0, 0, k0); v < grid.linear(0, 0, k1); ++v) {
-          const float d = std::min(clamp, std::sqrt(out.data[v]));
-          out.data[v] = mask.data[v] ? d : -d;
-        }
-      },
-      threads);
+  const std::size_t slice_size = static_cast<std::size_t>(grid.dims[0] * grid.dims[1]);
+  squared_point_distance(surface, clamp_mm * clamp_mm, out.data, threads,
+                         [&](std::int64_t k, float* slice) {
+                           const std::uint8_t* in = &mask.data[grid.linear(0, 0, k)];
+                           for (std::size_t v = 0; v < slice_size; ++v) {
+                             const float d = std::min(clamp, std::sqrt(slice[v]));
+                             slice[v] = in[v] ? d : -d;
+                           }
+                         });
   refine_near_surface(surface, mask, band_mm, clamp_mm, out, threads);
 }
 

@@ -46,7 +46,7 @@ SurfacePoints surface_points(const CtVolume& ct, const Mask& mask, double iso_hu
 
 // The sub-voxel signed map of `mask` into `out` (reused when it has the grid's voxel count):
 // the distance to the points everywhere, then to the discs within `band_mm`, signed by the mask,
-// clamped to +-clamp_mm. Needs one float volume of scratch besides `out`.
+// clamped to +-clamp_mm. Needs no volume besides `out` (slice buffers per thread).
 void subvoxel_signed_distance(const SurfacePoints& surface, const Mask& mask, double band_mm,
                               double clamp_mm, DistanceMap& out, unsigned threads = 0);
 

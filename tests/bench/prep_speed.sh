@@ -6,7 +6,8 @@
 # Each run is `/usr/bin/time -v palp prep FILE --out DIR --no-cache [--surface S]`; the load
 # average (uptime) is recorded before every run, because timings on a shared machine are noisy,
 # with the CPU seconds (user + sys: less sensitive to other processes than the wall clock), the
-# stages (read CT, bone mask, the maps, the writes the pipeline waited for) and the outputs' size.
+# stages (read CT, bone mask, the maps, the time the main thread waited for writes and for d_surf's
+# thread) and the outputs' size.
 # With --before OTHER_PALP the runs alternate between that build and --palp, for a comparison
 # under the same load. Prints one Markdown row per run and a median per case and build; never
 # fails on a time (exit 0 unless a run fails).
@@ -31,7 +32,7 @@ while [ $# -gt 0 ]; do
     --work) work=$2; shift 2 ;;
     --scipy-s) scipy_s=$2; shift 2 ;;
     --before) before=$2; shift 2 ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "prep_speed.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -48,7 +49,7 @@ mkdir -p "$work"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(uname -sr)"
 echo "palp: $palp${before:+ (alternating with --before $before)}, surface: $surface, runs per case: $runs, scipy two maps (case A): ${scipy_s:-unknown} s"
 echo
-echo "| case | build | run | load (1 min) before | wall s | CPU s | peak RSS MiB | read CT s | bone mask s | d_surf + d_bone s | waited-for writes s | outputs MB | vs scipy |"
+echo "| case | build | run | load (1 min) before | wall s | CPU s | peak RSS MiB | read CT s | bone mask s | d_surf + d_bone s | waited s (writes, d_surf thread) | outputs MB | vs scipy |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 
 # One run of build $1 ("after" or "before", binary $2) on case $3 (file $4); appends the wall
@@ -91,7 +92,10 @@ median_of() {
 run_case() {
   local name=$1 dims=$2 spacing=$3
   local ct="$work/torso_${dims}.nii.gz"
-  [ -f "$ct" ] || "$palp" phantom torso --dims "$dims" --spacing "$spacing" --out "$ct" >/dev/null
+  # Written by the build under test (a file older than it is written again): palp's own gzip
+  # members carry their length and are read on all cores, a foreign file's are not.
+  [ -f "$ct" ] && [ "$ct" -nt "$palp" ] ||
+    "$palp" phantom torso --dims "$dims" --spacing "$spacing" --out "$ct" >/dev/null
   walls_after=()
   walls_before=()
   for r in $(seq 1 "$runs"); do

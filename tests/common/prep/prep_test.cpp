@@ -91,10 +91,14 @@ TEST_F(PrepTest, WritesAllOutputsOnTheInputGridWithItsWorldPlacement) {
   EXPECT_EQ(json["grid"]["spacing_mm"], nlohmann::json({2.0, 2.0, 2.5}));
   EXPECT_EQ(json["voxels"]["body"].get<std::uint64_t>(), result.stats.body_voxels);
   EXPECT_EQ(json["parameters"]["bone_seed_hu"], params.segmentation.bone_seed_hu);
-  for (const char* stage : {"read CT", "body mask", "bone mask", "d_surf", "d_bone", "total"}) {
+  for (const char* stage : {"read CT", "body mask", "bone mask", "d_surf", "write d_surf",
+                            "wait d_surf", "d_bone", "write d_bone", "total"}) {
     ASSERT_TRUE(json["timings_s"].contains(stage)) << stage;
     EXPECT_GE(json["timings_s"][stage].get<double>(), 0.0);
   }
+  // CPU seconds of the whole process, per stage the main thread ran and in total.
+  EXPECT_GT(json["cpu_seconds"]["total"].get<double>(), 0.0);
+  EXPECT_FALSE(json["cpu_seconds"].contains("d_surf"));  // d_surf's own thread: wall time only
   EXPECT_GT(json["peak_memory_bytes"].get<std::uint64_t>(), 0u);
   EXPECT_EQ(json["surface"], "mask");
   EXPECT_FALSE(json.contains("surface_iso_hu"));

@@ -7,8 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <random>
 
@@ -240,6 +242,69 @@ TEST(SubvoxelDistance, FarFieldIsTheExactDistanceToThePoints) {
         ASSERT_NEAR(map.at(i, j, k), expected, 1.0 / 2048 + 1e-4 * (1.0 + best))
             << i << " " << j << " " << k;
       }
+}
+
+// The far field and the band run over slices in parallel (the points along k by their columns):
+// the map is the same, bit for bit, for any thread count, on an anisotropic grid with several
+// surfaces along each column.
+TEST(SubvoxelDistance, MapIsBitIdenticalForAnyThreadCount) {
+  const Shape shape = [](double x, double y, double z) {
+    const double a = 9.0 - std::hypot(x - 14.2, y - 15.1, z - 12.7);
+    const double b = 5.0 - std::hypot(x - 15.4, y - 14.3, z - 32.1);
+    return std::max(a, b);
+  };
+  Phantom p = render(shape, 16, 2.5, 9u);
+  p.ct.grid.spacing = p.mask.grid.spacing = {2.5, 2.0, 3.0};
+  const SurfacePoints points = surface_points(p.ct, p.mask, kIso, 1);
+  DistanceMap one, other;
+  subvoxel_signed_distance(points, p.mask, 4.0, 60.0, one, 1);
+  for (const unsigned threads : {2u, 3u, 7u}) {
+    EXPECT_EQ(surface_points(p.ct, p.mask, kIso, threads).points.size(), points.points.size());
+    subvoxel_signed_distance(points, p.mask, 4.0, 60.0, other, threads);
+    ASSERT_EQ(other.data.size(), one.data.size());
+    EXPECT_EQ(0, std::memcmp(other.data.data(), one.data.data(), one.data.size() * sizeof(float)))
+        << threads << " threads";
+  }
+}
+
+// Every edge whose two ends the mask puts on different sides carries one point, in the order
+// of k, j, i and axis, wherever the edge lies in the row (the scan skips unchanging runs of
+// voxels eight at a time): against a plain enumeration on a random mask with rows of 37.
+TEST(SubvoxelDistance, SurfacePointsSitOnEveryEdgeTheMaskChangesAcross) {
+  Grid grid;
+  grid.dims = {37, 13, 11};
+  grid.spacing = {1.0, 1.0, 1.0};
+  CtVolume ct(grid, -1000);
+  Mask mask(grid, 0);
+  std::mt19937 rng(5u);
+  for (std::size_t v = 0; v < mask.data.size(); ++v) {
+    // Long runs with sparse changes, values 0, 1 and (as any nonzero) 2.
+    mask.data[v] = (v / 23) % 3 == 0 ? 0 : static_cast<std::uint8_t>(1 + (rng() % 97 == 0));
+    if (rng() % 41 == 0) mask.data[v] = 0;
+    ct.data[v] = mask.data[v] ? 40 : -1000;
+  }
+  std::vector<std::array<std::int32_t, 4>> expected;
+  for (std::int64_t k = 0; k < grid.dims[2]; ++k)
+    for (std::int64_t j = 0; j < grid.dims[1]; ++j)
+      for (std::int64_t i = 0; i < grid.dims[0]; ++i) {
+        const bool in = mask.at(i, j, k) != 0;
+        const std::int64_t next[3][3] = {{i + 1, j, k}, {i, j + 1, k}, {i, j, k + 1}};
+        for (int a = 0; a < 3; ++a) {
+          if (next[a][a] >= grid.dims[a]) continue;
+          if ((mask.at(next[a][0], next[a][1], next[a][2]) != 0) != in)
+            expected.push_back({static_cast<std::int32_t>(i), static_cast<std::int32_t>(j),
+                                static_cast<std::int32_t>(k), a});
+        }
+      }
+  ASSERT_GT(expected.size(), 500u);
+  for (const unsigned threads : {1u, 3u}) {
+    const SurfacePoints points = surface_points(ct, mask, kIso, threads);
+    ASSERT_EQ(points.points.size(), expected.size()) << threads;
+    for (std::size_t p = 0; p < expected.size(); ++p) {
+      const SurfacePoint& got = points.points[p];
+      ASSERT_EQ((std::array<std::int32_t, 4>{got.i, got.j, got.k, got.axis}), expected[p]) << p;
+    }
+  }
 }
 
 }  // namespace
