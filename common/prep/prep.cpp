@@ -37,6 +37,7 @@
 #include "prep/iso_projection.hpp"
 #include "prep/map_refine.hpp"
 #include "prep/output_guard.hpp"
+#include "prep/prep_cache.hpp"
 #include "prep/reorient.hpp"
 #include "prep/subvoxel_distance.hpp"
 
@@ -46,115 +47,11 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-// Bump when the algorithms change what prep writes, so old caches are not reused.
-// 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
-// bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
-// edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp); 9: maps on a refined grid
-// on coarse CTs (map_refine.hpp); 10: a leak's contact with the bone dropped with it
-constexpr int kPrepAlgorithmVersion = 10;
-
-// A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
-class ContentHash {
- public:
-  void add(const void* bytes, std::size_t size) {
-    const auto* p = static_cast<const unsigned char*>(bytes);
-    std::size_t i = 0;
-    for (; i + 8 <= size; i += 8) {
-      std::uint64_t word;
-      std::memcpy(&word, p + i, 8);
-      mix(word);
-    }
-    std::uint64_t tail = 0;
-    std::memcpy(&tail, p + i, size - i);
-    mix(tail ^ (static_cast<std::uint64_t>(size - i) << 56));
-    mix(size);
-  }
-  void add(const std::string& text) { add(text.data(), text.size()); }
-  // Reads through DecodedReader: only regular files, opened without blocking (a FIFO would wait
-  // for a writer, /dev/zero never ends), a symlink loop named as one.
-  void add_file(const fs::path& path) {
-    DecodedReader in(path.string(), 0, Compression::none);
-    std::vector<char> buffer(1 << 20);
-    for (;;) {
-      const std::size_t got = in.read(buffer.data(), buffer.size());
-      add(buffer.data(), got);
-      if (got < buffer.size()) break;
-    }
-  }
-  std::string hex() const {
-    char text[17];
-    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(state_));
-    return text;
-  }
-
- private:
-  void mix(std::uint64_t word) {
-    state_ ^= word + 0x9e3779b97f4a7c15ull + (state_ << 6) + (state_ >> 2);
-    state_ *= 0xff51afd7ed558ccdull;
-    state_ ^= state_ >> 33;
-  }
-  std::uint64_t state_ = 0xcbf29ce484222325ull;
-};
-
-void hash_input(ContentHash& hash, const std::string& input) {
-  if (input.rfind("phantom:", 0) == 0) {
-    hash.add(input);
-    return;
-  }
-  const fs::path path(input);
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) {
-    std::vector<fs::path> files;
-    for (const auto& entry : fs::directory_iterator(path, ec)) {
-      if (entry.is_regular_file()) files.push_back(entry.path());
-    }
-    std::sort(files.begin(), files.end());
-    for (const auto& file : files) {
-      hash.add(file.filename().string());
-      hash.add_file(file);
-    }
-    return;
-  }
-  if (!fs::exists(path, ec)) throw InputError(input + ": no such file or directory");
-  hash.add_file(path);
-  // A detached header (.mhd, .nhdr) names the file with the voxels: the key follows those too.
-  const std::string voxel_file = ct_voxel_file(input);
-  if (voxel_file != input) hash.add_file(voxel_file);
-}
-
 nlohmann::json grid_json(const Grid& grid) {
   return {{"dimensions", grid.dims},
           {"spacing_mm", grid.spacing},
           {"origin_lps_mm", grid.world.origin},
           {"direction_lps", grid.world.direction}};
-}
-
-// Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
-nlohmann::json params_json(const PrepParams& params) {
-  const SegmentationParams& s = params.segmentation;
-  return {{"body_threshold_hu", s.body_threshold_hu},
-          {"min_body_part_ml", s.min_body_part_ml},
-          {"body_core_radius_mm", s.body_core_radius_mm},
-          {"max_table_thickness_mm", s.max_table_thickness_mm},
-          {"min_table_width_mm", s.min_table_width_mm},
-          {"bone_seed_hu", s.bone_seed_hu},
-          {"bone_grow_hu", s.bone_grow_hu},
-          {"bone_leak_contact_fraction", s.bone_leak_contact_fraction},
-          {"bone_marrow_votes", s.bone_marrow_votes},
-          {"bone_max_hole_mm2", s.bone_max_hole_mm2},
-          {"bone_enclosure_radius_mm", s.bone_enclosure_radius_mm},
-          {"bone_enclosure_directions", s.bone_enclosure_directions},
-          {"bone_edge_fraction", s.bone_edge_fraction},
-          {"bone_max_cavity_ml", s.bone_max_cavity_ml},
-          {"min_bone_island_ml", s.min_bone_island_ml},
-          {"distance_band_mm", params.distance.band_mm},
-          {"surface", surface_method_name(params.surface.method)},
-          {"skin_iso_hu", params.surface.skin_hu},
-          {"bone_iso_hu", params.surface.bone_hu},
-          {"subvoxel_band_mm", params.surface.band_mm},
-          {"skin_projection_mm", params.surface.skin_projection_mm},
-          {"map_spacing_mm", params.map_spacing_mm},
-          {"bone_levels", params.adapt_bone_levels ? "adapted" : "as given"}};
 }
 
 // The sub-voxel band on this grid: the parameter, or twice the coarsest spacing.
@@ -212,23 +109,6 @@ void value_range(const DistanceMap& map, float range[2], unsigned threads) {
   }
 }
 
-// True when out_dir holds a complete result of this cache key.
-bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::json* cached) {
-  std::ifstream in(out_dir / kPrepJsonFile);
-  if (!in) return false;
-  const nlohmann::json json = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (json.is_discarded() || json.value("cache_key", "") != key) return false;
-  if (!json.contains("file_bytes") || !json["file_bytes"].is_object()) return false;
-  for (const char* name :
-       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
-    std::error_code ec;
-    const auto size = fs::file_size(out_dir / name, ec);
-    if (ec || !json["file_bytes"].contains(name) || json["file_bytes"][name] != size) return false;
-  }
-  *cached = json;
-  return true;
-}
-
 std::uint64_t count_nonzero(const Mask& mask) {
   return static_cast<std::uint64_t>(
       std::count_if(mask.data.begin(), mask.data.end(), [](std::uint8_t v) { return v != 0; }));
@@ -244,14 +124,6 @@ SurfaceMethod parse_surface_method(const std::string& name) {
   if (name == "subvoxel") return SurfaceMethod::subvoxel;
   if (name == "mask") return SurfaceMethod::mask;
   throw UsageError("--surface must be subvoxel or mask, not '" + name + "'");
-}
-
-std::string prep_cache_key(const std::string& input, const PrepParams& params) {
-  ContentHash hash;
-  hash.add("palp-prep-v" + std::to_string(kPrepAlgorithmVersion));
-  hash.add(params_json(params).dump());
-  hash_input(hash, input);
-  return hash.hex();
 }
 
 PrepResult run_prep(const std::string& input, const std::string& out_dir, const PrepParams& params,

@@ -1,0 +1,29 @@
+// prep's scene cache (internal to prep): what makes a result reusable. A result is keyed by a
+// hash of the algorithm's version, every parameter that changes the outputs (also recorded in
+// prep.json) and the input's bytes; it is reused only when prep.json names that key and every
+// output has the size prep.json recorded.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "prep/prep.hpp"
+
+namespace palp {
+
+// Bump when the algorithms change what prep writes, so old caches are not reused.
+// 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
+// bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
+// edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp); 9: maps on a refined grid
+// on coarse CTs (map_refine.hpp); 10: a leak's contact with the bone dropped with it
+inline constexpr int kPrepAlgorithmVersion = 10;
+
+// Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
+nlohmann::json params_json(const PrepParams& params);
+
+// True when out_dir holds a complete result of this cache key (its prep.json into *cached).
+bool cache_is_valid(const std::filesystem::path& out_dir, const std::string& key,
+                    nlohmann::json* cached);
+
+}  // namespace palp
