@@ -24,10 +24,11 @@
 //    every tick of all of these the largest |f_friction| / (mu f_n) per point (mu = 0.5 for both).
 // 3. Smoothness  the real CT, bone off, finger:1 slid at 20 mm/s (1 kHz) along the anterior
 //    abdomen (azimuth 90 deg, 0.30-0.60 of the body axis) at a constant true depth (2, 4, 6 mm)
-//    below the -500 HU iso-surface of the trilinearly interpolated CT, along its normal (-grad HU
-//    by central differences over 1.5 mm; PALP_SMOOTH_PATH=exact: the pad then moved along it
-//    onto the exact depth): |f_device| detrended by a centred 10 mm moving
-//    average, its standard deviation and the largest change between two ticks.
+//    below the -500 HU iso-surface of the trilinearly interpolated CT: the pad on the ray of the
+//    ribs frame where its global distance to the skin's iso-surface (study_skin.hpp, checked
+//    against a brute-force sampling of the surface) equals the depth: |f_device| detrended by a
+//    centred 10 mm moving average, its standard deviation and the largest change between two
+//    ticks; the path's own exact depth (detrended std) and largest step in position.
 //
 // 4. Contact count  a skin ball (R 30 mm): finger:1/7/19/37 pressed along the radius to
 //    2..8 mm, the pressing force against finger:1's (the paper claims independence of the count).
@@ -39,8 +40,11 @@
 //   study_force_model [--out DIR] [--quick]
 // PALP_CT: the CT (default ../shared/data/ct_abdomen_3mm.nii.gz).
 // PALP_MAP_SPACING: prep's --map-spacing for the CT (0: the CT's own grid; default prep's).
-// PALP_SMOOTH_PATH=exact: the smoothness path's pad moved along the normal onto the exact depth
-// (default: the depth along the normal only).
+// PALP_SMOOTH_PATH: the smoothness path: global (default, above); normal: the pad `depth` along
+// the HU normal at the skin point (central differences over 1.5 mm; the earlier path, whose exact
+// depth wanders); exact: that, then moved along the normal onto prep's single descent's distance
+// (which jumps where its closest point switches sheets).
+// PALP_SMOOTH_POSE=ray: the pad oriented by the ray instead of the HU normal at the skin point.
 // PALP_STUDY_PARTS: the parts to run (names among contrast, friction, contacts, smooth; all
 // when unset).
 #include <cmath>
@@ -54,6 +58,7 @@
 #include <vector>
 
 #include "base/errors.hpp"
+#include "bench/study_skin.hpp"
 #include "bench/study_util.hpp"
 #include "io/ct_io.hpp"
 #include "model/field_sampler.hpp"
@@ -440,75 +445,6 @@ void friction(const Flags& flags, Csv& csv, Csv& creep_csv) {
 
 // ---- 3. Skin smoothness on the real CT ---------------------------------------------------------
 
-struct Hu {
-  CtVolume ct;
-  double at(const Vec3d& x) const {
-    const Grid& g = ct.grid;
-    const double u[3] = {x.x / g.spacing[0], x.y / g.spacing[1], x.z / g.spacing[2]};
-    std::int64_t i0[3];
-    double t[3];
-    for (int a = 0; a < 3; ++a) {
-      const double c = std::clamp(u[a], 0.0, static_cast<double>(g.dims[a] - 1) - 1e-9);
-      i0[a] = static_cast<std::int64_t>(c);
-      t[a] = c - static_cast<double>(i0[a]);
-    }
-    double v = 0.0;
-    for (int c = 0; c < 8; ++c) {
-      const std::int64_t i = i0[0] + (c & 1), j = i0[1] + ((c >> 1) & 1), k = i0[2] + (c >> 2);
-      const double w = ((c & 1) ? t[0] : 1 - t[0]) * (((c >> 1) & 1) ? t[1] : 1 - t[1]) *
-                       ((c >> 2) ? t[2] : 1 - t[2]);
-      v += w * ct.at(i, j, k);
-    }
-    return v;
-  }
-  Vec3d normal(const Vec3d& x) const {  // outward: -grad HU, central differences over 1.5 mm
-    const double h = 1.5;
-    const Vec3d g{at(x + Vec3d{h, 0, 0}) - at(x - Vec3d{h, 0, 0}),
-                  at(x + Vec3d{0, h, 0}) - at(x - Vec3d{0, h, 0}),
-                  at(x + Vec3d{0, 0, h}) - at(x - Vec3d{0, 0, h})};
-    return normalized(-1.0 * g);
-  }
-  // The distance from p to the -500 HU iso-surface (prep/iso_projection.hpp), from a surface
-  // point near its nearest one; signed as the maps are (positive inside, where HU >= -500).
-  double distance(const Vec3d& p, const Vec3d& near) const {
-    const double q[3] = {p.x, p.y, p.z};
-    double x[3] = {near.x, near.y, near.z};
-    const double d = distance_to_iso_surface(ct, -500.0, q, x);
-    return at(p) >= -500.0 ? d : -d;
-  }
-  // The trilinear interpolation at p of the exact distances at the 8 nodes of grid g (the maps')
-  // around it.
-  double interpolated_node_distance(const Grid& g, const Vec3d& p, const Vec3d& near) const {
-    double out = 0.0;
-    const double u[3] = {p.x / g.spacing[0], p.y / g.spacing[1], p.z / g.spacing[2]};
-    double t[3], base[3];
-    for (int a = 0; a < 3; ++a) {
-      base[a] = std::floor(u[a]);
-      t[a] = u[a] - base[a];
-    }
-    for (int c = 0; c < 8; ++c) {
-      const int b[3] = {c & 1, (c >> 1) & 1, c >> 2};
-      double w = 1.0;
-      for (int a = 0; a < 3; ++a) w *= b[a] ? t[a] : 1.0 - t[a];
-      const Vec3d node{(base[0] + b[0]) * g.spacing[0], (base[1] + b[1]) * g.spacing[1],
-                       (base[2] + b[2]) * g.spacing[2]};
-      out += w * distance(node, near);
-    }
-    return out;
-  }
-  // The -500 HU crossing met coming in along -dir from `outside` (bisection to 1e-6 mm): from
-  // outside, so that gas in the bowel is not taken for the skin.
-  Vec3d skin(const Vec3d& outside, const Vec3d& dir) const {
-    double lo = 0.0, hi = 0.0;  // at(outside - lo dir) < -500 <= at(outside - hi dir)
-    while (at(outside - hi * dir) < -500.0 && hi < 100.0) lo = hi, hi += 0.25;
-    for (int i = 0; i < 40; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (at(outside - mid * dir) < -500.0 ? lo : hi) = mid;
-    }
-    return outside - (0.5 * (lo + hi)) * dir;
-  }
-};
-
 // D_surf at p sampled as sum_c w_c (D_c + g_c . (p - c) / 2) over the 8 nodes c around p, g_c the
 // map's gradient at c by central differences: the mean of the trilinear sample and of the
 // first-order Taylor expansions from the corners, whose quadratic errors are equal and opposite
@@ -556,13 +492,28 @@ void smoothness(const std::string& ct_path, Csv& csv) {
   const BodyAxis axis = ribs_body_axis(*vars[0].fields, spec);
   const Tool tool = parse_tool("finger:1");
   const double offset = pad_offset(tool);
+  // PALP_SMOOTH_PATH: global (default), normal or exact; see the file's head.
   const char* path_env = std::getenv("PALP_SMOOTH_PATH");
-  const bool true_depth = path_env && std::string(path_env) == "exact";
+  const std::string path_kind = path_env && *path_env ? path_env : "global";
+  if (path_kind != "global" && path_kind != "normal" && path_kind != "exact")
+    throw UsageError("PALP_SMOOTH_PATH: global, normal or exact, not " + path_kind);
+  const char* pose_env = std::getenv("PALP_SMOOTH_POSE");
+  const bool pose_from_ray = pose_env && std::string(pose_env) == "ray";
   const double rate = 1000.0, speed = 20.0;
   const double len = (spec.to - spec.from) * axis.extent;
   const int n = static_cast<int>(len / speed * rate);
   const int half = static_cast<int>(5.0 / speed * rate);  // 5 mm each side
-  for (double depth : {2.0, 4.0, 6.0})
+  // The skin sheet around the path (20 mm beyond it on every side), for the global distance.
+  const SkinSheet sheet(
+      hu,
+      [&](double a) {
+        const double along = std::clamp(spec.from + a / axis.extent, 0.0, 1.0);
+        return ribs_skin_frame(*vars[0].fields, axis, along).skin + 30.0 * axis.ray;
+      },
+      axis.ray, axis.superior, len, 20.0);
+  std::printf("smooth: path %s, pad oriented by the %s\n", path_kind.c_str(),
+              pose_from_ray ? "ray" : "HU normal at the skin point");
+  for (double depth : {2.0, 4.0, 6.0}) {
     for (const Variant& v : vars) {
       ForceParams prm = model_params(v.model, tool.kind);
       prm.bone_enabled = false;
@@ -571,29 +522,55 @@ void smoothness(const std::string& ct_path, Csv& csv) {
       std::vector<double> f, map_depth, exact_depth, exact_nodes_depth,
           corrected_depth;    // map_depth: D_surf at the pad centre (nominal: depth)
       double skin_gap = 0.0;  // largest |D_surf| on the HU iso-surface: the maps' own error
+      double pos_step = 0.0;  // the path's largest step between two ticks, mm
+      double s_ray = depth;   // global: the pad's offset along -ray from the skin point
+      Vec3d last{};
+      // Every 50th tick (1 mm) of the first model's path: the depth by a brute-force sampling of
+      // the iso-surface (0.1 mm lines in a cube of half-side depth + 1 mm), independent of the
+      // descents, and the global distance's difference from it.
+      std::vector<double> brute;
+      double diff_lo = 0.0, diff_hi = 0.0;
       for (int t = 0; t <= n; ++t) {
         const double along = spec.from + (spec.to - spec.from) * t / n;
         // Start 15 mm outside the map's skin point on the ray, come in to the HU iso-surface.
         const SkinFrame frame = ribs_skin_frame(*v.fields, axis, along);
         const Vec3d skin = hu.skin(frame.skin + 15.0 * axis.ray, axis.ray);
         skin_gap = std::max(skin_gap, std::fabs(v.fields->sample_surf(skin).value));
-        const Vec3d nrm = hu.normal(skin);
+        const Vec3d nrm = pose_from_ray ? axis.ray : hu.normal(skin);
         const Quat q = surface_orientation(nrm, axis.superior);
-        // The pad `depth` along the normal; PALP_SMOOTH_PATH=exact: then moved along it until its
-        // exact distance to the iso-surface is `depth` (the offset alone wanders by 0.04 mm std
-        // at 6 mm where the skin curves or the normal's estimate tilts, but the exact depth's
-        // closest point can switch between two sheets, a step of the path itself).
         Vec3d pad = skin - depth * nrm;
-        if (true_depth)
+        if (path_kind == "exact") {
+          // Moved along the normal onto the exact depth of prep's descent from the skin point,
+          // whose closest point can switch between two sheets: a step of the path itself.
           for (int it = 0; it < 3; ++it) pad = pad - (depth - hu.distance(pad, skin)) * nrm;
+        } else if (path_kind == "global") {
+          // The root of global distance - depth along the ray (a fixed direction, so the path is
+          // as continuous as the distance), by secant steps from the last tick's offset.
+          const auto g = [&](double s) { return sheet.global(skin - s * axis.ray) - depth; };
+          double s0 = s_ray, g0 = g(s0), s1 = s0 - g0, g1 = g(s1);
+          for (int it = 0; it < 30 && std::fabs(g1) > 1e-7 && g1 != g0; ++it) {
+            const double s2 = s1 - g1 * (s1 - s0) / (g1 - g0);
+            s0 = s1, g0 = g1, s1 = s2, g1 = g(s1);
+          }
+          s_ray = s1;
+          pad = skin - s_ray * axis.ray;
+        }
+        if (t > 0) pos_step = std::max(pos_step, norm(pad - last));
+        last = pad;
         tick(m, st, pad_pose(pad, nrm, q, offset));
         f.push_back(norm(st.f_device));
         map_depth.push_back(v.fields->sample_surf(pad).value);
-        // The exact distance from the pad centre to the trilinear HU's iso-surface, and the
-        // trilinear interpolation of the exact distances at the 8 grid nodes around it: what the
-        // tick would read from a map exact at its nodes.
-        exact_depth.push_back(hu.distance(pad, skin));
-        exact_nodes_depth.push_back(hu.interpolated_node_distance(map_grid, pad, skin));
+        // The global distance from the pad centre to the trilinear HU's iso-surface, and the
+        // trilinear interpolation of the global distances at the 8 grid nodes around it: what
+        // the tick would read from a map exact at its nodes.
+        exact_depth.push_back(sheet.global(pad));
+        if (&v == &vars[0] && t % 50 == 0) {
+          brute.push_back(sheet.brute_force(pad, depth + 1.0, 0.1));
+          const double diff = exact_depth.back() - brute.back();
+          diff_lo = std::min(diff_lo, diff), diff_hi = std::max(diff_hi, diff);
+        }
+        exact_nodes_depth.push_back(Hu::interpolated_node_distance(
+            map_grid, pad, [&](const Vec3d& x) { return sheet.global_cached(x); }));
         corrected_depth.push_back(gradient_corrected_surf(*v.fields, map_grid, pad));
       }
       double sq = 0.0, step = 0.0, mean = 0.0, sq_depth = 0.0, sq_err = 0.0, sq_nodes = 0.0,
@@ -622,17 +599,32 @@ void smoothness(const std::string& ct_path, Csv& csv) {
       const double err = std::sqrt(sq_err / cnt), nodes_err = std::sqrt(sq_nodes / cnt);
       const double corrected_err = std::sqrt(sq_corrected / cnt);
       const double sd_path = std::sqrt(sq_path / cnt);
+      if (!brute.empty()) {
+        double sq_brute = 0.0;
+        int nb = 0;
+        for (int t = 5; t + 5 < static_cast<int>(brute.size()); ++t, ++nb) {
+          double avg = 0.0;
+          for (int j = t - 5; j <= t + 5; ++j) avg += brute[j];
+          avg /= 11;
+          sq_brute += (brute[t] - avg) * (brute[t] - avg);
+        }
+        std::printf(
+            "smooth: %g mm path, its depth by brute force at %zu points: detrended std %.4f mm; "
+            "the global distance minus it: %.4f to %.4f mm\n",
+            depth, brute.size(), std::sqrt(sq_brute / nb), diff_lo, diff_hi);
+      }
       csv.row({std::string(to_string(v.model)), depth, mean / cnt, sd, step, skin_gap, sd_depth,
-               err, nodes_err, corrected_err, sd_path});
+               err, nodes_err, corrected_err, sd_path, pos_step});
       std::printf(
           "smooth %-5s finger:1 %g mm true depth, %.0f mm at 20 mm/s: mean %.3f N, detrended "
           "std %.3f N, largest tick step %.3f N (|D_surf| on the iso-surface up to %.2f mm; "
           "D_surf at the pad centre: detrended std %.3f mm, against the exact distance rms "
           "%.3f mm; exact nodes interpolated: rms %.3f mm; the map gradient-corrected: rms %.3f "
-          "mm; the path's exact depth: detrended std %.4f mm)\n",
+          "mm; the path's exact depth: detrended std %.4f mm, largest step %.4f mm)\n",
           to_string(v.model), depth, len, mean / cnt, sd, step, skin_gap, sd_depth, err, nodes_err,
-          corrected_err, sd_path);
+          corrected_err, sd_path, pos_step);
     }
+  }
 }
 
 // ---- 4. Contact-count independence on a curved surface -----------------------------------------
@@ -745,7 +737,7 @@ int main(int argc, char** argv) {
   Csv s_csv(flags.out_dir + "/force_model_smooth.csv",
             {"model", "depth_mm", "mean_N", "detrended_std_N", "max_step_N", "map_skin_error_mm",
              "map_depth_std_mm", "map_vs_exact_rms_mm", "exact_nodes_interp_rms_mm",
-             "gradient_corrected_vs_exact_rms_mm", "path_depth_std_mm"});
+             "gradient_corrected_vs_exact_rms_mm", "path_depth_std_mm", "path_max_step_mm"});
   if (have_ct && want("smooth")) smoothness(ct, s_csv);
   std::printf("force_model: %.1f s\n", now_seconds() - t0);
   return 0;
