@@ -450,26 +450,15 @@ void friction(const Flags& flags, Csv& csv, Csv& creep_csv) {
 // first-order Taylor expansions from the corners, whose quadratic errors are equal and opposite
 // (a candidate for the tick, measured here only).
 double gradient_corrected_surf(const FieldSampler& fields, const Grid& g, const Vec3d& p) {
-  const double u[3] = {p.x / g.spacing[0], p.y / g.spacing[1], p.z / g.spacing[2]};
-  double base[3], t[3];
-  for (int a = 0; a < 3; ++a) {
-    base[a] = std::floor(u[a]);
-    t[a] = u[a] - base[a];
-  }
   const auto at = [&](const Vec3d& x) { return fields.sample_surf(x).value; };
   const Vec3d ex{g.spacing[0], 0, 0}, ey{0, g.spacing[1], 0}, ez{0, 0, g.spacing[2]};
   double out = 0.0;
-  for (int c = 0; c < 8; ++c) {
-    const int b[3] = {c & 1, (c >> 1) & 1, c >> 2};
-    double w = 1.0;
-    for (int a = 0; a < 3; ++a) w *= b[a] ? t[a] : 1.0 - t[a];
-    const Vec3d node{(base[0] + b[0]) * g.spacing[0], (base[1] + b[1]) * g.spacing[1],
-                     (base[2] + b[2]) * g.spacing[2]};
+  for_each_node_around(g, p, [&](const Vec3d& node, double w) {
     const Vec3d grad{(at(node + ex) - at(node - ex)) / (2 * g.spacing[0]),
                      (at(node + ey) - at(node - ey)) / (2 * g.spacing[1]),
                      (at(node + ez) - at(node - ez)) / (2 * g.spacing[2])};
     out += w * (at(node) + 0.5 * dot(grad, p - node));
-  }
+  });
   return out;
 }
 

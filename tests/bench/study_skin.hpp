@@ -18,6 +18,26 @@
 
 namespace palp::study {
 
+// Calls fn(node, w) for the 8 nodes of grid g (voxel (i,j,k) at (i sx, j sy, k sz)) around p,
+// w their trilinear weights at p.
+template <class Fn>
+void for_each_node_around(const Grid& g, const Vec3d& p, Fn fn) {
+  const double u[3] = {p.x / g.spacing[0], p.y / g.spacing[1], p.z / g.spacing[2]};
+  double t[3], base[3];
+  for (int a = 0; a < 3; ++a) {
+    base[a] = std::floor(u[a]);
+    t[a] = u[a] - base[a];
+  }
+  for (int c = 0; c < 8; ++c) {
+    const int b[3] = {c & 1, (c >> 1) & 1, c >> 2};
+    double w = 1.0;
+    for (int a = 0; a < 3; ++a) w *= b[a] ? t[a] : 1.0 - t[a];
+    fn(Vec3d{(base[0] + b[0]) * g.spacing[0], (base[1] + b[1]) * g.spacing[1],
+             (base[2] + b[2]) * g.spacing[2]},
+       w);
+  }
+}
+
 struct Hu {
   CtVolume ct;
   double at(const Vec3d& x) const {
@@ -59,20 +79,7 @@ struct Hu {
   template <class Distance>
   static double interpolated_node_distance(const Grid& g, const Vec3d& p, Distance dist) {
     double out = 0.0;
-    const double u[3] = {p.x / g.spacing[0], p.y / g.spacing[1], p.z / g.spacing[2]};
-    double t[3], base[3];
-    for (int a = 0; a < 3; ++a) {
-      base[a] = std::floor(u[a]);
-      t[a] = u[a] - base[a];
-    }
-    for (int c = 0; c < 8; ++c) {
-      const int b[3] = {c & 1, (c >> 1) & 1, c >> 2};
-      double w = 1.0;
-      for (int a = 0; a < 3; ++a) w *= b[a] ? t[a] : 1.0 - t[a];
-      const Vec3d node{(base[0] + b[0]) * g.spacing[0], (base[1] + b[1]) * g.spacing[1],
-                       (base[2] + b[2]) * g.spacing[2]};
-      out += w * dist(node);
-    }
+    for_each_node_around(g, p, [&](const Vec3d& node, double w) { out += w * dist(node); });
     return out;
   }
   // The -500 HU crossing met coming in along -dir from `outside` (bisection to 1e-6 mm): from

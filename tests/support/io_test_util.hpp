@@ -58,6 +58,17 @@ inline void write_bytes(const std::string& path, const std::vector<std::uint8_t>
   write_bytes(path, bytes.data(), bytes.size());
 }
 
+// Compressible but not trivial test data (runs of 97 bytes over 13 levels, with noise).
+inline std::vector<std::uint8_t> compressible_bytes(std::size_t n) {
+  std::vector<std::uint8_t> out(n);
+  std::uint32_t state = 12345;
+  for (std::size_t i = 0; i < n; ++i) {
+    state = state * 1664525u + 1013904223u;
+    out[i] = static_cast<std::uint8_t>((i / 97) % 13 + ((state >> 24) & 3));
+  }
+  return out;
+}
+
 inline void write_text(const std::string& path, const std::string& text) {
   write_bytes(path, text.data(), text.size());
 }

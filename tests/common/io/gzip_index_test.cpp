@@ -16,19 +16,10 @@
 namespace palp {
 namespace {
 
+using testing::compressible_bytes;
 using testing::read_bytes;
 using testing::TempDir;
 using testing::write_bytes;
-
-std::vector<std::uint8_t> sample_bytes(std::size_t n) {
-  std::vector<std::uint8_t> out(n);
-  std::uint32_t state = 777;
-  for (std::size_t i = 0; i < n; ++i) {
-    state = state * 1664525u + 1013904223u;
-    out[i] = static_cast<std::uint8_t>((i / 31) % 7 + ((state >> 25) & 3));
-  }
-  return out;
-}
 
 // Writes `pieces` as palp does: members of `member_bytes`, each piece starting a new one.
 void write_members(const std::string& path, const std::vector<std::vector<std::uint8_t>>& pieces,
@@ -64,7 +55,7 @@ bool read_into(const std::string& path, std::uint64_t first, std::uint64_t count
 
 TEST(GzipIndex, EveryMemberCarriesItsLengthAndZlibStillReadsTheFile) {
   TempDir dir;
-  const auto header = sample_bytes(352), data = sample_bytes(5'000'000);
+  const auto header = compressible_bytes(352), data = compressible_bytes(5'000'000);
   const std::string path = dir.file("v.gz");
   write_members(path, {header, data}, 1 << 20);
   const auto file = read_bytes(path);
@@ -87,7 +78,7 @@ TEST(GzipIndex, EveryMemberCarriesItsLengthAndZlibStillReadsTheFile) {
 
 TEST(GzipIndex, DecodesAnyRangeOnGranulesForAnyThreadCount) {
   TempDir dir;
-  const auto header = sample_bytes(352), data = sample_bytes(3'000'000);
+  const auto header = compressible_bytes(352), data = compressible_bytes(3'000'000);
   const std::string path = dir.file("v.gz");
   write_members(path, {header, data}, 1 << 18);  // 12 data members
   for (const unsigned threads : {1u, 2u, 5u}) {
@@ -104,7 +95,7 @@ TEST(GzipIndex, DecodesAnyRangeOnGranulesForAnyThreadCount) {
 
 TEST(GzipIndex, LeavesEverythingElseToTheStreamingReaderWithoutDelivering) {
   TempDir dir;
-  const auto header = sample_bytes(352), data = sample_bytes(1'000'000);
+  const auto header = compressible_bytes(352), data = compressible_bytes(1'000'000);
   const std::string path = dir.file("v.gz");
   write_members(path, {header, data}, 1 << 18);
   Delivered got;
@@ -138,7 +129,7 @@ TEST(GzipIndex, LeavesEverythingElseToTheStreamingReaderWithoutDelivering) {
 
 TEST(GzipIndex, DamagedMemberIsReportedAsNotRead) {
   TempDir dir;
-  const auto data = sample_bytes(1'000'000);
+  const auto data = compressible_bytes(1'000'000);
   const std::string path = dir.file("v.gz");
   write_members(path, {data}, 1 << 18);
   auto bytes = read_bytes(path);

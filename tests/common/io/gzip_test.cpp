@@ -16,20 +16,10 @@
 namespace palp {
 namespace {
 
+using testing::compressible_bytes;
 using testing::read_bytes;
 using testing::TempDir;
 using testing::write_bytes;
-
-// Compressible but not trivial test data.
-std::vector<std::uint8_t> sample_bytes(std::size_t n) {
-  std::vector<std::uint8_t> out(n);
-  std::uint32_t state = 12345;
-  for (std::size_t i = 0; i < n; ++i) {
-    state = state * 1664525u + 1013904223u;
-    out[i] = static_cast<std::uint8_t>((i / 97) % 13 + ((state >> 24) & 3));
-  }
-  return out;
-}
 
 // One gzip member made by zlib (not by the code under test).
 std::vector<std::uint8_t> zlib_gzip_member(const std::vector<std::uint8_t>& data) {
@@ -61,7 +51,7 @@ std::vector<std::uint8_t> zlib_gunzip_file(const std::string& path) {
 
 TEST(Gzip, ParallelMultiMemberOutputIsReadByZlibAndByTheReader) {
   TempDir dir;
-  const auto data = sample_bytes(10'000'000);
+  const auto data = compressible_bytes(10'000'000);
   const std::string path = dir.file("data.gz");
   GzipOptions options;
   options.member_bytes = 1 << 20;
@@ -84,7 +74,7 @@ TEST(Gzip, EveryLevelAndIncompressibleDataRoundTripThroughZlib) {
     state ^= state << 13, state ^= state >> 7, state ^= state << 17;
     b = static_cast<std::uint8_t>(state);
   }
-  std::vector<std::uint8_t> text = sample_bytes(2'000'000);
+  std::vector<std::uint8_t> text = compressible_bytes(2'000'000);
   TempDir dir;
   for (int level = 0; level <= 3; ++level) {
     for (const std::vector<std::uint8_t>* data : {&noise, &text}) {
@@ -121,7 +111,7 @@ TEST(Gzip, CompressingLeavesNoUpperVectorStateOnTheCallingThread) {
   // ISA-L's kernels return with the YMM/ZMM upper halves dirty; the SSE code the thread runs
   // next (a distance map) then ran several times slower. The writer must clear them.
   if (!vector_state_in_use()) GTEST_SKIP() << "this CPU does not report XINUSE";
-  const auto data = sample_bytes(3'000'000);
+  const auto data = compressible_bytes(3'000'000);
   GzipOptions options;
   options.threads = 1;  // every member on this thread
   options.member_bytes = 1 << 20;
@@ -151,8 +141,8 @@ TEST(Gzip, BytesDoNotDependOnWhichThreadCompressedWhichMember) {
 }
 
 TEST(Gzip, PiecesStartNewMembersAndConcatenate) {
-  const auto a = sample_bytes(1000);
-  const auto b = sample_bytes(3000);
+  const auto a = compressible_bytes(1000);
+  const auto b = compressible_bytes(3000);
   const ByteSpan pieces[2] = {ByteSpan(a), ByteSpan(b)};
   const auto packed = gzip_compress(pieces);
   auto expected = a;
@@ -169,8 +159,8 @@ TEST(Gzip, EmptyInputIsAValidGzipStream) {
 
 TEST(Gzip, ReadsMultiMemberFilesWrittenByZlib) {
   TempDir dir;
-  const auto a = sample_bytes(200'000);
-  const auto b = sample_bytes(50'000);
+  const auto a = compressible_bytes(200'000);
+  const auto b = compressible_bytes(50'000);
   auto file = zlib_gzip_member(a);
   const auto second = zlib_gzip_member(b);
   file.insert(file.end(), second.begin(), second.end());
@@ -182,7 +172,7 @@ TEST(Gzip, ReadsMultiMemberFilesWrittenByZlib) {
 
 TEST(Gzip, TrailingZeroPaddingIsIgnored) {
   TempDir dir;
-  const auto a = sample_bytes(5000);
+  const auto a = compressible_bytes(5000);
   auto file = zlib_gzip_member(a);
   file.insert(file.end(), 100, 0);
   write_bytes(dir.file("padded.gz"), file);
@@ -191,7 +181,7 @@ TEST(Gzip, TrailingZeroPaddingIsIgnored) {
 
 TEST(Gzip, StreamingReaderDeliversExactChunksAndSkips) {
   TempDir dir;
-  const auto data = sample_bytes(3'000'000);
+  const auto data = compressible_bytes(3'000'000);
   write_bytes(dir.file("d.gz"), zlib_gzip_member(data));
   DecodedReader reader(dir.file("d.gz"), 0, Compression::gzip);
   EXPECT_EQ(reader.skip(1000), 1000u);
@@ -205,7 +195,7 @@ TEST(Gzip, StreamingReaderDeliversExactChunksAndSkips) {
 
 TEST(Gzip, RawReaderFromOffset) {
   TempDir dir;
-  const auto data = sample_bytes(5000);
+  const auto data = compressible_bytes(5000);
   write_bytes(dir.file("raw.bin"), data);
   DecodedReader reader(dir.file("raw.bin"), 100, Compression::none);
   EXPECT_EQ(reader.skip(50), 50u);
@@ -218,7 +208,7 @@ TEST(Gzip, RawReaderFromOffset) {
 
 TEST(Gzip, TruncatedStreamIsAClearInputError) {
   TempDir dir;
-  auto file = zlib_gzip_member(sample_bytes(400'000));
+  auto file = zlib_gzip_member(compressible_bytes(400'000));
   file.resize(file.size() / 2);
   write_bytes(dir.file("cut.gz"), file);
   EXPECT_PALP_ERROR(read_file(dir.file("cut.gz"), 1 << 20), InputError,
@@ -227,7 +217,7 @@ TEST(Gzip, TruncatedStreamIsAClearInputError) {
 
 TEST(Gzip, CorruptDataReportsZlibsMessage) {
   TempDir dir;
-  auto file = zlib_gzip_member(sample_bytes(400'000));
+  auto file = zlib_gzip_member(compressible_bytes(400'000));
   for (std::size_t i = 40; i < 60; ++i) file[i] ^= 0x5a;
   write_bytes(dir.file("bad.gz"), file);
   EXPECT_PALP_ERROR(read_file(dir.file("bad.gz"), 1 << 20), InputError,
@@ -236,7 +226,7 @@ TEST(Gzip, CorruptDataReportsZlibsMessage) {
 
 TEST(Gzip, CorruptChecksumIsDetected) {
   TempDir dir;
-  auto file = zlib_gzip_member(sample_bytes(10'000));
+  auto file = zlib_gzip_member(compressible_bytes(10'000));
   file[file.size() - 6] ^= 0xff;  // inside the CRC-32 of the trailer
   write_bytes(dir.file("crc.gz"), file);
   EXPECT_PALP_ERROR(read_file(dir.file("crc.gz"), 1 << 20), InputError, "incorrect data check");
@@ -252,7 +242,7 @@ TEST(Gzip, DecompressionBombIsRefusedAtTheLimit) {
 }
 
 TEST(Gzip, ZlibStreamsAsInMetaImageCompressedData) {
-  const auto data = sample_bytes(123'456);
+  const auto data = compressible_bytes(123'456);
   uLongf size = compressBound(data.size());
   std::vector<std::uint8_t> packed(size);
   ASSERT_EQ(compress2(packed.data(), &size, data.data(), data.size(), 6), Z_OK);
@@ -277,9 +267,9 @@ std::vector<std::uint8_t> read_unevenly(DecodedReader& reader) {
 TEST(Gzip, LibdeflateAndZlibMembersMixInOneStream) {
   // Three small members (libdeflate decodes them whole), one whose output exceeds the fast
   // path's 8 MiB buffer (zlib takes over), then a small one (zlib from then on).
-  const auto a = sample_bytes(2'500'000);
-  const auto big = sample_bytes(9'000'000);
-  const auto tail = sample_bytes(1000);
+  const auto a = compressible_bytes(2'500'000);
+  const auto big = compressible_bytes(9'000'000);
+  const auto tail = compressible_bytes(1000);
   GzipOptions options;
   options.member_bytes = 1 << 20;
   auto file = gzip_compress(ByteSpan(a), options);
@@ -303,7 +293,7 @@ TEST(Gzip, LibdeflateAndZlibMembersMixInOneStream) {
 TEST(Gzip, DamageInALaterMemberIsStillReported) {
   // Four members of 1 MiB written by palp; the third one's CRC, then its data, damaged, then
   // the file cut inside it: the fast path declines and zlib reports what is wrong.
-  const auto data = sample_bytes(4 << 20);
+  const auto data = compressible_bytes(4 << 20);
   GzipOptions options;
   options.member_bytes = 1 << 20;
   std::vector<std::uint8_t> file;
