@@ -50,8 +50,9 @@ using Clock = std::chrono::steady_clock;
 // 2: oblique inputs reoriented, cube phantom ILA; 3: sub-voxel surfaces; 4: the bone trim keeps
 // bone too thin for an interior voxel; 7: bone grown from 150 HU, marrow by votes of three planes,
 // edge trim at 0.3; 8: marrow between cortices (bone_enclosure.cpp); 9: maps on a refined grid
-// on coarse CTs (map_refine.hpp); 10: a leak's contact with the bone dropped with it
-constexpr int kPrepAlgorithmVersion = 10;
+// on coarse CTs (map_refine.hpp); 10: a leak's contact with the bone dropped with it; 11: marrow of
+// plates bracketed within 20 mm and along the body axis (bone_enclosure.cpp)
+constexpr int kPrepAlgorithmVersion = 11;
 
 // A stable 64-bit hash of byte streams (not cryptographic: it detects changed inputs).
 class ContentHash {
@@ -144,6 +145,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_max_hole_mm2", s.bone_max_hole_mm2},
           {"bone_enclosure_radius_mm", s.bone_enclosure_radius_mm},
           {"bone_enclosure_directions", s.bone_enclosure_directions},
+          {"bone_plate_radius_mm", s.bone_plate_radius_mm},
           {"bone_edge_fraction", s.bone_edge_fraction},
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},
