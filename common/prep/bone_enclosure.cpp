@@ -95,10 +95,12 @@ inline std::uint8_t next_step(std::uint8_t from) {  // one step further, saturat
   return static_cast<std::uint8_t>(std::min<unsigned>(from, kFar - 1u) + 1u);
 }
 
-// The votes of one voxel: bits 0-3 count the lines bracketed within the radius, bits 4-7 those
-// within the plate radius, bit 8 the line across the slices within the plate radius.
-using Votes = std::uint16_t;
-constexpr Votes kFarVote = 16, kAxisVote = 256;
+// One worker's votes for a voxel, over its share of the lines (at most 7): bits 0-3 count the
+// lines that bone brackets within the radius, bits 4-7 those within the plate radius, where the
+// line across the slices (the body axis) counts 9: the high nibble is the line count, plus 8 when
+// the axis line is among them (at most 6 + 9).
+using Votes = std::uint8_t;
+constexpr Votes kFarVote = 16, kAxisVote = 9 * 16;
 
 // One sweep along `step`: dist[q] = 0 on bone, else 1 + dist[q - step], saturating at kFar;
 // leaving the box across a cut end counts as bone just outside. With `votes`, the backward sweep
@@ -166,6 +168,7 @@ void enclosure_pass(const PatientAxes& axes, const std::vector<Line>& lines,
   if (!bone_box(bone, body, margin, axes.slice, box)) return;
   // Two workers, each with its own distances and votes for its share of the lines.
   constexpr std::int64_t kWorkers = 2;
+  static_assert((13 + kWorkers - 1) / kWorkers <= 7, "a worker's line counts must fit 3 bits");
   std::vector<std::vector<Votes>> votes(kWorkers);
   const auto count = static_cast<std::int64_t>(lines.size());
   parallel_for_chunks(kWorkers, 1, [&](std::int64_t w0, std::int64_t w1) {
@@ -179,7 +182,7 @@ void enclosure_pass(const PatientAxes& axes, const std::vector<Line>& lines,
         const auto far_reach = static_cast<std::uint8_t>(line.far_reach);
         bool across_slices = true;  // the line along the body axis
         for (int a = 0; a < 3; ++a) across_slices &= (line.step[a] != 0) == (a == axes.slice);
-        const Votes far_vote = across_slices ? kFarVote + kAxisVote : kFarVote;
+        const Votes far_vote = across_slices ? kAxisVote : kFarVote;
         sweep(box, line.step, reach, far_reach, far_vote, dist.data(), nullptr);
         const std::array<std::int64_t, 3> back = {-line.step[0], -line.step[1], -line.step[2]};
         sweep(box, back, reach, far_reach, far_vote, dist.data(), v.data());
@@ -193,9 +196,11 @@ void enclosure_pass(const PatientAxes& axes, const std::vector<Line>& lines,
     for (std::int64_t j = 0; j < box.dims[1]; ++j)
       for (std::int64_t i = 0; i < box.dims[0]; ++i) {
         const std::size_t q = box.at(i, j, k);
-        const unsigned v = static_cast<unsigned>(votes[0][q]) + votes[1][q];
-        const bool near = static_cast<int>(v & 15u) >= needed;
-        const bool plate = plates && static_cast<int>((v >> 4) & 15u) >= needed && (v >> 8) != 0;
+        const unsigned v0 = votes[0][q], v1 = votes[1][q];
+        const bool near = static_cast<int>((v0 & 15u) + (v1 & 15u)) >= needed;
+        const unsigned f0 = v0 >> 4, f1 = v1 >> 4;  // line counts in bits 0-2, the axis in bit 3
+        const bool plate =
+            plates && static_cast<int>((f0 & 7u) + (f1 & 7u)) >= needed && ((f0 | f1) & 8u) != 0;
         if (near || plate) bone.data[g.linear(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k)] = 1;
       }
 }
@@ -214,7 +219,7 @@ void fill_between_cortices(const PatientAxes& axes, const SegmentationParams& pa
   std::array<std::int64_t, 3> margin{};
   for (int a = 0; a < 3; ++a)
     margin[a] = static_cast<std::int64_t>(std::floor(far_mm / g.spacing[a]));
-  check_allocation(g, 7, "bone enclosure");
+  check_allocation(g, 5, "bone enclosure");
   enclosure_pass(axes, lines, margin, needed, plates, body, bone);
 }
 
