@@ -24,10 +24,11 @@ namespace {
 struct Line {
   std::array<std::int64_t, 3> step{};  // voxel step along each axis, -1, 0 or 1
   std::int64_t reach = 0;              // steps within the radius
+  std::int64_t far_reach = 0;          // steps within the plate radius
 };
 
 // The 13 lines through a voxel of the 3x3x3 neighbourhood (one of each opposite pair).
-std::vector<Line> lines_within(const Grid& g, double radius_mm) {
+std::vector<Line> lines_within(const Grid& g, double radius_mm, double far_mm) {
   std::vector<Line> lines;
   for (std::int64_t dz = -1; dz <= 1; ++dz)
     for (std::int64_t dy = -1; dy <= 1; ++dy)
@@ -38,7 +39,9 @@ std::vector<Line> lines_within(const Grid& g, double radius_mm) {
                                      std::pow(static_cast<double>(dy) * g.spacing[1], 2) +
                                      std::pow(static_cast<double>(dz) * g.spacing[2], 2));
         const auto reach = static_cast<std::int64_t>(std::floor(radius_mm / len));
-        lines.push_back({{dx, dy, dz}, std::min<std::int64_t>(reach, 250)});
+        const auto far = static_cast<std::int64_t>(std::floor(far_mm / len));
+        lines.push_back(
+            {{dx, dy, dz}, std::min<std::int64_t>(reach, 250), std::min<std::int64_t>(far, 250)});
       }
   return lines;
 }
@@ -92,20 +95,33 @@ inline std::uint8_t next_step(std::uint8_t from) {  // one step further, saturat
   return static_cast<std::uint8_t>(std::min<unsigned>(from, kFar - 1u) + 1u);
 }
 
+// One worker's votes for a voxel, over its share of the lines (at most 7): bits 0-3 count the
+// lines that bone brackets within the radius, bits 4-7 those within the plate radius, where the
+// line across the slices (the body axis) counts 9: the high nibble is the line count, plus 8 when
+// the axis line is among them (at most 6 + 9).
+using Votes = std::uint8_t;
+constexpr Votes kFarVote = 16, kAxisVote = 9 * 16;
+
 // One sweep along `step`: dist[q] = 0 on bone, else 1 + dist[q - step], saturating at kFar;
 // leaving the box across a cut end counts as bone just outside. With `votes`, the backward sweep
 // (step negated) adds a vote where the candidate's forward value (still in dist) and its backward
-// value are both within `reach`, before overwriting it.
+// value are both within `reach`, and `far_vote` where both are within `far_reach`, before
+// overwriting it.
 void sweep(const Box& box, const std::array<std::int64_t, 3>& step, std::uint8_t reach,
-           std::uint8_t* dist, std::uint8_t* votes) {
+           std::uint8_t far_reach, Votes far_vote, std::uint8_t* dist, Votes* votes) {
   const std::int64_t nx = box.dims[0], ny = box.dims[1], nz = box.dims[2], dx = step[0];
   const auto exit_value = [&](int axis, std::int64_t from) {  // `from`: the coordinate left to
     return box.cut[axis][from < 0 ? 0 : 1] ? std::uint8_t{1} : kFar;
   };
-  const auto put = [&](std::uint8_t* d, const std::uint8_t* cell, std::uint8_t* v, std::int64_t i,
+  const auto put = [&](std::uint8_t* d, const std::uint8_t* cell, Votes* v, std::int64_t i,
                        std::uint8_t from) {
     const std::uint8_t value = cell[i] == 1 ? std::uint8_t{0} : next_step(from);
-    if (v) v[i] += static_cast<std::uint8_t>((cell[i] == 2) & (d[i] <= reach) & (value <= reach));
+    if (v) {
+      const bool candidate = cell[i] == 2;
+      const bool near = candidate & (d[i] <= reach) & (value <= reach);
+      const bool far = candidate & (d[i] <= far_reach) & (value <= far_reach);
+      v[i] = static_cast<Votes>(v[i] + near + far * far_vote);
+    }
     d[i] = value;
   };
   for (std::int64_t kk = 0; kk < nz; ++kk) {
@@ -120,7 +136,7 @@ void sweep(const Box& box, const std::array<std::int64_t, 3>& step, std::uint8_t
       const std::size_t row = box.at(0, j, k);
       const std::uint8_t* cell = box.cells.data() + row;
       std::uint8_t* d = dist + row;
-      std::uint8_t* v = votes ? votes + row : nullptr;
+      Votes* v = votes ? votes + row : nullptr;
       // The voxel whose neighbour behind lies beyond the row's end (none when dx == 0).
       const std::int64_t edge = dx > 0 ? 0 : nx - 1;
       const std::int64_t lo = dx > 0 ? 1 : 0, hi = dx < 0 ? nx - 1 : nx;  // the others
@@ -143,6 +159,52 @@ void sweep(const Box& box, const std::array<std::int64_t, 3>& step, std::uint8_t
   }
 }
 
+// The rule over `bone`: the votes of every line, then the voxels they fill.
+void enclosure_pass(const PatientAxes& axes, const std::vector<Line>& lines,
+                    const std::array<std::int64_t, 3>& margin, int needed, bool plates,
+                    const Mask& body, Mask& bone) {
+  const Grid& g = bone.grid;
+  Box box;
+  if (!bone_box(bone, body, margin, axes.slice, box)) return;
+  // Two workers, each with its own distances and votes for its share of the lines.
+  constexpr std::int64_t kWorkers = 2;
+  static_assert((13 + kWorkers - 1) / kWorkers <= 7, "a worker's line counts must fit 3 bits");
+  std::vector<std::vector<Votes>> votes(kWorkers);
+  const auto count = static_cast<std::int64_t>(lines.size());
+  parallel_for_chunks(kWorkers, 1, [&](std::int64_t w0, std::int64_t w1) {
+    for (std::int64_t w = w0; w < w1; ++w) {
+      std::vector<std::uint8_t> dist(box.cells.size());
+      std::vector<Votes>& v = votes[static_cast<std::size_t>(w)];
+      v.assign(box.cells.size(), 0);
+      for (std::int64_t l = w; l < count; l += kWorkers) {
+        const Line& line = lines[static_cast<std::size_t>(l)];
+        const auto reach = static_cast<std::uint8_t>(line.reach);
+        const auto far_reach = static_cast<std::uint8_t>(line.far_reach);
+        bool across_slices = true;  // the line along the body axis
+        for (int a = 0; a < 3; ++a) across_slices &= (line.step[a] != 0) == (a == axes.slice);
+        const Votes far_vote = across_slices ? kAxisVote : kFarVote;
+        sweep(box, line.step, reach, far_reach, far_vote, dist.data(), nullptr);
+        const std::array<std::int64_t, 3> back = {-line.step[0], -line.step[1], -line.step[2]};
+        sweep(box, back, reach, far_reach, far_vote, dist.data(), v.data());
+      }
+    }
+  });
+  // Within the radius along `needed` lines; or, a plate between cortices farther apart, within
+  // the plate radius along as many lines and along the body axis (the spinal canal, a tube open
+  // along the axis, is not bracketed along it; nor is a foramen's channel across the slices).
+  for (std::int64_t k = 0; k < box.dims[2]; ++k)
+    for (std::int64_t j = 0; j < box.dims[1]; ++j)
+      for (std::int64_t i = 0; i < box.dims[0]; ++i) {
+        const std::size_t q = box.at(i, j, k);
+        const unsigned v0 = votes[0][q], v1 = votes[1][q];
+        const bool near = static_cast<int>((v0 & 15u) + (v1 & 15u)) >= needed;
+        const unsigned f0 = v0 >> 4, f1 = v1 >> 4;  // line counts in bits 0-2, the axis in bit 3
+        const bool plate =
+            plates && static_cast<int>((f0 & 7u) + (f1 & 7u)) >= needed && ((f0 | f1) & 8u) != 0;
+        if (near || plate) bone.data[g.linear(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k)] = 1;
+      }
+}
+
 }  // namespace
 
 void fill_between_cortices(const PatientAxes& axes, const SegmentationParams& params,
@@ -150,39 +212,15 @@ void fill_between_cortices(const PatientAxes& axes, const SegmentationParams& pa
   const int needed = params.bone_enclosure_directions;
   if (needed <= 0) return;
   const Grid& g = bone.grid;
-  const std::vector<Line> lines = lines_within(g, params.bone_enclosure_radius_mm);
+  // The plate radius reaches at least as far as the radius (0: no plate rule).
+  const double far_mm = std::max(params.bone_enclosure_radius_mm, params.bone_plate_radius_mm);
+  const bool plates = params.bone_plate_radius_mm > params.bone_enclosure_radius_mm;
+  const std::vector<Line> lines = lines_within(g, params.bone_enclosure_radius_mm, far_mm);
   std::array<std::int64_t, 3> margin{};
   for (int a = 0; a < 3; ++a)
-    margin[a] =
-        static_cast<std::int64_t>(std::floor(params.bone_enclosure_radius_mm / g.spacing[a]));
+    margin[a] = static_cast<std::int64_t>(std::floor(far_mm / g.spacing[a]));
   check_allocation(g, 5, "bone enclosure");
-  Box box;
-  if (!bone_box(bone, body, margin, axes.slice, box)) return;
-  // Two workers, each with its own distances and votes for its share of the lines.
-  constexpr std::int64_t kWorkers = 2;
-  std::vector<std::vector<std::uint8_t>> votes(kWorkers);
-  const auto count = static_cast<std::int64_t>(lines.size());
-  parallel_for_chunks(kWorkers, 1, [&](std::int64_t w0, std::int64_t w1) {
-    for (std::int64_t w = w0; w < w1; ++w) {
-      std::vector<std::uint8_t> dist(box.cells.size());
-      std::vector<std::uint8_t>& v = votes[static_cast<std::size_t>(w)];
-      v.assign(box.cells.size(), 0);
-      for (std::int64_t l = w; l < count; l += kWorkers) {
-        const Line& line = lines[static_cast<std::size_t>(l)];
-        const auto reach = static_cast<std::uint8_t>(line.reach);
-        sweep(box, line.step, reach, dist.data(), nullptr);
-        const std::array<std::int64_t, 3> back = {-line.step[0], -line.step[1], -line.step[2]};
-        sweep(box, back, reach, dist.data(), v.data());
-      }
-    }
-  });
-  for (std::int64_t k = 0; k < box.dims[2]; ++k)
-    for (std::int64_t j = 0; j < box.dims[1]; ++j)
-      for (std::int64_t i = 0; i < box.dims[0]; ++i) {
-        const std::size_t q = box.at(i, j, k);
-        if (votes[0][q] + votes[1][q] >= needed)
-          bone.data[g.linear(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k)] = 1;
-      }
+  enclosure_pass(axes, lines, margin, needed, plates, body, bone);
 }
 
 }  // namespace palp::segmentation

@@ -102,6 +102,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_max_hole_mm2", s.bone_max_hole_mm2},
           {"bone_enclosure_radius_mm", s.bone_enclosure_radius_mm},
           {"bone_enclosure_directions", s.bone_enclosure_directions},
+          {"bone_plate_radius_mm", s.bone_plate_radius_mm},
           {"bone_edge_fraction", s.bone_edge_fraction},
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},

@@ -24,7 +24,8 @@ void check_params(const SegmentationParams& p) {
                            p.bone_edge_fraction,
                            p.bone_max_cavity_ml,
                            p.min_bone_island_ml,
-                           p.bone_enclosure_radius_mm};
+                           p.bone_enclosure_radius_mm,
+                           p.bone_plate_radius_mm};
   for (double v : values)
     if (!std::isfinite(v)) throw UsageError("segmentation: parameters must be finite numbers");
   if (p.min_body_part_ml < 0 || p.body_core_radius_mm < 0 || p.max_table_thickness_mm < 0 ||
@@ -39,6 +40,8 @@ void check_params(const SegmentationParams& p) {
     throw UsageError("segmentation: bone_enclosure_directions must lie in [0, 13]");
   if (p.bone_enclosure_radius_mm < 0 || p.bone_enclosure_radius_mm > 100)
     throw UsageError("segmentation: bone_enclosure_radius_mm must lie in [0, 100]");
+  if (p.bone_plate_radius_mm < 0 || p.bone_plate_radius_mm > 100)
+    throw UsageError("segmentation: bone_plate_radius_mm must lie in [0, 100]");
   if (p.bone_grow_hu > p.bone_seed_hu)
     throw UsageError("segmentation: bone_grow_hu must not exceed bone_seed_hu");
 }

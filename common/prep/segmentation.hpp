@@ -51,6 +51,11 @@ struct SegmentationParams {
   // every plane (common/prep/bone_enclosure.hpp). 0 directions: off.
   double bone_enclosure_radius_mm = 12.0;
   int bone_enclosure_directions = 10;
+  // Marrow of a plate between cortices farther apart (the sacrum): also filled when bone brackets
+  // it within bone_plate_radius_mm along as many lines AND along the line across the slices (the
+  // body axis). The spinal canal, a tube open along the axis, is not bracketed along it however
+  // far its arches reach. 0 (or not above bone_enclosure_radius_mm): off.
+  double bone_plate_radius_mm = 20.0;
   // Edge trim: a bone voxel beside non-bone, next to a thicker bone voxel, is dropped when its HU
   // is below this fraction of the way from its outside neighbours' mean to its brightest bone
   // neighbour; 0: no trim. The half-maximum (0.5) fits sharp phantom edges but cuts ribs and

@@ -2,7 +2,8 @@
 // scenes at 1 mm: marrow behind foramina that open it in every slice plane is filled by the lines
 // that bone brackets, the foramina and the tissue around the bone are not; tissue between two
 // parallel plates (a disc, a joint space) is bracketed only by the lines that cross it and stays
-// out; tissue beside a single plate stays out.
+// out; tissue beside a single plate stays out; a plate of marrow too thick for the radius is
+// filled by the plate rule, a canal inside arches beside it is not.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -64,6 +65,61 @@ TEST(BoneEnclosure, TissueBetweenParallelPlatesOrBesideOneStaysOut) {
   EXPECT_EQ(count_in(bone, {0, 0, 0}, {100, 100, 60}), 2 * 30 * 4 * 40 + 4 * 60 * 40);
 }
 
+// A ring of bone (arches) around a canal of CSF, in slices [k0, k0 + 12): centre (72, 50),
+// radii 7 and 12 voxels.
+void arch(CtVolume& ct, std::int64_t k0) {
+  for (std::int64_t k = k0; k < k0 + 12; ++k)
+    for (std::int64_t j = 0; j < 100; ++j)
+      for (std::int64_t i = 0; i < 100; ++i) {
+        const std::int64_t r2 = (i - 72) * (i - 72) + (j - 50) * (j - 50);
+        if (r2 <= 12 * 12 && r2 > 7 * 7) ct.at(i, j, k) = 700;
+      }
+}
+
+TEST(BoneEnclosure, APlateIsFilledWithinThePlateRadiusACanalIsNot) {
+  // A plate: marrow 20 x 16 x 20 mm (x, y, z) in a 2 mm cortex. Its middle lies 8 mm from the
+  // faces across y, 10 mm from the others and 14 mm along the diagonals that do not cross y:
+  // within 12 mm bone brackets it along the 3 axes only, within 20 mm along all 13 lines, the
+  // one along the body axis (z) included. Beside it, arches 12 mm high with 8 mm interlaminar spaces
+  // around a canal through the whole scan: within 20 mm their tilted lines bracket the canal, the
+  // line along the axis does not. The slice-plane holes and the 3-D cavity fill are off (they would
+  // fill the closed plate), so the enclosure acts alone.
+  CtVolume ct = tissue_scene();
+  box(ct, {20, 20, 18}, {44, 40, 42}, 700);
+  box(ct, {22, 22, 20}, {42, 38, 40}, -30);
+  for (const std::int64_t k0 : {2, 22, 42}) arch(ct, k0);
+  SegmentationParams p;
+  p.bone_max_hole_mm2 = 0;
+  p.bone_max_cavity_ml = 0;
+  SegmentationParams no_plate = p;
+  no_plate.bone_plate_radius_mm = 0;
+  SegmentationParams wide = no_plate;  // the 12 mm rule at 20 mm: no axis line needed
+  wide.bone_enclosure_radius_mm = 20;
+  const Mask bone = bone_of(ct, p), near_only = bone_of(ct, no_plate),
+             wide_only = bone_of(ct, wide);
+  const std::int64_t marrow = 20 * 16 * 20;
+  const Index3 lo = {22, 22, 20}, hi = {42, 38, 40};
+  const Index3 canal_lo = {68, 46, 0}, canal_hi = {77, 55, 60};  // the canal's core, 9 x 9
+  // The 12 mm rule alone fills none of the marrow: no voxel of it has both x faces, both z faces
+  // and the diagonals between them within 12 mm.
+  EXPECT_EQ(count_in(near_only, lo, hi), 0);
+  // The plate rule fills its core whole (4 mm and more from the x and z faces, 2 mm from the y
+  // faces) and most of the rest; a voxel next to a face misses the lines across to the far face.
+  EXPECT_EQ(count_in(bone, {26, 24, 24}, {38, 36, 36}), 12 * 12 * 12);
+  const std::int64_t filled = count_in(bone, lo, hi);
+  EXPECT_GE(filled, marrow * 85 / 100);
+  // The canal stays open; a 20 mm radius without the axis line fills it.
+  EXPECT_EQ(count_in(bone, canal_lo, canal_hi), 0);
+  EXPECT_GT(count_in(wide_only, canal_lo, canal_hi), 0) << "the canal test does not bite";
+  // Nothing but the cortex, the filled marrow and the arches.
+  const std::int64_t cortex = 24 * 20 * 24 - marrow;
+  EXPECT_EQ(count_in(bone, {20, 20, 18}, {44, 40, 42}), cortex + filled);
+  EXPECT_EQ(count_in(bone, {0, 0, 0}, {100, 100, 60}),
+            cortex + filled + count_in(bone, {60, 38, 0}, {85, 63, 60}));
+  EXPECT_EQ(count_in(bone, {60, 38, 0}, {85, 63, 60}),
+            count_in(near_only, {60, 38, 0}, {85, 63, 60}));
+}
+
 TEST(BoneEnclosure, RejectsUnusableParameters) {
   const CtVolume ct = tissue_scene();
   const Mask body = segment_body(ct, SegmentationParams{});
@@ -76,6 +132,9 @@ TEST(BoneEnclosure, RejectsUnusableParameters) {
     SegmentationParams p;
     p.bone_enclosure_radius_mm = radius;
     EXPECT_THROW(segment_bone(ct, body, p), UsageError);
+    SegmentationParams plate;
+    plate.bone_plate_radius_mm = radius;
+    EXPECT_THROW(segment_bone(ct, body, plate), UsageError);
   }
 }
 
