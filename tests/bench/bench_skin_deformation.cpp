@@ -120,20 +120,12 @@ std::vector<float> full_volume() {
   return ellipse_body(kFullDims, {0.8, 0.8, 1.0}, 0.6, 0.4);
 }
 
-// Full resolution (issue 15): the 512 x 512 x 400 CT at 0.8 x 0.8 x 1 mm, finger:37 pressed
-// 6 mm, with the ROI margin given (mm), ChainMail on every voxel (lattice 0) or on 1.6 mm
-// elements (the default), and the ChainMail's and the resampling's shares.
-void BM_SkinDeformFull(benchmark::State& state) {
-  constexpr std::array<std::int64_t, 3> dims = kFullDims;
-  constexpr std::array<double, 3> spacing{0.8, 0.8, 1.0};
-  static const std::vector<float> original = full_volume();
-  palp::DeformerParams params;
-  params.roi_margin_mm = static_cast<double>(state.range(0));
-  params.lattice_mm = 0.1 * static_cast<double>(state.range(1));  // 0: an element a voxel
-  palp::SkinDeformer deformer(dims, spacing, original, params);
-  std::vector<float> out = original;
-  const std::vector<palp::DeformContact> frames[2] = {press(37, 204.8, 200.0, 6.0),
-                                                      press(37, 205.6, 200.0, 6.0)};
+// Times deformer.update alternating the two frames (after 4 warm-up updates) and reports the
+// ROI's elements, the voxels written and the ChainMail's and the resampling's shares; returns the
+// last update's result.
+palp::DeformResult time_alternating(benchmark::State& state, palp::SkinDeformer& deformer,
+                                    const std::vector<palp::DeformContact> (&frames)[2],
+                                    std::vector<float>& out) {
   palp::DeformResult last;
   std::int64_t frame = 0;
   double solve = 0, resample = 0;
@@ -149,6 +141,24 @@ void BM_SkinDeformFull(benchmark::State& state) {
       (last.hi[0] - last.lo[0]) * (last.hi[1] - last.lo[1]) * (last.hi[2] - last.lo[2]));
   state.counters["solve_ms"] = 1e3 * solve / static_cast<double>(frame);
   state.counters["resample_ms"] = 1e3 * resample / static_cast<double>(frame);
+  return last;
+}
+
+// Full resolution (issue 15): the 512 x 512 x 400 CT at 0.8 x 0.8 x 1 mm, finger:37 pressed
+// 6 mm, with the ROI margin given (mm), ChainMail on every voxel (lattice 0) or on 1.6 mm
+// elements (the default), and the ChainMail's and the resampling's shares.
+void BM_SkinDeformFull(benchmark::State& state) {
+  constexpr std::array<std::int64_t, 3> dims = kFullDims;
+  constexpr std::array<double, 3> spacing{0.8, 0.8, 1.0};
+  static const std::vector<float> original = full_volume();
+  palp::DeformerParams params;
+  params.roi_margin_mm = static_cast<double>(state.range(0));
+  params.lattice_mm = 0.1 * static_cast<double>(state.range(1));  // 0: an element a voxel
+  palp::SkinDeformer deformer(dims, spacing, original, params);
+  std::vector<float> out = original;
+  const std::vector<palp::DeformContact> frames[2] = {press(37, 204.8, 200.0, 6.0),
+                                                      press(37, 205.6, 200.0, 6.0)};
+  time_alternating(state, deformer, frames, out);
 }
 BENCHMARK(BM_SkinDeformFull)
     ->ArgsProduct({{20, 10}, {0, 16}})
@@ -192,22 +202,8 @@ void BM_SkinDeformPalpview(benchmark::State& state) {
   std::vector<float> out = original;
   const std::vector<palp::DeformContact> frames[2] = {flank_press(0.0, slide),
                                                       flank_press(0.8, slide)};
-  palp::DeformResult last;
-  std::int64_t frame = 0;
-  double solve = 0, resample = 0;
-  for (int warm = 0; warm < 4; ++warm) last = deformer.update(frames[warm % 2], out);
-  for (auto _ : state) {
-    last = deformer.update(frames[frame++ % 2], out);
-    solve += last.solve_seconds;
-    resample += last.resample_seconds;
-    benchmark::DoNotOptimize(out.data());
-  }
-  state.counters["roi_elements"] = static_cast<double>(last.elements);
+  const palp::DeformResult last = time_alternating(state, deformer, frames, out);
   state.counters["lattice_i"] = static_cast<double>(last.lattice[0]);
-  state.counters["written_voxels"] = static_cast<double>(
-      (last.hi[0] - last.lo[0]) * (last.hi[1] - last.lo[1]) * (last.hi[2] - last.lo[2]));
-  state.counters["solve_ms"] = 1e3 * solve / static_cast<double>(frame);
-  state.counters["resample_ms"] = 1e3 * resample / static_cast<double>(frame);
 }
 BENCHMARK(BM_SkinDeformPalpview)
     ->ArgsProduct({{0, 1}, {16, 0}})
