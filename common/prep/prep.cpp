@@ -17,21 +17,17 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <system_error>
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
 #include "base/patient_frame.hpp"
 #include "io/ct_io.hpp"
-#include "io/gzip.hpp"
 #include "prep/background_writes.hpp"
 #include "prep/ct_check.hpp"
 #include "prep/iso_projection.hpp"
