@@ -232,22 +232,15 @@ inline void sample_pair(const Geometry& g, const float* records, const Vec3d& x,
                             records + (b + sx + sz) * kPairRecord,
                             records + (b + sy + sz) * kPairRecord,
                             records + (b + sx + sy + sz) * kPairRecord};
-  const double t0 = cell.t[0], t1 = cell.t[1], t2 = cell.t[2];
   double r[kPairRecord];
   for (std::size_t ch = 0; ch < kPairRecord; ++ch) {
     double c[8];
     for (int k = 0; k < 8; ++k) c[k] = static_cast<double>(corner[k][ch]);
-    const double c00 = c[0] + (c[1] - c[0]) * t0;
-    const double c10 = c[2] + (c[3] - c[2]) * t0;
-    const double c01 = c[4] + (c[5] - c[4]) * t0;
-    const double c11 = c[6] + (c[7] - c[6]) * t0;
-    const double c0 = c00 + (c10 - c00) * t1;
-    const double c1 = c01 + (c11 - c01) * t1;
-    r[ch] = c0 + (c1 - c0) * t2;
+    r[ch] = trilinear(c, cell.t);
   }
   surf.inside = bone.inside = true;
-  surf.value = 1.0 * r[0];  // (the float maps' scale, as sample() applies it)
-  bone.value = 1.0 * r[1];
+  surf.value = r[0];  // (a float map's scale is 1)
+  bone.value = r[1];
   surf.grad = {r[2], r[3], r[4]};
   bone.grad = {r[5], r[6], r[7]};
 }
