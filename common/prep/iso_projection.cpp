@@ -247,4 +247,12 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
   return stats;
 }
 
+IsoProjectionStats project_skin_map(const CtVolume& ct, const Mask& body, double skin_hu,
+                                    double reach_mm, double clamp_mm, DistanceMap& map,
+                                    unsigned threads) {
+  const double coarsest = ct.grid.max_spacing();
+  return project_onto_iso_surface(ct, body, skin_hu, reach_mm, coarsest, 0.25 * coarsest, clamp_mm,
+                                  map, threads);
+}
+
 }  // namespace palp

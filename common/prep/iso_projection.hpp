@@ -22,8 +22,8 @@
 //     right sheet of the surface).
 // Elsewhere the map keeps its value. The map may lie on the CT's grid refined by integer factors
 // (prep/map_refine.hpp): its nodes between the CT's take the upsampled map's sign (the HU's
-// where the mask cuts their cell and the two disagree) and their HU by trilinear interpolation. Values are rounded to 1/1024 mm and clamped to +-clamp_mm,
-// as the sub-voxel map is.
+// where the mask cuts their cell and the two disagree) and their HU by trilinear interpolation.
+// Values are rounded to 1/1024 mm and clamped to +-clamp_mm, as the sub-voxel map is.
 #pragma once
 
 #include <cstddef>
@@ -41,6 +41,14 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
                                             double reach_mm, double outside_mm,
                                             double max_change_mm, double clamp_mm, DistanceMap& map,
                                             unsigned threads = 0);
+
+// d_surf's projection as prep makes it, on the CT's grid or its aligned refinement: nodes within
+// `reach_mm` inside the skin and one coarsest CT spacing c outside it, a change of at most c/4.
+// Used by prep and by scene loading's in-memory refinement (scene/scene_maps.hpp), so both give
+// the skin the same surface.
+IsoProjectionStats project_skin_map(const CtVolume& ct, const Mask& body, double skin_hu,
+                                    double reach_mm, double clamp_mm, DistanceMap& map,
+                                    unsigned threads = 0);
 
 // The distance from q (mm from voxel (0,0,0)'s centre) to the trilinear HU's level `iso_hu`,
 // by the same descent from `start` (a point near the nearest surface point), which is moved to

@@ -224,7 +224,6 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   // buffer serves d_bone.
   const bool subvoxel = params.surface.method == SurfaceMethod::subvoxel;
   const double band = subvoxel_band_mm(params.surface, ct.grid);
-  const double coarsest = ct.grid.max_spacing();
   const double projection = skin_projection_mm(params.surface, ct.grid);
   DistanceMap map;
   SurfacePoints skin_points, bone_points;
@@ -246,9 +245,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     }
     if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
     if (subvoxel && hu != nullptr)
-      projected = project_onto_iso_surface(*hu, mask, params.surface.skin_hu, projection, coarsest,
-                                           0.25 * coarsest, params.distance.band_mm, map,
-                                           params.distance.threads);
+      projected = project_skin_map(*hu, mask, params.surface.skin_hu, projection,
+                                   params.distance.band_mm, map, params.distance.threads);
   };
   // The HU are needed by d_surf past the bone's points only for its projection onto their
   // iso-surface; the job drops them after it. Nobody changes them: the writers read them.

@@ -1,6 +1,7 @@
 // Scene loading (see scene.hpp). Stages:
 //   resolve     SCENE -> a prep directory (itself, or the cache entry run_prep fills or verifies)
-//   read maps   d_surf.nii.gz, d_bone.nii.gz -> two DistanceMaps, grids checked to agree
+//   read maps   d_surf.nii.gz, d_bone.nii.gz -> two DistanceMaps on one grid, refined in memory
+//               when asked (scene_maps.hpp)
 //   sampler     DistanceMaps (moved) -> FieldSampler in the configured storage and scheme
 #include "scene/scene.hpp"
 
@@ -26,34 +27,6 @@ std::string env_or_empty(const char* name) {
   return value ? std::string(value) : std::string();
 }
 
-std::string describe_grid(const Grid& grid) {
-  char text[160];
-  std::snprintf(text, sizeof text, "%lld x %lld x %lld voxels of %g x %g x %g mm",
-                static_cast<long long>(grid.dims[0]), static_cast<long long>(grid.dims[1]),
-                static_cast<long long>(grid.dims[2]), grid.spacing[0], grid.spacing[1],
-                grid.spacing[2]);
-  return text;
-}
-
-// One map of a prep directory; a missing file is named with what to do about it.
-DistanceMap read_map(const fs::path& dir, const char* file) {
-  const fs::path path = dir / file;
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) {
-    throw InputError(dir.string() + ": missing " + file +
-                     " (not a complete prep directory; run palp prep)");
-  }
-  return read_nifti_float(path.string());
-}
-
-// The two maps must sample the same points: same dimensions and spacing.
-void check_same_grid(const DistanceMap& surf, const DistanceMap& bone, const fs::path& dir) {
-  if (surf.grid.dims == bone.grid.dims && surf.grid.spacing == bone.grid.spacing) return;
-  throw InputError(dir.string() + ": " + kSurfaceDistanceFile + " (" + describe_grid(surf.grid) +
-                   ") and " + kBoneDistanceFile + " (" + describe_grid(bone.grid) +
-                   ") are on different grids");
-}
-
 // A CT input -> its cache directory, prepped now unless the cache already holds it.
 fs::path prep_into_cache(const std::string& input, const SceneOptions& options, bool* prepped) {
   const std::string root =
@@ -67,6 +40,10 @@ fs::path prep_into_cache(const std::string& input, const SceneOptions& options, 
 }
 
 }  // namespace
+
+SceneMaps read_scene_maps(const Scene& scene, unsigned threads) {
+  return read_scene_maps(scene.prep_dir, scene.map_spacing_mm, threads);
+}
 
 bool is_prep_directory(const std::string& path) {
   std::error_code ec;
@@ -99,11 +76,12 @@ Scene load_scene(const std::string& scene, const SceneOptions& options) {
   const fs::path dir =
       is_prep_directory(scene) ? fs::path(scene) : prep_into_cache(scene, options, &out.prepped);
   out.prep_dir = dir.string();
-  // read maps: d_surf, d_bone on one grid.
-  DistanceMap surf = read_map(dir, kSurfaceDistanceFile);
-  DistanceMap bone = read_map(dir, kBoneDistanceFile);
-  check_same_grid(surf, bone, dir);
-  out.grid = surf.grid;
+  // read maps: d_surf, d_bone on one grid, refined when asked.
+  SceneMaps maps = read_scene_maps(out.prep_dir, options.map_spacing_mm, options.threads);
+  out.grid = maps.surf.grid;
+  out.map_spacing_mm = options.map_spacing_mm;
+  out.map_refinement = maps.refinement;
+  out.map_note = maps.note;
   // The CT and body mask (a prep directory written before palp kept the CT has none).
   std::error_code ec;
   if (options.load_ct && fs::is_regular_file(dir / kCtFile, ec) &&
@@ -117,8 +95,8 @@ Scene load_scene(const std::string& scene, const SceneOptions& options) {
     }
   }
   // sampler: the maps move in (no copy with float32 storage).
-  out.fields =
-      std::make_shared<const FieldSampler>(std::move(surf), std::move(bone), options.sampler);
+  out.fields = std::make_shared<const FieldSampler>(std::move(maps.surf), std::move(maps.bone),
+                                                    options.sampler);
   out.load_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return out;
 }

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -16,10 +15,8 @@
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/model_setup.hpp"
-#include "io/ct_io.hpp"
 #include "model/force_model.hpp"
 #include "model/map_window.hpp"
-#include "prep/prep.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
 
@@ -104,7 +101,7 @@ double clock_pair_ns() {
 }
 
 struct Timings {
-  std::vector<std::int64_t> ns;  // per timed tick
+  std::vector<std::int64_t> ns;   // per timed tick
   std::vector<std::size_t> pose;  // its index in the path
   std::vector<std::uint32_t> status;
   std::vector<int> in_contact;
@@ -239,10 +236,8 @@ int cmd_bench(const Arguments& argv_in) {
     }
     const Vec3d widen{reach + margin, reach + margin, reach + margin};
     const MapWindow window = window_for_box(scene.fields->grid(), lo - widen, hi + widen);
-    const auto dir = std::filesystem::path(scene.prep_dir);
-    fields = window_sampler(read_nifti_float((dir / kSurfaceDistanceFile).string()),
-                            read_nifti_float((dir / kBoneDistanceFile).string()), *scene.fields,
-                            window, scene.fields->config());
+    const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
+    fields = window_sampler(maps.surf, maps.bone, *scene.fields, window, scene.fields->config());
   }
   const Model model(fields, tool, params);
   const double model_mib = maps_mib(*fields, params);

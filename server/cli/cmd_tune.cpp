@@ -170,11 +170,8 @@ int cmd_tune(const Arguments& argv_in) {
 
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene_for(args, "tune", quiet);
-  const DistanceMap surf =
-      read_nifti_float((fs::path(scene.prep_dir) / kSurfaceDistanceFile).string());
-  const DistanceMap bone =
-      read_nifti_float((fs::path(scene.prep_dir) / kBoneDistanceFile).string());
-  const tune::Outcome o = tune::tune(surf, bone, setup, quiet ? nullptr : progress_line);
+  const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
+  const tune::Outcome o = tune::tune(maps.surf, maps.bone, setup, quiet ? nullptr : progress_line);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const tune::Judged& chosen = o.results[o.chosen];

@@ -4,17 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 
 #include "base/errors.hpp"
 #include "devices/device.hpp"
-#include "io/ct_io.hpp"
-#include "prep/prep.hpp"
 
 namespace palp::cli {
 namespace {
-
-namespace fs = std::filesystem;
 
 Box grow(const Box& b, double by) {
   return {b.lo - Vec3d{by, by, by}, b.hi + Vec3d{by, by, by}};
@@ -93,9 +88,10 @@ MapsAtStart maps_at_start(const Args& args, const std::string& device_spec, std:
   }
   const Box box = grow(reach, margin + tool_reach(tool));
   out.window = window_for_box(scene.fields->grid(), box.lo, box.hi);
-  const fs::path dir(scene.prep_dir);
-  DistanceMap surf = read_nifti_float((dir / kSurfaceDistanceFile).string());
-  DistanceMap bone = read_nifti_float((dir / kBoneDistanceFile).string());
+  // the maps as the scene's sampler has them (refined in memory as at load)
+  SceneMaps maps = read_scene_maps(scene);
+  DistanceMap& surf = maps.surf;
+  DistanceMap& bone = maps.bone;
   out.haptic = window_sampler(surf, bone, *scene.fields, out.window, scene.fields->config());
   // (after it: the whole maps' bone-beneath map is traced by now, as the window's)
   const std::size_t whole_bytes = haptic_map_bytes(*scene.fields);

@@ -41,10 +41,15 @@ SceneOptions scene_options(const Args& args) {
   if (model_kind(args) == ModelKind::Palp) {
     options.sampler.gradient = GradientScheme::PrecomputedField;
     options.sampler.storage = Storage::Interleaved;
+    // and on a coarse CT its maps refined in memory (scene/scene_maps.hpp)
+    options.map_spacing_mm = kPalpMapSpacingMm;
   }
   if (const auto scheme = args.get("scheme"))
     options.sampler.gradient = parse_gradient_scheme(*scheme);
   if (const auto storage = args.get("storage")) options.sampler.storage = parse_storage(*storage);
+  options.map_spacing_mm = args.number("map-spacing", options.map_spacing_mm);
+  if (!(options.map_spacing_mm >= 0.0 && options.map_spacing_mm <= 100.0))
+    throw UsageError("--map-spacing needs 0 (the maps as prepped) or a spacing in mm up to 100");
   if (const auto dir = args.get("cache-dir")) {
     if (dir->empty()) throw UsageError("--cache-dir needs a directory");
     options.cache_dir = *dir;
@@ -70,7 +75,18 @@ Scene load_scene_for(const Args& args, const std::string& command, bool quiet) {
                  scene.prep_dir.c_str(), scene.prepped ? " (prepped now)" : "", scene.load_seconds,
                  to_string(scene.fields->config().gradient),
                  to_string(scene.fields->config().storage));
+    if (is_refined(scene.map_refinement)) {
+      const Grid& g = scene.grid;
+      std::fprintf(stderr,
+                   "scene maps refined in memory (--map-spacing %g): %lldx%lldx%lld nodes of "
+                   "%.3g x %.3g x %.3g mm\n",
+                   scene.map_spacing_mm, static_cast<long long>(g.dims[0]),
+                   static_cast<long long>(g.dims[1]), static_cast<long long>(g.dims[2]),
+                   g.spacing[0], g.spacing[1], g.spacing[2]);
+    }
   }
+  if (!quiet && !scene.map_note.empty())
+    std::fprintf(stderr, "scene: note: %s\n", scene.map_note.c_str());
   return scene;
 }
 

@@ -14,8 +14,8 @@
 namespace palp::cli {
 
 // Valued options every model command accepts (besides its own).
-inline const std::vector<std::string> kSceneOptions = {"scene", "scheme", "storage", "cache-dir",
-                                                       "model"};
+inline const std::vector<std::string> kSceneOptions = {"scene",     "scheme", "storage",
+                                                       "cache-dir", "model",  "map-spacing"};
 
 // Help text of those options.
 inline constexpr const char* kSceneOptionsHelp =
@@ -27,6 +27,10 @@ inline constexpr const char* kSceneOptionsHelp =
                           --model palp, analytic for --model paper)
   --storage NAME          maps in memory: float32, int16, interleaved (default: interleaved
                           for --model palp, float32 for --model paper)
+  --map-spacing MM        the maps in memory on the CT's grid refined to at most MM where it is
+                          coarser, the skin's band projected onto the CT's own surface at the
+                          new nodes (default 2 for --model palp: a 3 mm CT's maps at 1.5 mm;
+                          0 = as prepped, the default for --model paper)
   --cache-dir DIR         scene cache (default $PALP_SCENE_CACHE, else
                           $XDG_CACHE_HOME/palp/scenes, else ~/.cache/palp/scenes)
 )";
@@ -38,8 +42,8 @@ std::vector<std::string> take_repeated(Arguments& argv, const std::string& key);
 // The force model of parsed arguments (--model; default palp).
 ModelKind model_kind(const Args& args);
 
-// The scene options of parsed arguments (--scheme, --storage, --cache-dir; the scheme's default
-// follows --model).
+// The scene options of parsed arguments (--scheme, --storage, --map-spacing, --cache-dir; the
+// scheme's, the storage's and the map spacing's defaults follow --model).
 SceneOptions scene_options(const Args& args);
 
 // Loads --scene (required: UsageError naming `command` otherwise), reporting on stderr unless

@@ -114,12 +114,14 @@ void write_cached(const fs::path& path, const Cached& c, const std::string& abou
 
 }  // namespace
 
-std::string tune_cache_key(const std::string& prep_dir, const std::string& tool, double rate_hz,
-                           const ForceParams& p, const std::string& machine) {
+std::string tune_cache_key(const std::string& prep_dir, double map_spacing_mm,
+                           const std::string& tool, double rate_hz, const ForceParams& p,
+                           const std::string& machine) {
   Fnv h;
   h.add("palpd-tune-v1");
   h.add_file(fs::path(prep_dir) / kSurfaceDistanceFile);
   h.add_file(fs::path(prep_dir) / kBoneDistanceFile);
+  h.add(number(map_spacing_mm));  // the maps refined in memory or not (scene/scene_maps.hpp)
   h.add(parse_tool(tool).name);
   h.add(number(rate_hz));
   for (double v : {p.c, p.k, p.bone_fmax, p.bone_flip, p.grad_epsilon, p.direction_epsilon,
@@ -147,7 +149,8 @@ StartTuning tune_at_start(const Args& args, Scene& scene, Tool& tool, const Forc
 
   const auto start = std::chrono::steady_clock::now();
   const std::string machine = tune::machine_class();
-  const std::string key = tune_cache_key(scene.prep_dir, tool.name, rate_hz, params, machine);
+  const std::string key =
+      tune_cache_key(scene.prep_dir, scene.map_spacing_mm, tool.name, rate_hz, params, machine);
   std::string cache_dir = scene_options(args).cache_dir;
   if (cache_dir.empty()) cache_dir = default_scene_cache_dir();
   const fs::path cache_file = fs::path(cache_dir) / "tune" / (key + ".toml");
@@ -158,10 +161,9 @@ StartTuning tune_at_start(const Args& args, Scene& scene, Tool& tool, const Forc
     out.cached = true;
     out.note = "cached (" + cache_file.string() + "): " + choice->summary;
   } else {
-    const DistanceMap surf =
-        read_nifti_float((fs::path(scene.prep_dir) / kSurfaceDistanceFile).string());
-    const DistanceMap bone =
-        read_nifti_float((fs::path(scene.prep_dir) / kBoneDistanceFile).string());
+    const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
+    const DistanceMap& surf = maps.surf;
+    const DistanceMap& bone = maps.bone;
     tune::Setup setup;
     setup.tool = tool.name;
     setup.rate_hz = rate_hz;
@@ -212,10 +214,9 @@ StartTuning tune_at_start(const Args& args, Scene& scene, Tool& tool, const Forc
   if (now.gradient != choice->sampler.gradient || now.storage != choice->sampler.storage) {
     // the whole sampler goes before the new one is built: one set of maps at a time
     scene.fields.reset();
-    DistanceMap surf = read_nifti_float((fs::path(scene.prep_dir) / kSurfaceDistanceFile).string());
-    DistanceMap bone = read_nifti_float((fs::path(scene.prep_dir) / kBoneDistanceFile).string());
-    scene.fields =
-        std::make_shared<const FieldSampler>(std::move(surf), std::move(bone), choice->sampler);
+    SceneMaps maps = read_scene_maps(scene);
+    scene.fields = std::make_shared<const FieldSampler>(std::move(maps.surf), std::move(maps.bone),
+                                                        choice->sampler);
   }
   if (!quiet) std::fprintf(stderr, "palpd: --tune: %s, %s\n", out.choice.c_str(), out.note.c_str());
   return out;

@@ -41,9 +41,11 @@ struct StartTuning {
 };
 
 // The cache file name (hex, no directory) of a tuning of the maps in prep_dir (their bytes are
-// hashed) for a tool, rate, parameters and machine class.
-std::string tune_cache_key(const std::string& prep_dir, const std::string& tool, double rate_hz,
-                           const ForceParams& params, const std::string& machine);
+// hashed) refined in memory to map_spacing_mm or not, for a tool, rate, parameters and machine
+// class.
+std::string tune_cache_key(const std::string& prep_dir, double map_spacing_mm,
+                           const std::string& tool, double rate_hz, const ForceParams& params,
+                           const std::string& machine);
 
 // With --tune: replaces `tool` and, when the scheme or storage differ, scene.fields by the
 // choice (from the cache, else measured within --tune-budget-s and cached); over budget, keeps

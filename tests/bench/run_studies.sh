@@ -94,7 +94,7 @@ charts() {
   want force_model && for scene in torso ct; do
     grep -q "^$scene," "$data/force_model_contrast_ratio.csv" || continue
     local what="torso phantom, 4 paths, 3 ribs each"
-    [[ $scene == ct ]] && what="real CT (3 mm), lower right ribs"
+    [[ $scene == ct ]] && what="real CT (3 mm; palp's maps at 1.5 mm in memory), lower right ribs"
     "$chart" "${c[@]}" --csv "$data/force_model_contrast_ratio.csv" --where scene=$scene \
       --x depth_mm --y ratio_median --group series --style line --legend tr --logy \
       --xlabel "pad depth under the skin (mm), pressed along the skin normal" \
@@ -112,6 +112,14 @@ charts() {
     --xlabel "update rate (Hz), 4 mm deep, flat skin" \
     --ylabel "sliding friction against 10 kHz (%)" \
     --title "Friction against the loop rate (goal: within +-5 %)" --out "$figures/force_model_friction_rate.png"
+  want force_model && [[ -s $data/force_model_smooth.csv ]] &&
+    "$chart" "${c[@]}" --csv "$data/force_model_smooth.csv" \
+      --x depth_mm --y detrended_std_N,max_step_N --names "detrended std","largest tick step" \
+      --group model --style linepoints --logy --legend br \
+      --xlabel "true depth below the -500 HU iso-surface (mm), finger:1, 20 mm/s, bone off" \
+      --ylabel "force (N)" \
+      --title "Skin smoothness on the real CT (goal for palp: both <= 0.1 N)" \
+      --out "$figures/force_model_smooth_ct.png"
   want force_model && "$chart" "${c[@]}" --csv "$data/force_model_creep.csv" \
     --x depth_mm --y decay_pct --group model --style line --legend tr \
     --xlabel "pad depth (mm); shifted by half the breakaway distance, held 5 s, +-0.05 mm jitter" \

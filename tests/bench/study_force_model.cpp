@@ -40,6 +40,9 @@
 //   study_force_model [--out DIR] [--quick]
 // PALP_CT: the CT (default ../shared/data/ct_abdomen_3mm.nii.gz).
 // PALP_MAP_SPACING: prep's --map-spacing for the CT (0: the CT's own grid; default prep's).
+// PALP_MEMORY_MAP_SPACING: the palp model's maps refined in memory to at most this spacing
+// (scene/scene_maps.hpp; default kPalpMapSpacingMm, as palp run's; 0: as prepped). The paper's
+// maps are never refined (its --map-spacing default is 0).
 // PALP_SMOOTH_PATH: the smoothness path: global (default, above); normal: the pad `depth` along
 // the HU normal at the skin point (central differences over 1.5 mm; the earlier path, whose exact
 // depth wanders); exact: that, then moved along the normal onto prep's single descent's distance
@@ -77,9 +80,15 @@ struct Variant {
   std::shared_ptr<const FieldSampler> fields;
 };
 
-std::shared_ptr<const FieldSampler> load_fields(const std::string& scene, GradientScheme g) {
+std::shared_ptr<const FieldSampler> load_fields(const std::string& scene, ModelKind model,
+                                                GradientScheme g) {
   SceneOptions options;
   options.sampler.gradient = g;
+  if (model == ModelKind::Palp) {
+    options.map_spacing_mm = kPalpMapSpacingMm;
+    if (const char* spacing = std::getenv("PALP_MEMORY_MAP_SPACING"))
+      options.map_spacing_mm = std::strtod(spacing, nullptr);
+  }
   // PALP_MAP_SPACING: prep's --map-spacing for a CT scene (default its default).
   if (const char* spacing = std::getenv("PALP_MAP_SPACING"))
     options.prep.map_spacing_mm = std::strtod(spacing, nullptr);
@@ -87,8 +96,9 @@ std::shared_ptr<const FieldSampler> load_fields(const std::string& scene, Gradie
 }
 
 std::vector<Variant> variants_for(const std::string& scene) {
-  return {{ModelKind::Paper, load_fields(scene, GradientScheme::AnalyticTrilinear)},
-          {ModelKind::Palp, load_fields(scene, GradientScheme::PrecomputedField)}};
+  return {
+      {ModelKind::Paper, load_fields(scene, ModelKind::Paper, GradientScheme::AnalyticTrilinear)},
+      {ModelKind::Palp, load_fields(scene, ModelKind::Palp, GradientScheme::PrecomputedField)}};
 }
 
 // Distance along dir from `from` to the first sample inside bone, NaN within `length` none.
@@ -471,9 +481,12 @@ void smoothness(const std::string& ct_path, Csv& csv) {
     std::printf("smooth: the CT was resampled by prep (grids differ): skipped\n");
     return;
   }
-  std::printf("smooth: maps on %lld x %lld x %lld nodes of %g mm\n",
-              static_cast<long long>(map_grid.dims[0]), static_cast<long long>(map_grid.dims[1]),
-              static_cast<long long>(map_grid.dims[2]), map_grid.spacing[0]);
+  for (const Variant& v : vars) {
+    const Grid& g = v.fields->grid();
+    std::printf("smooth: %s's maps on %lld x %lld x %lld nodes of %g mm\n", to_string(v.model),
+                static_cast<long long>(g.dims[0]), static_cast<long long>(g.dims[1]),
+                static_cast<long long>(g.dims[2]), g.spacing[0]);
+  }
   RibsSpec spec;
   spec.azimuth_deg = 90.0;  // anterior
   spec.from = 0.30;

@@ -14,6 +14,7 @@
 #include "model/field_sampler.hpp"
 #include "prep/iso_projection.hpp"
 #include "prep/subvoxel_distance.hpp"
+#include "support/partial_volume.hpp"
 
 namespace palp {
 namespace {
@@ -118,27 +119,9 @@ TEST(MapRefine, RefinedSkinMapOfAPartialVolumeSphereIsCloserToTheExactDistance) 
   constexpr std::int64_t n = 28;
   const Grid g = grid_of({n, n, n}, {h, h, h});
   const Vec3d centre{40.3, 41.1, 39.6};
-  CtVolume ct(g, 0, "ct");
+  const CtVolume ct = testing::partial_volume_balls(g, {{centre, radius, 0.0}}, -1000.0);
   Mask mask(g, 0, "mask");
-  constexpr int kSub = 6;
-  for (std::int64_t k = 0; k < n; ++k)
-    for (std::int64_t j = 0; j < n; ++j)
-      for (std::int64_t i = 0; i < n; ++i) {
-        int in = 0;
-        for (int a = 0; a < kSub; ++a)
-          for (int b = 0; b < kSub; ++b)
-            for (int e = 0; e < kSub; ++e) {
-              const Vec3d x =
-                  Vec3d{(i + (a + 0.5) / kSub - 0.5) * h, (j + (b + 0.5) / kSub - 0.5) * h,
-                        (k + (e + 0.5) / kSub - 0.5) * h} -
-                  centre;
-              in += norm(x) <= radius;
-            }
-        const auto hu = static_cast<std::int16_t>(
-            std::lround(-1000.0 + 1000.0 * in / double{kSub * kSub * kSub}));
-        ct.at(i, j, k) = hu;
-        mask.at(i, j, k) = hu >= iso ? 1 : 0;
-      }
+  for (std::size_t v = 0; v < ct.data.size(); ++v) mask.data[v] = ct.data[v] >= iso ? 1 : 0;
   const SurfacePoints points = surface_points(ct, mask, iso);
   DistanceMap coarse;
   subvoxel_signed_distance(points, mask, 2.0 * h, 60.0, coarse);
