@@ -4,9 +4,9 @@
 // the volume's chunks (in index order, once all are there), Stats, and each frame converted to a
 // palp.v1 HapticFrame. The render side sees the same LatestState either way. Observer only.
 #include <algorithm>
-#include <map>
 
 #include "dds_subscriber.hpp"
+#include "stream/dds_volume_chunks.hpp"
 #include "stream/stream_client_impl.hpp"
 
 namespace palp::view {
@@ -79,7 +79,7 @@ void StreamClient::Impl::run_dds() {
     shared.link.message = where + ": waiting for palpd";
     shared.link.volume_progress = opts.volume_max_dim > 0 ? 0.0 : 1.0;
   }
-  std::map<std::uint32_t, v1::VolumeChunk> chunks;  // until all `count` are there
+  DdsVolumeChunks chunks;  // until all are there and the scene has come
   std::uint64_t scene_version = 0;
   bool volume_fed = opts.volume_max_dim == 0;
   std::int64_t last_offset_ns = 0;
@@ -97,16 +97,14 @@ void StreamClient::Impl::run_dds() {
       } else if (which == palp::dds::kStats) {
         v1::Stats s;
         if (s.ParseFromArray(data, size)) on_stats(*c, s);
-      } else if (which == palp::dds::kVolume && !volume_fed && c->scene_grid) {
+      } else if (which == palp::dds::kVolume && !volume_fed) {
+        // kept even before the scene: each latched topic is delivered on its own
         v1::VolumeChunk chunk;
-        if (!chunk.ParseFromArray(data, size) || e.index >= e.count) return;
-        chunks[e.index] = std::move(chunk);
-        if (chunks.size() == e.count) {
-          for (const auto& [index, ch] : chunks) on_volume(*c, ch);
-          chunks.clear();
-          volume_fed = true;
-        }
+        if (chunk.ParseFromArray(data, size)) chunks.add(e.index, e.count, std::move(chunk));
       }
+      // the volume once all its chunks and the scene are there (in either order)
+      if (!volume_fed && c->scene_grid)
+        volume_fed = chunks.hand_over([&](const v1::VolumeChunk& ch) { on_volume(*c, ch); });
     } catch (const std::exception& ex) {
       std::lock_guard lock(shared_mutex);
       shared.link.message = where + ": " + ex.what();
