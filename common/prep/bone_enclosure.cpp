@@ -60,14 +60,23 @@ struct Box {
 bool bone_box(const Mask& bone, const Mask& body, const std::array<std::int64_t, 3>& margin,
               int slice, Box& box) {
   const Grid& g = bone.grid;
-  std::array<std::int64_t, 3> lo = g.dims, hi = {-1, -1, -1};
+  // Each slice's box of bone, written only by the thread that visits that slice (the slices are
+  // shared out whole), then merged here: one shared box updated by every thread lost updates, so
+  // the box, and with it the enclosure, changed from run to run (ThreadSanitizer).
+  using SliceBox = std::array<std::int64_t, 6>;  // lo i, j, k; hi i, j, k
+  std::vector<SliceBox> per_slice(static_cast<std::size_t>(g.dims[2]),
+                                  SliceBox{g.dims[0], g.dims[1], g.dims[2], -1, -1, -1});
   for_each_nonzero(bone, [&](std::size_t n) {
     const auto nx = static_cast<std::size_t>(g.dims[0]), ny = static_cast<std::size_t>(g.dims[1]);
     const std::array<std::int64_t, 3> q = {static_cast<std::int64_t>(n % nx),
                                            static_cast<std::int64_t>((n / nx) % ny),
                                            static_cast<std::int64_t>(n / (nx * ny))};
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], q[a]), hi[a] = std::max(hi[a], q[a]);
+    SliceBox& b = per_slice[static_cast<std::size_t>(q[2])];
+    for (int a = 0; a < 3; ++a) b[a] = std::min(b[a], q[a]), b[3 + a] = std::max(b[3 + a], q[a]);
   });
+  std::array<std::int64_t, 3> lo = g.dims, hi = {-1, -1, -1};
+  for (const SliceBox& b : per_slice)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b[a]), hi[a] = std::max(hi[a], b[3 + a]);
   if (hi[0] < 0) return false;
   for (int a = 0; a < 3; ++a) {
     box.lo[a] = std::max<std::int64_t>(0, lo[a] - margin[a] - 1);
