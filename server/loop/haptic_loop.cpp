@@ -126,8 +126,8 @@ std::string HapticLoop::realtime_setup() {
   param.sched_priority = config_.priority;
   const int sched_rc = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &param);
   const int lock_rc = mlockall(MCL_CURRENT) == 0 ? 0 : errno;
-  realtime_ = sched_rc == 0 && lock_rc == 0;
-  if (realtime_)
+  realtime_.store(sched_rc == 0 && lock_rc == 0, std::memory_order_relaxed);
+  if (realtime_.load(std::memory_order_relaxed))
     return report + "real time: SCHED_FIFO priority " + std::to_string(config_.priority) +
            ", memory locked";
   std::string warning = "warning: running without real-time guarantees:";
@@ -408,7 +408,7 @@ LoopStats HapticLoop::stats() const {
   s.max_late_ns = max_late_ns_.load(std::memory_order_relaxed);
   s.tick_ns_sum = tick_ns_sum_.load(std::memory_order_relaxed);
   s.tick_ns_max = tick_ns_max_.load(std::memory_order_relaxed);
-  s.realtime = realtime_;
+  s.realtime = realtime_.load(std::memory_order_relaxed);
   s.paused = paused();
   s.recording = recording_.load(std::memory_order_relaxed);
   s.finished = finished();

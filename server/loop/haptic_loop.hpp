@@ -223,7 +223,8 @@ class HapticLoop {
   std::atomic<bool> paused_{false}, recording_{false}, stop_{false}, finished_{false};
   std::atomic<int> record_request_{0};  // 1: start recording (reset state), 2: stop
   bool recording_on_ = false;           // loop side
-  bool realtime_ = false;
+  // set by start() while the DDS and network threads may already read stats()
+  std::atomic<bool> realtime_{false};
 
   SnapshotRing net_ring_;
   SnapshotRing record_ring_;
