@@ -48,6 +48,9 @@
 // depth wanders); exact: that, then moved along the normal onto prep's single descent's distance
 // (which jumps where its closest point switches sheets).
 // PALP_SMOOTH_POSE=ray: the pad oriented by the ray instead of the HU normal at the skin point.
+// PALP_SMOOTH_TRAJ_DIR: also write the smoothness path at each depth as a trajectory CSV,
+// DIR/skin_path_<depth>mm.csv (the paper variant's; `palp run --trajectory` replays it:
+// tests/bench/skin_ripple_methods.sh).
 // PALP_STUDY_PARTS: the parts to run (names among contrast, friction, contacts, smooth; all
 // when unset).
 #include <cmath>
@@ -70,6 +73,7 @@
 #include "prep/iso_projection.hpp"
 #include "prep/map_refine.hpp"
 #include "scene/scene.hpp"
+#include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
 
 namespace palp::study {
@@ -532,6 +536,7 @@ void smoothness(const std::string& ct_path, Csv& csv) {
       // descents, and the global distance's difference from it.
       std::vector<double> brute;
       double diff_lo = 0.0, diff_hi = 0.0;
+      Trajectory path;  // the poses ticked, for PALP_SMOOTH_TRAJ_DIR
       for (int t = 0; t <= n; ++t) {
         const double along = spec.from + (spec.to - spec.from) * t / n;
         // Start 15 mm outside the map's skin point on the ray, come in to the HU iso-surface.
@@ -559,7 +564,9 @@ void smoothness(const std::string& ct_path, Csv& csv) {
         }
         if (t > 0) pos_step = std::max(pos_step, norm(pad - last));
         last = pad;
-        tick(m, st, pad_pose(pad, nrm, q, offset));
+        const Pose pose = pad_pose(pad, nrm, q, offset);
+        tick(m, st, pose);
+        path.push_back({t / rate, pose});
         f.push_back(norm(st.f_device));
         map_depth.push_back(v.fields->sample_surf(pad).value);
         // The global distance from the pad centre to the trilinear HU's iso-surface, and the
@@ -614,6 +621,11 @@ void smoothness(const std::string& ct_path, Csv& csv) {
             "smooth: %g mm path, its depth by brute force at %zu points: detrended std %.4f mm; "
             "the global distance minus it: %.4f to %.4f mm\n",
             depth, brute.size(), std::sqrt(sq_brute / nb), diff_lo, diff_hi);
+      }
+      if (const char* dir = std::getenv("PALP_SMOOTH_TRAJ_DIR"); dir && *dir && &v == &vars[0]) {
+        char name[64];
+        std::snprintf(name, sizeof name, "skin_path_%gmm.csv", depth);
+        write_trajectory_csv((std::filesystem::path(dir) / name).string(), path);
       }
       csv.row({std::string(to_string(v.model)), depth, mean / cnt, sd, step, skin_gap, sd_depth,
                err, nodes_err, corrected_err, sd_path, pos_step});
