@@ -1,9 +1,11 @@
-// The bone mask (segment_bone): seeded region growing, leak removal, marrow, surface, islands.
+// The bone mask (segment_bone): seeded region growing, leak removal, marrow, surface, notches,
+// islands.
 //
 // Values while growing: 2 = seed, 1 = grown voxel below the seed level.
 #include "prep/segmentation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -166,6 +168,74 @@ void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
   for_each_nonzero(trim, [&](std::size_t n) { bone.data[n] = 0; });
 }
 
+// Notches: a body voxel outside the bone with bone on at least `faces` (4 or more) of its six faces
+// lies in a pit, a tunnel or a gap narrower than a voxel in the bone's surface. A bone's surface is
+// smooth at the scale of a 1-3 mm voxel, so such a voxel is the bone's own partial volume (or a
+// voxel the edge trim cut out of a concave surface, judged by its one or two outside neighbours),
+// not tissue; a canal, foramen, disc or joint space the scan resolves (two voxels or more across)
+// never has four bone faces. Filled until none is left: the least such closure of the mask, the
+// same in any order.
+void fill_notches(const Mask& body, int faces, Mask& bone) {
+  if (faces <= 0) return;
+  const Grid& g = bone.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  const auto open_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return std::array<bool, 6>{i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+  };
+  const auto bone_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k, std::size_t n) {
+    const std::array<bool, 6> in = open_faces(i, j, k);
+    int c = 0;
+    for (int d = 0; d < 6; ++d)
+      c += in[d] && bone.data[static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d])];
+    return c;
+  };
+  const auto is_notch = [&](std::size_t n) {
+    if (bone.data[n] || !body.data[n]) return false;
+    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
+    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
+    return bone_faces(i, jk % ny, jk / ny, n) >= faces;
+  };
+  // The notches of the mask as it is, slice by slice (each row's face counts summed from the six
+  // neighbouring rows, a loop that vectorises); then each filled voxel's neighbours again.
+  std::vector<std::vector<std::size_t>> found(static_cast<std::size_t>(nz));
+  const std::vector<std::uint8_t> none(static_cast<std::size_t>(nx), 0);
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    std::vector<std::uint8_t> counts(static_cast<std::size_t>(nx));
+    std::uint8_t* count = counts.data();
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j) {
+        const std::size_t first = g.linear(0, j, k);
+        const std::uint8_t* row = bone.data.data() + first;
+        const std::uint8_t* in_body = body.data.data() + first;
+        const std::uint8_t* y0 = j > 0 ? row - nx : none.data();
+        const std::uint8_t* y1 = j + 1 < ny ? row + nx : none.data();
+        const std::uint8_t* z0 = k > 0 ? row - nx * ny : none.data();
+        const std::uint8_t* z1 = k + 1 < nz ? row + nx * ny : none.data();
+        for (std::int64_t i = 0; i < nx; ++i)
+          count[i] = static_cast<std::uint8_t>(y0[i] + y1[i] + z0[i] + z1[i]);
+        for (std::int64_t i = 1; i < nx; ++i) count[i] += row[i - 1];
+        for (std::int64_t i = 0; i + 1 < nx; ++i) count[i] += row[i + 1];
+        for (std::int64_t i = 0; i < nx; ++i)
+          if (count[i] >= faces && !row[i] && in_body[i])
+            found[static_cast<std::size_t>(k)].push_back(first + static_cast<std::size_t>(i));
+      }
+  });
+  std::vector<std::size_t> todo;
+  for (const auto& slice : found) todo.insert(todo.end(), slice.begin(), slice.end());
+  while (!todo.empty()) {
+    const std::size_t n = todo.back();
+    todo.pop_back();
+    if (!is_notch(n)) continue;
+    bone.data[n] = 1;
+    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
+    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
+    const std::array<bool, 6> in = open_faces(i, jk % ny, jk / ny);
+    for (int d = 0; d < 6; ++d)
+      if (in[d]) todo.push_back(static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d]));
+  }
+}
+
 void remove_small_islands(double min_island_ml, Mask& bone) {
   const Grid& g = bone.grid;
   const RunTable runs = extract_runs(bone, false);
@@ -195,6 +265,7 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   fill_between_cortices(axes, params, body, bone);          // marrow: bracketed along most lines
   fill_enclosed_cavities(params.bone_max_cavity_ml, bone);  // marrow enclosed in 3D
   refine_surface(ct, params.bone_edge_fraction, bone);      // partial-volume edge
+  fill_notches(body, params.bone_notch_faces, bone);        // notches narrower than a voxel
   remove_small_islands(params.min_bone_island_ml, bone);    // islands
   if (stats) stats->bone_voxels = count_nonzero(bone);
   return bone;

@@ -104,6 +104,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_enclosure_directions", s.bone_enclosure_directions},
           {"bone_plate_radius_mm", s.bone_plate_radius_mm},
           {"bone_edge_fraction", s.bone_edge_fraction},
+          {"bone_notch_faces", s.bone_notch_faces},
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},
           {"distance_band_mm", params.distance.band_mm},

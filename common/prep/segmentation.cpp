@@ -42,6 +42,8 @@ void check_params(const SegmentationParams& p) {
     throw UsageError("segmentation: bone_enclosure_radius_mm must lie in [0, 100]");
   if (p.bone_plate_radius_mm < 0 || p.bone_plate_radius_mm > 100)
     throw UsageError("segmentation: bone_plate_radius_mm must lie in [0, 100]");
+  if (p.bone_notch_faces != 0 && (p.bone_notch_faces < 4 || p.bone_notch_faces > 6))
+    throw UsageError("segmentation: bone_notch_faces must be 0 (off), 4, 5 or 6");
   if (p.bone_grow_hu > p.bone_seed_hu)
     throw UsageError("segmentation: bone_grow_hu must not exceed bone_seed_hu");
 }

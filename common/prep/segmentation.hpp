@@ -11,7 +11,8 @@
 // bone only across a narrow contact (contrast-filled vessels, enhancing organs) are dropped with
 // that contact; marrow filled where two of the three orthogonal slice planes find it enclosed,
 // where bone brackets it along most lines through it, and in small cavities enclosed in 3D; the
-// edge trimmed to a partial-volume level; small islands removed.
+// edge trimmed to a partial-volume level; notches narrower than a voxel filled; small islands
+// removed.
 #pragma once
 
 #include <cstdint>
@@ -63,6 +64,11 @@ struct SegmentationParams {
   // 0.003 Dice there and loses 0.015-0.019 on the torso phantom (docs/prep.md). The contact a
   // dropped leak leaves on a bone goes with the leak, whatever this is.
   double bone_edge_fraction = 0.3;
+  // Notches: after the edge trim, a body voxel outside the bone with bone on at least this many of
+  // its six faces (a pit, tunnel or gap narrower than a voxel in a surface smooth at that scale) is
+  // the bone's partial volume and is filled, until none is left. 4 (more faces on bone than off),
+  // 5 or 6; 0: off. A canal, foramen, disc or joint two voxels across never has four bone faces.
+  int bone_notch_faces = 4;
   // Regions outside the bone that the bone encloses in 3D and that hold at most this are filled.
   double bone_max_cavity_ml = 30.0;
   // Bone islands smaller than this are removed.
