@@ -46,16 +46,17 @@ std::array<double, 3> eigenvalues(const std::array<double, 6>& c) {
   return {e1, 3.0 * q - e1 - e3, e3};
 }
 
-// Whether bone other than island `c` lies within `reach` voxels (per axis) of a voxel of it: a
-// box around the island, the island's voxels spread by `reach` along each axis in turn (a box
-// dilation), then compared with the bone there.
+// Whether bone other than island `c` has a voxel centre within `reach_mm` of one of the island's:
+// in a box around the island, the squared distance to the island, one axis after the other
+// (min over offsets within the reach of value + offset^2: exact for distances up to the reach),
+// compared with the bone there.
 bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& labels,
                      std::int64_t c, const std::array<std::int64_t, 3>& lo,
-                     const std::array<std::int64_t, 3>& hi,
-                     const std::array<std::int64_t, 3>& reach) {
+                     const std::array<std::int64_t, 3>& hi, double reach_mm) {
   const Grid& g = bone.grid;
-  std::array<std::int64_t, 3> b0{}, b1{}, size{};
+  std::array<std::int64_t, 3> b0{}, b1{}, size{}, reach{};
   for (int a = 0; a < 3; ++a) {
+    reach[a] = static_cast<std::int64_t>(std::floor(reach_mm / g.spacing[a]));
     b0[a] = std::max<std::int64_t>(0, lo[a] - reach[a]);
     b1[a] = std::min<std::int64_t>(g.dims[a], hi[a] + 1 + reach[a]);
     size[a] = b1[a] - b0[a];
@@ -63,16 +64,18 @@ bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& la
   const auto local = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
     return static_cast<std::size_t>((i - b0[0]) + size[0] * ((j - b0[1]) + size[1] * (k - b0[2])));
   };
-  std::vector<std::uint8_t> own(static_cast<std::size_t>(size[0] * size[1] * size[2]), 0);
+  constexpr double kFar = 1e30;
+  std::vector<double> d2(static_cast<std::size_t>(size[0] * size[1] * size[2]), kFar);
+  std::vector<std::uint8_t> own(d2.size(), 0);
   for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
     for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
       const std::int64_t row = j + g.dims[1] * k;
       for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r)
         if (labels.of_run[r] == c)
           for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i)
-            own[local(i, j, k)] = 1;
+            own[local(i, j, k)] = 1, d2[local(i, j, k)] = 0.0;
     }
-  std::vector<std::uint8_t> spread = own, line;
+  std::vector<double> line;
   for (int a = 0; a < 3; ++a) {
     const std::int64_t stride = a == 0 ? 1 : (a == 1 ? size[0] : size[0] * size[1]);
     const std::int64_t n = size[a];
@@ -81,25 +84,24 @@ bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& la
       for (std::int64_t j = 0; j < (a == 1 ? 1 : size[1]); ++j)
         for (std::int64_t i = 0; i < (a == 0 ? 1 : size[0]); ++i) {
           const std::int64_t base = i + size[0] * (j + size[1] * k);
-          std::int64_t last = -(1 << 30);  // the last set voxel seen along the line
           for (std::int64_t t = 0; t < n; ++t) {
-            if (spread[static_cast<std::size_t>(base + t * stride)]) last = t;
-            line[static_cast<std::size_t>(t)] = t - last <= reach[a];
-          }
-          last = 1 << 30;
-          for (std::int64_t t = n - 1; t >= 0; --t) {
-            if (spread[static_cast<std::size_t>(base + t * stride)]) last = t;
-            line[static_cast<std::size_t>(t)] |= last - t <= reach[a];
+            double best = kFar;
+            for (std::int64_t u = std::max<std::int64_t>(0, t - reach[a]);
+                 u <= std::min<std::int64_t>(n - 1, t + reach[a]); ++u) {
+              const double step = static_cast<double>(t - u) * g.spacing[a];
+              best = std::min(best, d2[static_cast<std::size_t>(base + u * stride)] + step * step);
+            }
+            line[static_cast<std::size_t>(t)] = best;
           }
           for (std::int64_t t = 0; t < n; ++t)
-            spread[static_cast<std::size_t>(base + t * stride)] = line[static_cast<std::size_t>(t)];
+            d2[static_cast<std::size_t>(base + t * stride)] = line[static_cast<std::size_t>(t)];
         }
   }
   for (std::int64_t k = b0[2]; k < b1[2]; ++k)
     for (std::int64_t j = b0[1]; j < b1[1]; ++j)
       for (std::int64_t i = b0[0]; i < b1[0]; ++i) {
         const std::size_t n = local(i, j, k);
-        if (spread[n] && !own[n] && bone.data[g.linear(i, j, k)]) return true;
+        if (!own[n] && d2[n] <= reach_mm * reach_mm && bone.data[g.linear(i, j, k)]) return true;
       }
   return false;
 }
@@ -144,10 +146,7 @@ void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
       std::max_element(labels.voxels.begin(), labels.voxels.end()) - labels.voxels.begin());
   std::vector<std::uint8_t> keep(count, 1);
   // A gap of up to kBoneJointGapMm of non-bone between two voxels: centres that far plus a voxel.
-  std::array<std::int64_t, 3> reach{};
-  for (int a = 0; a < 3; ++a)
-    reach[a] =
-        static_cast<std::int64_t>(std::floor((kBoneJointGapMm + g.spacing[a]) / g.spacing[a]));
+  const double reach = kBoneJointGapMm + g.max_spacing();
   for (std::size_t c = 0; c < count; ++c) {
     const Moments& s = m[c];
     if (static_cast<std::int64_t>(c) == largest || s.border) continue;

@@ -26,7 +26,8 @@ void remove_compact_islands(const SegmentationParams& params, Mask& bone);
 // stone or node is roundish or ovoid, below it.
 inline constexpr double kBoneIslandElongation = 3.0;
 // Joint spaces, discs' rims at the facets and growth plates that separate a bone from its
-// neighbour are a few mm wide: an island with other bone within this gap (per axis) is kept.
+// neighbour are a few mm wide: an island with other bone within this gap (voxel centres within it
+// plus the largest spacing) is kept.
 inline constexpr double kBoneJointGapMm = 6.0;
 
 }  // namespace palp::segmentation
