@@ -228,8 +228,9 @@ TEST(BoneSegmentation, VariantsTable) {
   for (const int faces : {0, 5, 6}) {
     SegmentationParams p = base;
     p.bone_notch_faces = faces;
-    const std::string name = faces == 0 ? std::string("no notch fill (the previous default)")
-                                        : "notches " + std::to_string(faces) + " of 6 faces";
+    const std::string name = faces == 0
+                                 ? std::string("no notch fill (the default before the notches)")
+                                 : "notches " + std::to_string(faces) + " of 6 faces";
     print_row(name.c_str(), measure(d, p));
   }
   for (const double edge : {0.2, 0.5}) {
