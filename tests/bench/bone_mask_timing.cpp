@@ -86,13 +86,18 @@ int main(int argc, char** argv) {
       "%.4f\n",
       step.c_str(), t_without.front(), t_without[t_without.size() / 2],
       cpu_without[cpu_without.size() / 2], dice(bone_without));
-  std::int64_t only_with = 0, only_with_truth = 0;
+  std::int64_t only_with = 0, only_with_truth = 0, only_without = 0, only_without_truth = 0;
   for (std::size_t n = 0; n < bone_with.size(); ++n) {
     const bool added = bone_with.data[n] && !bone_without.data[n];
+    const bool removed = !bone_with.data[n] && bone_without.data[n];
     only_with += added;
     only_with_truth += added && truth.bone.data[n];
+    only_without += removed;
+    only_without_truth += removed && truth.bone.data[n];
   }
   std::printf("voxels only with %s: %lld, of them bone in the truth %lld\n", step.c_str(),
               static_cast<long long>(only_with), static_cast<long long>(only_with_truth));
+  std::printf("voxels only without %s: %lld, of them bone in the truth %lld\n", step.c_str(),
+              static_cast<long long>(only_without), static_cast<long long>(only_without_truth));
   return 0;
 }
