@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <array>
-#include <climits>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -151,9 +150,13 @@ void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
     const Moments& s = m[c];
     if (static_cast<std::int64_t>(c) == largest || s.border) continue;
     const double mx = s.sum[0] / s.n, my = s.sum[1] / s.n, mz = s.sum[2] / s.n;
-    const std::array<double, 6> cov{s.sum2[0] / s.n - mx * mx, s.sum2[1] / s.n - my * my,
-                                    s.sum2[2] / s.n - mz * mz, s.sum2[3] / s.n - mx * my,
-                                    s.sum2[4] / s.n - mx * mz, s.sum2[5] / s.n - my * mz};
+    // The spread of the voxels' centres plus each voxel's own (a box of side h: h^2 / 12), so that
+    // an island one slice thick is as thick as its slice, and a cube of side L is L long.
+    const auto own = [&](int axis) { return g.spacing[axis] * g.spacing[axis] / 12.0; };
+    const std::array<double, 6> cov{
+        s.sum2[0] / s.n - mx * mx + own(0), s.sum2[1] / s.n - my * my + own(1),
+        s.sum2[2] / s.n - mz * mz + own(2), s.sum2[3] / s.n - mx * my,
+        s.sum2[4] / s.n - mx * mz,          s.sum2[5] / s.n - my * mz};
     const std::array<double, 3> e = eigenvalues(cov);
     const double long_sd = std::sqrt(std::max(e[0], 0.0));
     const double thin_sd = std::sqrt(std::max(e[2], 0.0));

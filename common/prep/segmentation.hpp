@@ -74,10 +74,11 @@ struct SegmentationParams {
   // Bone islands smaller than this are removed.
   double min_bone_island_ml = 0.5;
   // Calculi: an island other than the largest that does not reach the scan's border, is shorter
-  // than this along its principal axis and is compact (under 3 times as long as wide) is a stone, a
+  // than this along its principal axis, is compact (neither rod nor plate: its longest spread under
+  // 3 times its thinnest) and lies more than a joint gap (6 mm) from other bone is a stone, a
   // calcified node or a phlebolith, not bone, and is removed: every bone of the trunk the scan
-  // shows apart is long (a rib or cartilage segment, an arm's bone) or cut by the scan's edge
-  // (common/prep/bone_islands.hpp). 0: off.
+  // shows apart is long (a rib or cartilage segment, an arm's bone), flat, cut by the scan's edge
+  // or across a joint from its neighbour (common/prep/bone_islands.hpp). 0: off.
   double bone_calculus_max_length_mm = 30.0;
 };
 
