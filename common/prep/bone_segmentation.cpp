@@ -1,5 +1,5 @@
 // The bone mask (segment_bone): seeded region growing, leak removal, marrow, surface, notches,
-// islands.
+// islands, calculi.
 //
 // Values while growing: 2 = seed, 1 = grown voxel below the seed level.
 #include "prep/segmentation.hpp"
@@ -14,6 +14,7 @@
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
 #include "prep/bone_enclosure.hpp"
+#include "prep/bone_islands.hpp"
 #include "prep/bone_marrow.hpp"
 #include "prep/components.hpp"
 #include "prep/segmentation_shared.hpp"
@@ -267,6 +268,7 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   refine_surface(ct, params.bone_edge_fraction, bone);      // partial-volume edge
   fill_notches(body, params.bone_notch_faces, bone);        // notches narrower than a voxel
   remove_small_islands(params.min_bone_island_ml, bone);    // islands
+  remove_compact_islands(params, bone);                     // calculi, calcified nodes
   if (stats) stats->bone_voxels = count_nonzero(bone);
   return bone;
 }

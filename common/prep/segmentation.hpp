@@ -12,7 +12,7 @@
 // that contact; marrow filled where two of the three orthogonal slice planes find it enclosed,
 // where bone brackets it along most lines through it, and in small cavities enclosed in 3D; the
 // edge trimmed to a partial-volume level; notches narrower than a voxel filled; small islands
-// removed.
+// and compact detached ones (calculi) removed.
 #pragma once
 
 #include <cstdint>
@@ -73,6 +73,13 @@ struct SegmentationParams {
   double bone_max_cavity_ml = 30.0;
   // Bone islands smaller than this are removed.
   double min_bone_island_ml = 0.5;
+  // Calculi: an island other than the largest that does not reach the scan's border, is shorter
+  // than this along its principal axis, is compact (neither rod nor plate: its longest spread under
+  // 3 times its thinnest) and lies more than a joint gap (6 mm) from other bone is a stone, a
+  // calcified node or a phlebolith, not bone, and is removed: every bone of the trunk the scan
+  // shows apart is long (a rib or cartilage segment, an arm's bone), flat, cut by the scan's edge
+  // or across a joint from its neighbour (common/prep/bone_islands.hpp). 0: off.
+  double bone_calculus_max_length_mm = 30.0;
 };
 
 struct SegmentationStats {

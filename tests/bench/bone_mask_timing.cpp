@@ -4,9 +4,9 @@
 // phantom's truth. It measures; it is not a test.
 //
 // Usage: bone_mask_timing [runs=5] [nx ny nz sx sy sz] [step]   (default 384 384 160 0.8 0.8 1.5)
-// step: the step the second variant leaves out, "enclosure" (default) or "notches" (the notch
-// fill after the edge trim); it also prints how many voxels only the full mask holds and how many
-// of them the phantom's truth calls bone.
+// step: the step the second variant leaves out, "enclosure" (default), "notches" (the notch
+// fill after the edge trim) or "calculi" (compact detached islands removed); it also prints how
+// many voxels only the full mask holds and how many of them the phantom's truth calls bone.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -40,10 +40,12 @@ int main(int argc, char** argv) {
   SegmentationParams without = with;
   if (step == "notches") {
     without.bone_notch_faces = 0;
+  } else if (step == "calculi") {
+    without.bone_calculus_max_length_mm = 0.0;
   } else if (step == "enclosure") {
     without.bone_enclosure_directions = 0;
   } else {
-    std::fprintf(stderr, "bone_mask_timing: step must be enclosure or notches\n");
+    std::fprintf(stderr, "bone_mask_timing: step must be enclosure, notches or calculi\n");
     return 2;
   }
   std::vector<double> t_with, t_without, cpu_with, cpu_without;
@@ -84,13 +86,18 @@ int main(int argc, char** argv) {
       "%.4f\n",
       step.c_str(), t_without.front(), t_without[t_without.size() / 2],
       cpu_without[cpu_without.size() / 2], dice(bone_without));
-  std::int64_t only_with = 0, only_with_truth = 0;
+  std::int64_t only_with = 0, only_with_truth = 0, only_without = 0, only_without_truth = 0;
   for (std::size_t n = 0; n < bone_with.size(); ++n) {
     const bool added = bone_with.data[n] && !bone_without.data[n];
+    const bool removed = !bone_with.data[n] && bone_without.data[n];
     only_with += added;
     only_with_truth += added && truth.bone.data[n];
+    only_without += removed;
+    only_without_truth += removed && truth.bone.data[n];
   }
   std::printf("voxels only with %s: %lld, of them bone in the truth %lld\n", step.c_str(),
               static_cast<long long>(only_with), static_cast<long long>(only_with_truth));
+  std::printf("voxels only without %s: %lld, of them bone in the truth %lld\n", step.c_str(),
+              static_cast<long long>(only_without), static_cast<long long>(only_without_truth));
   return 0;
 }

@@ -80,10 +80,10 @@ TEST(BoneEnclosure, APlateIsFilledWithinThePlateRadiusACanalIsNot) {
   // A plate: marrow 20 x 16 x 20 mm (x, y, z) in a 2 mm cortex. Its middle lies 8 mm from the
   // faces across y, 10 mm from the others and 14 mm along the diagonals that do not cross y:
   // within 12 mm bone brackets it along the 3 axes only, within 20 mm along all 13 lines, the
-  // one along the body axis (z) included. Beside it, arches 12 mm high with 8 mm interlaminar spaces
-  // around a canal through the whole scan: within 20 mm their tilted lines bracket the canal, the
-  // line along the axis does not. The slice-plane holes and the 3-D cavity fill are off (they would
-  // fill the closed plate), so the enclosure acts alone.
+  // one along the body axis (z) included. Beside it, arches 12 mm high with 8 mm interlaminar
+  // spaces around a canal through the whole scan: within 20 mm their tilted lines bracket the
+  // canal, the line along the axis does not. The slice-plane holes and the 3-D cavity fill are off
+  // (they would fill the closed plate), so the enclosure acts alone.
   CtVolume ct = tissue_scene();
   box(ct, {20, 20, 18}, {44, 40, 42}, 700);
   box(ct, {22, 22, 20}, {42, 38, 40}, -30);
@@ -91,6 +91,9 @@ TEST(BoneEnclosure, APlateIsFilledWithinThePlateRadiusACanalIsNot) {
   SegmentationParams p;
   p.bone_max_hole_mm2 = 0;
   p.bone_max_cavity_ml = 0;
+  // The arches stand alone here, 8 mm apart with no bodies, as no vertebra does; compact and
+  // detached, the calculus rule (bone_islands.hpp) would remove them: off.
+  p.bone_calculus_max_length_mm = 0;
   SegmentationParams no_plate = p;
   no_plate.bone_plate_radius_mm = 0;
   SegmentationParams wide = no_plate;  // the 12 mm rule at 20 mm: no axis line needed

@@ -151,15 +151,15 @@ TEST(BoneSegmentation, AgainstExpertLabelsOfTheSharedCt) {
   EXPECT_EQ(m.organ_voxels_outside_body, 0);
   EXPECT_GT(m.superficial_voxels, 1000);
   if (fixed) return;
-  // What the method achieves (docs/prep.md: Dice 0.897, precision 0.904, 1.14 mm, rib region
+  // What the method achieves (docs/prep.md: Dice 0.898, precision 0.905, 1.10 mm, rib region
   // 0.889). The goal, Dice >= 0.90 and <= 1.0 mm, is not met on the whole scan; away from
-  // the prosthesis, where the labels hold the bone, both are met (Dice 0.907, 0.90 mm).
-  EXPECT_GE(m.dice, 0.896);
-  EXPECT_LE(m.assd_mm, 1.145);
+  // the prosthesis, where the labels hold the bone, both are met (Dice 0.907, 0.85 mm).
+  EXPECT_GE(m.dice, 0.8975);
+  EXPECT_LE(m.assd_mm, 1.105);
   EXPECT_GE(m.superficial_recall, 0.885);
   if (d.metal_margin_mm == kMetalMarginMm) {
     EXPECT_GE(m.dice_away, 0.905);
-    EXPECT_LE(m.assd_away_mm, 0.905);
+    EXPECT_LE(m.assd_away_mm, 0.855);
   }
   EXPECT_GE(m.precision, 0.89);  // over-segmentation (vessels, calcifications, table) stays rare
 }
@@ -176,7 +176,7 @@ TEST(BoneSegmentation, VariantsTable) {
   const SegmentationParams base;
   print_row(
       "default: grow 150, 2 of 3 planes, enclosure 12 mm 10 of 13, plates 20 mm, edge 0.3, notches "
-      "4 of 6 faces",
+      "4 of 6 faces, calculi up to 30 mm",
       measure(d, base));
   print_row("the same, levels not adapted", measure(d, base, false));
   for (const double edge : {0.0, 0.1, 0.2, 0.4, 0.5}) {
@@ -228,8 +228,9 @@ TEST(BoneSegmentation, VariantsTable) {
   for (const int faces : {0, 5, 6}) {
     SegmentationParams p = base;
     p.bone_notch_faces = faces;
-    const std::string name = faces == 0 ? std::string("no notch fill (the previous default)")
-                                        : "notches " + std::to_string(faces) + " of 6 faces";
+    const std::string name = faces == 0
+                                 ? std::string("no notch fill (the default before the notches)")
+                                 : "notches " + std::to_string(faces) + " of 6 faces";
     print_row(name.c_str(), measure(d, p));
   }
   for (const double edge : {0.2, 0.5}) {
@@ -243,6 +244,14 @@ TEST(BoneSegmentation, VariantsTable) {
     SegmentationParams p = base;
     p.min_bone_island_ml = island;
     const std::string name = "islands under " + std::to_string(island).substr(0, 3) + " ml removed";
+    print_row(name.c_str(), measure(d, p));
+  }
+  for (const double length : {0.0, 15.0, 45.0}) {
+    SegmentationParams p = base;
+    p.bone_calculus_max_length_mm = length;
+    const std::string name =
+        length == 0.0 ? std::string("no calculus rule (the previous default)")
+                      : "calculi up to " + std::to_string(static_cast<int>(length)) + " mm long";
     print_row(name.c_str(), measure(d, p));
   }
   for (const double hole : {1000.0, 1e9}) {
