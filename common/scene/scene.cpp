@@ -76,23 +76,27 @@ Scene load_scene(const std::string& scene, const SceneOptions& options) {
   const fs::path dir =
       is_prep_directory(scene) ? fs::path(scene) : prep_into_cache(scene, options, &out.prepped);
   out.prep_dir = dir.string();
+  // The CT and body mask, for palpd's render volume (a prep directory written before palp kept
+  // the CT has none); read once, the refinement below uses them too.
+  std::shared_ptr<CtVolume> ct;
+  std::shared_ptr<Mask> body;
+  std::error_code ec;
+  if (options.load_ct && fs::is_regular_file(dir / kCtFile, ec) &&
+      fs::is_regular_file(dir / kBodyFile, ec)) {
+    ct = std::make_shared<CtVolume>(read_ct((dir / kCtFile).string()));
+    body = std::make_shared<Mask>(read_nifti_mask((dir / kBodyFile).string()));
+  }
   // read maps: d_surf, d_bone on one grid, refined when asked.
-  SceneMaps maps = read_scene_maps(out.prep_dir, options.map_spacing_mm, options.threads);
+  SceneMaps maps =
+      read_scene_maps(out.prep_dir, options.map_spacing_mm, options.threads, ct.get(), body.get());
   out.grid = maps.surf.grid;
   out.map_spacing_mm = options.map_spacing_mm;
   out.map_refinement = maps.refinement;
   out.map_note = maps.note;
-  // The CT and body mask (a prep directory written before palp kept the CT has none).
-  std::error_code ec;
-  if (options.load_ct && fs::is_regular_file(dir / kCtFile, ec) &&
-      fs::is_regular_file(dir / kBodyFile, ec)) {
-    auto ct = std::make_shared<CtVolume>(read_ct((dir / kCtFile).string()));
-    auto body = std::make_shared<Mask>(read_nifti_mask((dir / kBodyFile).string()));
-    // On the maps' grid, or on the CT grid the maps refine (prep/map_refine.hpp).
-    if (refinement_between(ct->grid, out.grid)[0] != 0 && body->grid.dims == ct->grid.dims) {
-      out.ct = std::move(ct);
-      out.body = std::move(body);
-    }
+  // On the maps' grid, or on the CT grid the maps refine (prep/map_refine.hpp).
+  if (ct && refinement_between(ct->grid, out.grid)[0] != 0 && body->grid.dims == ct->grid.dims) {
+    out.ct = std::move(ct);
+    out.body = std::move(body);
   }
   // sampler: the maps move in (no copy with float32 storage).
   out.fields = std::make_shared<const FieldSampler>(std::move(maps.surf), std::move(maps.bone),

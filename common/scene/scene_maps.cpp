@@ -91,7 +91,8 @@ SkinSurface skin_surface(const fs::path& dir) {
 
 }  // namespace
 
-SceneMaps read_scene_maps(const std::string& dir_name, double map_spacing_mm, unsigned threads) {
+SceneMaps read_scene_maps(const std::string& dir_name, double map_spacing_mm, unsigned threads,
+                          const CtVolume* given_ct, const Mask* given_body) {
   const fs::path dir(dir_name);
   SceneMaps out;
   // read maps: d_surf, d_bone on one grid.
@@ -107,14 +108,20 @@ SceneMaps read_scene_maps(const std::string& dir_name, double map_spacing_mm, un
     out.note = "maps not refined: " + skin.why;
     return out;
   }
-  std::error_code ec;
-  if (!fs::is_regular_file(dir / kCtFile, ec) || !fs::is_regular_file(dir / kBodyFile, ec)) {
-    out.note = std::string("maps not refined: no ") + kCtFile + " and " + kBodyFile +
-               " in the prep directory (prepped before palp kept the CT)";
-    return out;
+  CtVolume read_ct_volume;
+  Mask read_body;
+  if (!given_ct || !given_body) {
+    std::error_code ec;
+    if (!fs::is_regular_file(dir / kCtFile, ec) || !fs::is_regular_file(dir / kBodyFile, ec)) {
+      out.note = std::string("maps not refined: no ") + kCtFile + " and " + kBodyFile +
+                 " in the prep directory (prepped before palp kept the CT)";
+      return out;
+    }
+    read_ct_volume = read_ct((dir / kCtFile).string());
+    read_body = read_nifti_mask((dir / kBodyFile).string());
   }
-  const CtVolume ct = read_ct((dir / kCtFile).string());
-  const Mask body = read_nifti_mask((dir / kBodyFile).string());
+  const CtVolume& ct = given_ct && given_body ? *given_ct : read_ct_volume;
+  const Mask& body = given_ct && given_body ? *given_body : read_body;
   if (refinement_between(ct.grid, out.surf.grid) != Refinement{1, 1, 1} ||
       body.grid.dims != ct.grid.dims) {
     out.note = "maps not refined: they are not on the CT's own grid (prepped with --map-spacing)";

@@ -31,7 +31,10 @@ struct SceneMaps {
 // different grids), refined in memory when map_spacing_mm > 0 and the maps' grid is coarser
 // than it along some axis. A directory that cannot be refined (no ct.nii.gz or body.nii.gz, maps
 // prepped with --surface mask or no skin projection, maps not on the CT's grid) gives its maps
-// as they are and says why in `note`.
-SceneMaps read_scene_maps(const std::string& dir, double map_spacing_mm, unsigned threads = 0);
+// as they are and says why in `note`. `ct` and `body`: the directory's ct.nii.gz and body.nii.gz
+// when the caller has read them already (palpd keeps them for its render volume), so they are
+// not read twice; both null: read here when needed.
+SceneMaps read_scene_maps(const std::string& dir, double map_spacing_mm, unsigned threads = 0,
+                          const CtVolume* ct = nullptr, const Mask* body = nullptr);
 
 }  // namespace palp

@@ -209,6 +209,20 @@ TEST_F(SceneMapsTest, WhatCannotBeRefinedIsSaid) {
   EXPECT_EQ(refined.grid.dims, (Index3{55, 55, 55}));
   EXPECT_EQ(refined.map_refinement, (Refinement{2, 2, 2}));
   EXPECT_EQ(read_scene_maps(refined).surf.grid.dims, refined.grid.dims);
+  // palpd's load keeps the CT and body mask (read once, handed to the refinement): the same maps,
+  // and the CT on its own grid beside them.
+  options.load_ct = true;
+  const Scene with_ct = load_scene(prep_, options);
+  ASSERT_TRUE(with_ct.ct && with_ct.body);
+  EXPECT_EQ(with_ct.ct->grid.dims, (Index3{28, 28, 28}));
+  EXPECT_EQ(with_ct.map_refinement, (Refinement{2, 2, 2}));
+  const SceneMaps given =
+      read_scene_maps(prep_, kPalpMapSpacingMm, 0, with_ct.ct.get(), with_ct.body.get());
+  const SceneMaps read_here = read_scene_maps(prep_, kPalpMapSpacingMm);
+  EXPECT_EQ(given.surf.data, read_here.surf.data);
+  EXPECT_EQ(given.bone.data, read_here.bone.data);
+  const Vec3d inside{40.0, 41.0, 40.0};
+  EXPECT_EQ(with_ct.fields->sample_surf(inside).value, refined.fields->sample_surf(inside).value);
 }
 
 }  // namespace
