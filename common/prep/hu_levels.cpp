@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "base/errors.hpp"
@@ -12,7 +14,38 @@ namespace {
 
 constexpr int kLowHu = -1024, kHighHu = 3071;  // histogram range; beyond it clamped
 constexpr int kPeakLo = -30, kPeakHi = 150;
+constexpr int kFatLo = -150, kFatHi = -50;
 constexpr int kSmoothHalfWidth = 4;  // 9 HU box
+constexpr double kMinPeakShare = 0.01;
+// How far the fat's offset may fall short of the soft tissue's and still confirm it: the two
+// modes are estimated apart, each to a few HU.
+constexpr double kFatAgreementHu = 10.0;
+
+// The mode of `hist` (1 HU bins from kLowHu) between lo and hi, 9 HU box-smoothed; the first of
+// equal maxima, so the result is deterministic.
+int smoothed_mode(const std::vector<std::uint64_t>& hist, int lo, int hi) {
+  auto count = [&](int hu) { return hist[static_cast<std::size_t>(hu - kLowHu)]; };
+  std::uint64_t best = 0;
+  int mode = lo;
+  for (int hu = lo; hu <= hi; ++hu) {
+    std::uint64_t s = 0;
+    for (int d = -kSmoothHalfWidth; d <= kSmoothHalfWidth; ++d) s += count(hu + d);
+    if (s > best) best = s, mode = hu;
+  }
+  return mode;
+}
+
+double share(const std::vector<std::uint64_t>& hist, int lo, int hi, std::uint64_t total) {
+  std::uint64_t in_range = 0;
+  for (int hu = lo; hu <= hi; ++hu) in_range += hist[static_cast<std::size_t>(hu - kLowHu)];
+  return total > 0 ? static_cast<double>(in_range) / static_cast<double>(total) : 0.0;
+}
+
+std::string hu_text(double hu) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%+.0f", hu);
+  return text;
+}
 
 }  // namespace
 
@@ -27,30 +60,39 @@ HuLevels estimate_hu_levels(const CtVolume& ct, const Mask& body, const BoneLeve
     ++hist[static_cast<std::size_t>(hu - kLowHu)];
     ++in_body;
   }
-  auto count = [&](int hu) { return hist[static_cast<std::size_t>(hu - kLowHu)]; };
-
   HuLevels out;
   out.levels = nominal;
-  std::uint64_t in_range = 0;
-  for (int hu = kPeakLo; hu <= kPeakHi; ++hu) in_range += count(hu);
-  out.peak_share = in_body > 0 ? static_cast<double>(in_range) / static_cast<double>(in_body) : 0.0;
-  if (in_body == 0 || out.peak_share < 0.01) {
+  out.peak_share = share(hist, kPeakLo, kPeakHi, in_body);
+  out.fat_share = share(hist, kFatLo, kFatHi, in_body);
+  if (out.fat_share >= kMinPeakShare) {
+    out.fat_found = true;
+    out.fat_peak_hu = smoothed_mode(hist, kFatLo, kFatHi);
+  }
+  if (in_body == 0 || out.peak_share < kMinPeakShare) {
     out.note = "no soft-tissue peak between -30 and 150 HU inside the body: nominal levels";
     return out;
   }
-  std::uint64_t best = 0;
-  int mode = kPeakLo;
-  for (int hu = kPeakLo; hu <= kPeakHi; ++hu) {
-    std::uint64_t s = 0;
-    for (int d = -kSmoothHalfWidth; d <= kSmoothHalfWidth; ++d) s += count(hu + d);
-    if (s > best) best = s, mode = hu;  // the first of equal maxima: deterministic
-  }
+  const int mode = smoothed_mode(hist, kPeakLo, kPeakHi);
   out.peak_found = true;
   out.soft_peak_hu = mode;
-  const double offset = mode - kNominalSoftTissueHu;
+  double offset = mode - kNominalSoftTissueHu;
   if (std::fabs(offset) > kMaxCalibrationOffsetHu) {
     out.note = "soft-tissue peak more than 40 HU from 50 HU: not followed, nominal levels";
     return out;
+  }
+  // Upward only as far as fat confirms (within kFatAgreementHu): a calibration offset moves fat
+  // with soft tissue, contrast raises the organs (often the soft-tissue peak) and leaves fat and
+  // bone where they were.
+  if (offset > 0.0) {
+    const double fat_offset = out.fat_found ? out.fat_peak_hu - kNominalFatHu : 0.0;
+    if (fat_offset < offset - kFatAgreementHu) {
+      const double raised = std::max(0.0, fat_offset);
+      out.note = "soft-tissue peak " + hu_text(offset) + " HU from 50 HU, fat " +
+                 (out.fat_found ? hu_text(fat_offset) + " HU from -100 HU" : "not found") +
+                 ": levels raised by " + hu_text(raised) +
+                 " HU only (contrast raises soft tissue, not fat or bone)";
+      offset = raised;
+    }
   }
   out.offset_hu = offset;
   out.levels.seed_hu = nominal.seed_hu + offset;

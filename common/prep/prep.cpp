@@ -331,6 +331,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
         {"mode", params.adapt_bone_levels ? "adapted to the scan" : "as given"},
         {"soft_tissue_peak_hu", h.peak_found ? nlohmann::json(h.soft_peak_hu) : nlohmann::json()},
         {"soft_tissue_share", h.peak_share},
+        {"fat_peak_hu", h.fat_found ? nlohmann::json(h.fat_peak_hu) : nlohmann::json()},
+        {"fat_share", h.fat_share},
         {"offset_hu", params.adapt_bone_levels ? h.offset_hu : 0.0},
         {"note", h.note},
         {"bone_seed_hu", segmentation.bone_seed_hu},

@@ -54,7 +54,9 @@ Options:
   --bone-grow HU          bone grows into voxels at or above (default %g)
   --bone-levels adapt|given  adapt (default): the bone levels (--bone-seed, --bone-grow and
                           --bone-hu) move with the scan's soft-tissue peak,
-                          measured inside the body, by its offset from 50 HU (at most 40 HU);
+                          measured inside the body, by its offset from 50 HU (at most 40 HU;
+                          upward only as far as the fat peak, -100 HU nominal, moved too:
+                          contrast raises organs, not fat or bone);
                           given: used as written. prep.json records both ("hu_levels")
   --min-bone-island ML    drop bone islands smaller than this (default %g)
   --not-hu-ok             prep a volume that does not look like a CT in HU (prep refuses a
@@ -161,13 +163,14 @@ int cmd_prep(const Arguments& argv) {
       std::printf("  HU        soft-tissue peak %.0f HU", h.soft_peak_hu);
     else
       std::printf("  HU        no soft-tissue peak");
+    if (h.fat_found) std::printf(", fat peak %.0f HU", h.fat_peak_hu);
     if (!params.adapt_bone_levels)
       std::printf(": bone levels as given\n");
-    else if (!h.note.empty())
-      std::printf(": %s\n", h.note.c_str());
     else
       std::printf(": bone levels %+.0f HU (seed %.0f, grow %.0f, surface %.0f)\n", h.offset_hu,
                   h.levels.seed_hu, h.levels.grow_hu, h.levels.iso_hu);
+    if (params.adapt_bone_levels && !h.note.empty())
+      std::printf("            %s\n", h.note.c_str());
   }
   std::printf("  body      %llu voxels (%.0f ml)\n",
               static_cast<unsigned long long>(r.stats.body_voxels),

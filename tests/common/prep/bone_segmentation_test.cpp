@@ -8,12 +8,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 #include "io/ct_io.hpp"
 #include "prep/hu_levels.hpp"
 #include "prep/segmentation.hpp"
 #include "support/bone_error_split.hpp"
 #include "support/mask_metrics.hpp"
+#include "support/shared_ct_labels.hpp"
 
 namespace palp {
 namespace {
@@ -49,18 +51,6 @@ Mask far_from_metal(const CtVolume& ct, double margin_mm) {
   return far;
 }
 
-// Superficial anterolateral bone, where palpation feels ribs, costal cartilage and the iliac
-// crests: expert bone voxels within 30 mm of the body's outside and not in the posterior 30 % of
-// the body's extent along the posterior axis in their slice (the spine's processes).
-Mask superficial_bone(const Mask& truth_bone, const Mask& body) {
-  const std::vector<std::uint8_t> region = testing::body_regions(body);
-  Mask out(body.grid, 0);
-  for (std::size_t n = 0; n < out.data.size(); ++n)
-    out.data[n] =
-        truth_bone.data[n] && region[n] == static_cast<std::uint8_t>(testing::Region::superficial);
-  return out;
-}
-
 struct SharedCt {
   CtVolume ct;
   Mask body, truth_bone, organs, superficial, away_from_metal;
@@ -70,23 +60,15 @@ struct SharedCt {
 
 // The shared CT, its body mask and the expert labels; false when the data is absent.
 bool load_shared_ct(SharedCt& d) {
-  const std::string dir = PALP_SHARED_DATA_DIR;
-  const std::string ct_path = dir + "/ct_abdomen_3mm.nii.gz";
-  const std::string labels_path = dir + "/ct_abdomen_3mm_reference_labels.nii.gz";
-  if (!std::filesystem::exists(ct_path) || !std::filesystem::exists(labels_path)) return false;
-  d.ct = read_ct(ct_path);
-  const DistanceMap labels = read_nifti_float(labels_path);  // 0, 1, 2 as read
-  EXPECT_EQ(labels.grid.dims, d.ct.grid.dims);
+  testing::LabelledCt labelled;
+  if (!testing::load_labelled_shared_ct(labelled)) return false;
+  d.ct = std::move(labelled.ct);
+  d.truth_bone = std::move(labelled.truth_bone);
+  d.organs = std::move(labelled.organs);
   d.body = segment_body(d.ct, SegmentationParams{});
   // The levels as prep sets them: shifted with the scan's soft-tissue peak (prep/hu_levels.hpp).
   d.levels = estimate_hu_levels(d.ct, d.body);
-  d.truth_bone = Mask(d.ct.grid, 0);
-  d.organs = Mask(d.ct.grid, 0);
-  for (std::size_t n = 0; n < labels.data.size(); ++n) {
-    d.truth_bone.data[n] = labels.data[n] == 2.0f;
-    d.organs.data[n] = labels.data[n] == 1.0f;
-  }
-  d.superficial = superficial_bone(d.truth_bone, d.body);
+  d.superficial = testing::superficial_bone(d.truth_bone, d.body);
   // PALP_BONE_METAL_MARGIN_MM=X: another margin (docs/prep.md lists 30, 50 and 80 mm).
   const char* margin = std::getenv("PALP_BONE_METAL_MARGIN_MM");
   d.metal_margin_mm = margin ? std::atof(margin) : kMetalMarginMm;

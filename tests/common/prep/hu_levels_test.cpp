@@ -16,11 +16,11 @@
 namespace palp {
 namespace {
 
-// A 40^3 body: soft tissue at `soft` HU (+-7 HU deterministic ripple) with a fat layer at -100.
-CtVolume block(int soft) {
+// A 40^3 body: soft tissue at `soft` HU (+-7 HU deterministic ripple) with a fat layer at `fat`.
+CtVolume block(int soft, int fat = -100) {
   Grid g;
   g.dims = {40, 40, 40};
-  CtVolume ct(g, std::int16_t{-100});
+  CtVolume ct(g, static_cast<std::int16_t>(fat));
   for (std::int64_t k = 0; k < 40; ++k)
     for (std::int64_t j = 0; j < 40; ++j)
       for (std::int64_t i = 10; i < 40; ++i)
@@ -36,13 +36,45 @@ TEST(HuLevels, FindsThePeakAndShiftsTheLevelsByItsOffset) {
   ASSERT_TRUE(at50.peak_found);
   EXPECT_NEAR(at50.soft_peak_hu, 50.0, 4.0);  // the ripple's flat top: its first HU
   EXPECT_NEAR(at50.peak_share, 0.75, 1e-9);   // the fat column x < 10 is the rest
-  const HuLevels at80 = estimate_hu_levels(block(80), body);
+  ASSERT_TRUE(at50.fat_found);
+  EXPECT_NEAR(at50.fat_peak_hu, -100.0, 4.0);  // the first HU of the smoothed flat top
+  EXPECT_NEAR(at50.fat_share, 0.25, 1e-9);
+  // A calibration offset: fat and soft tissue both 30 HU up.
+  const HuLevels at80 = estimate_hu_levels(block(80, -70), body);
   EXPECT_EQ(at80.soft_peak_hu - at50.soft_peak_hu, 30.0);
   EXPECT_EQ(at80.offset_hu, at80.soft_peak_hu - 50.0);
   EXPECT_EQ(at80.levels.seed_hu, 300.0 + at80.offset_hu);
   EXPECT_EQ(at80.levels.grow_hu, 150.0 + at80.offset_hu);
   EXPECT_EQ(at80.levels.iso_hu, 200.0 + at80.offset_hu);
   EXPECT_TRUE(at80.note.empty());
+}
+
+// Contrast: the soft tissue up, fat where it was. The levels go up only as far as fat went up
+// (bone, like fat, does not enhance); down they follow the soft tissue alone.
+TEST(HuLevels, SoftTissueRaisedWithoutFatDoesNotRaiseTheLevels) {
+  const Mask body(block(0).grid, 1);
+  const HuLevels at50 = estimate_hu_levels(block(50), body);
+  const HuLevels contrast = estimate_hu_levels(block(80), body);
+  EXPECT_EQ(contrast.soft_peak_hu - at50.soft_peak_hu, 30.0);
+  EXPECT_EQ(contrast.offset_hu, 0.0);
+  EXPECT_EQ(contrast.levels.grow_hu, 150.0);
+  EXPECT_NE(contrast.note.find("contrast"), std::string::npos) << contrast.note;
+  const HuLevels partly = estimate_hu_levels(block(80, -85), body);  // fat 15 HU up
+  EXPECT_EQ(partly.offset_hu, partly.fat_peak_hu + 100.0);
+  EXPECT_NEAR(partly.offset_hu, 15.0, 4.0);
+  const HuLevels lower = estimate_hu_levels(block(20), body);  // soft tissue down, fat not
+  EXPECT_EQ(lower.offset_hu, lower.soft_peak_hu - 50.0);
+  EXPECT_LT(lower.offset_hu, -20.0);
+  EXPECT_TRUE(lower.note.empty());
+  // No fat to confirm a rise: not followed.
+  CtVolume lean = block(80, 40);
+  for (std::int64_t k = 0; k < 40; ++k)
+    for (std::int64_t j = 0; j < 40; ++j)
+      for (std::int64_t i = 0; i < 10; ++i) lean.at(i, j, k) = 600;  // bone, not fat
+  const HuLevels no_fat = estimate_hu_levels(lean, body);
+  EXPECT_FALSE(no_fat.fat_found);
+  EXPECT_EQ(no_fat.offset_hu, 0.0);
+  EXPECT_NE(no_fat.note.find("fat not found"), std::string::npos) << no_fat.note;
 }
 
 TEST(HuLevels, APeakFarFromSoftTissueIsNotFollowed) {
