@@ -37,6 +37,38 @@ Mask bone_candidates(const CtVolume& ct, const Mask& body, const SegmentationPar
   return bone;
 }
 
+// Skin clearance: candidates within `clearance_mm` of a voxel outside the body, along any axis (at
+// least one voxel), are cleared. Neighbours beyond the scan's border are not outside: the body
+// goes on there.
+void clear_skin(const Mask& body, double clearance_mm, Mask& bone) {
+  if (clearance_mm <= 0.0) return;
+  const Grid& g = bone.grid;
+  std::int64_t reach[3];
+  for (int a = 0; a < 3; ++a)
+    reach[a] = std::max<std::int64_t>(
+        1, static_cast<std::int64_t>(std::floor(clearance_mm / g.spacing[a] + 1e-9)));
+  const std::int64_t stride[3] = {1, g.dims[0], g.dims[0] * g.dims[1]};
+  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < g.dims[1]; ++j)
+        for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+          const std::size_t n = g.linear(i, j, k);
+          if (!bone.data[n]) continue;
+          const std::int64_t at[3] = {i, j, k};
+          bool near_outside = false;
+          for (int a = 0; a < 3 && !near_outside; ++a) {
+            const std::int64_t lo = std::max<std::int64_t>(0, at[a] - reach[a]);
+            const std::int64_t hi = std::min<std::int64_t>(g.dims[a] - 1, at[a] + reach[a]);
+            const auto base = static_cast<std::int64_t>(n) - at[a] * stride[a];
+            for (std::int64_t q = lo; q <= hi && !near_outside; ++q)
+              near_outside = !body.data[static_cast<std::size_t>(base + q * stride[a])];
+          }
+          // Each voxel reads only the body mask: clearing one changes nothing another sees.
+          if (near_outside) bone.data[n] = 0;
+        }
+  });
+}
+
 // Region growing: the candidate regions (6-connected) that hold a seed, values kept.
 void keep_seeded_regions(Mask& bone) {
   const Grid& g = bone.grid;
@@ -259,6 +291,7 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
     throw UsageError("segment_bone: the body mask is not on the CT's grid");
   const PatientAxes axes = patient_axes(ct.grid);
   Mask bone = bone_candidates(ct, body, params);          // seeds and growable voxels
+  clear_skin(body, params.bone_skin_clearance_mm, bone);  // none on the skin (kernel overshoot)
   keep_seeded_regions(bone);                              // region growing from the seeds
   remove_leaks(params.bone_leak_contact_fraction, bone);  // vessels resting on bone
   for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });

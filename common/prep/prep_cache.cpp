@@ -108,6 +108,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},
           {"bone_calculus_max_length_mm", s.bone_calculus_max_length_mm},
+          {"bone_skin_clearance_mm", s.bone_skin_clearance_mm},
           {"distance_band_mm", params.distance.band_mm},
           {"surface", surface_method_name(params.surface.method)},
           {"skin_iso_hu", params.surface.skin_hu},

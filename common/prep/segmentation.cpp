@@ -26,7 +26,8 @@ void check_params(const SegmentationParams& p) {
                            p.min_bone_island_ml,
                            p.bone_enclosure_radius_mm,
                            p.bone_plate_radius_mm,
-                           p.bone_calculus_max_length_mm};
+                           p.bone_calculus_max_length_mm,
+                           p.bone_skin_clearance_mm};
   for (double v : values)
     if (!std::isfinite(v)) throw UsageError("segmentation: parameters must be finite numbers");
   if (p.min_body_part_ml < 0 || p.body_core_radius_mm < 0 || p.max_table_thickness_mm < 0 ||
@@ -45,6 +46,8 @@ void check_params(const SegmentationParams& p) {
     throw UsageError("segmentation: bone_plate_radius_mm must lie in [0, 100]");
   if (p.bone_calculus_max_length_mm < 0 || p.bone_calculus_max_length_mm > 200)
     throw UsageError("segmentation: bone_calculus_max_length_mm must lie in [0, 200]");
+  if (p.bone_skin_clearance_mm < 0 || p.bone_skin_clearance_mm > 20)
+    throw UsageError("segmentation: bone_skin_clearance_mm must lie in [0, 20]");
   if (p.bone_notch_faces != 0 && (p.bone_notch_faces < 4 || p.bone_notch_faces > 6))
     throw UsageError("segmentation: bone_notch_faces must be 0 (off), 4, 5 or 6");
   if (p.bone_grow_hu > p.bone_seed_hu)

@@ -80,6 +80,12 @@ struct SegmentationParams {
   // shows apart is long (a rib or cartilage segment, an arm's bone), flat, cut by the scan's edge
   // or across a joint from its neighbour (common/prep/bone_islands.hpp). 0: off.
   double bone_calculus_max_length_mm = 30.0;
+  // Skin clearance: bone lies under the skin (1.5-3 mm thick) and the fat or muscle beneath it, so
+  // no body voxel within this distance of the outside (along each axis, at least one voxel) seeds
+  // or grows bone. A sharp (bone) reconstruction kernel overshoots at the skin-air edge, and the
+  // skin reads 200-450 HU there: without this a shell of "bone" forms under the skin (the shared
+  // CT with its edges sharpened: docs/prep.md). The scan's own border is not outside. 0: off.
+  double bone_skin_clearance_mm = 2.0;
 };
 
 struct SegmentationStats {
