@@ -70,6 +70,26 @@ void fill_axial_holes(const PatientAxes& axes, Mask& mask) {
   });
 }
 
+// The table lies behind a supine patient and in front of a prone one, and the patient's frame does
+// not say which way gravity pointed: the bands are looked for from behind and from the front, each
+// on the mask as it was, and what either finds is removed (the order of two passes on one mask
+// would matter: from the front, the table's parts beside a supine patient are found first and
+// the rest, from behind, no longer joins them). Returns the voxels removed.
+std::uint64_t remove_tables(const PatientAxes& axes, const SegmentationParams& params, Mask& body) {
+  Mask from_front = body;
+  PatientAxes front = axes;
+  front.posterior_increasing = !axes.posterior_increasing;
+  std::uint64_t removed = remove_table(axes, params, body);
+  remove_table(front, params, from_front);
+  for (std::size_t n = 0; n < body.data.size(); ++n) {
+    if (body.data[n] && !from_front.data[n]) {
+      body.data[n] = 0;
+      ++removed;
+    }
+  }
+  return removed;
+}
+
 }  // namespace
 }  // namespace segmentation
 
@@ -79,9 +99,9 @@ Mask segment_body(const CtVolume& ct, const SegmentationParams& params, Segmenta
   const PatientAxes axes = patient_axes(ct.grid);
   Mask body = threshold_above(ct, params.body_threshold_hu);  // not air
   const std::uint64_t above = count_nonzero(body);
-  const std::uint64_t table = remove_table(axes, params, body);  // table, pad, cables
-  mark_cores(axes, params.body_core_radius_mm, body);            // voxels deep inside
-  keep_patient_parts(params.min_body_part_ml, body);             // large parts with a core
+  const std::uint64_t table = remove_tables(axes, params, body);  // table, pad, cables
+  mark_cores(axes, params.body_core_radius_mm, body);             // voxels deep inside
+  keep_patient_parts(params.min_body_part_ml, body);              // large parts with a core
   const std::uint64_t kept_above = count_nonzero(body);
   fill_axial_holes(axes, body);  // internal air, per slice
   if (stats) {
