@@ -19,8 +19,9 @@ namespace palp {
 // on coarse CTs (map_refine.hpp); 10: a leak's contact with the bone dropped with it; 11: marrow of
 // plates bracketed within 20 mm and along the body axis (bone_enclosure.cpp); 12: notches
 // narrower than a voxel filled after the edge trim (bone_notch_faces); 13: compact detached
-// islands (calculi) removed (bone_calculus_max_length_mm, bone_islands.cpp)
-inline constexpr int kPrepAlgorithmVersion = 13;
+// islands (calculi) removed (bone_calculus_max_length_mm, bone_islands.cpp); 14: d_surf's skin
+// projection in a canonical storage order (iso_projection.cpp: CTs stored other than LPS change)
+inline constexpr int kPrepAlgorithmVersion = 14;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);
