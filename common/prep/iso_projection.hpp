@@ -24,6 +24,9 @@
 // (prep/map_refine.hpp): its nodes between the CT's take the upsampled map's sign (the HU's
 // where the mask cuts their cell and the two disagree) and their HU by trilinear interpolation.
 // Values are rounded to 1/1024 mm and clamped to +-clamp_mm, as the sub-voxel map is.
+// The descent runs in one canonical storage order (the grid's axes nearest L, P and S, pointing
+// along them), so a CT stored in another order (RAS, a sagittal series) gets the same values at
+// the same patient positions, bit for bit given the same map.
 #pragma once
 
 #include <cstddef>

@@ -22,8 +22,9 @@ namespace palp {
 // islands (calculi) removed (bone_calculus_max_length_mm, bone_islands.cpp); 14: the bone
 // levels rise with the soft-tissue peak only as far as the fat peak confirms (hu_levels.cpp); 15:
 // no bone within the skin clearance of the outside (bone_skin_clearance_mm); 16: the table also
-// looked for in front of the patient (prone)
-inline constexpr int kPrepAlgorithmVersion = 16;
+// looked for in front of the patient (prone); 17: d_surf's skin projection in a canonical storage
+// order (iso_projection.cpp: CTs stored other than LPS change)
+inline constexpr int kPrepAlgorithmVersion = 17;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);
