@@ -286,7 +286,8 @@ Result* BoneRobustness::baseline_ = nullptr;
 TEST_F(BoneRobustness, CalibrationOffsets) {
   for (const double offset : {-15.0, 15.0, 30.0}) {
     const Result r =
-        run("every HU " + std::to_string(static_cast<int>(offset)), shifted(*shared_, offset));
+        run((offset < 0 ? "every HU " : "every HU +") + std::to_string(static_cast<int>(offset)),
+            shifted(*shared_, offset));
     EXPECT_NEAR(r.levels.offset_hu, baseline_->levels.offset_hu + offset, 1.0);
     EXPECT_GE(testing::dice(baseline_->bone, r.bone), 0.995) << offset;
     EXPECT_NEAR(r.score.dice, baseline_->score.dice, 0.003) << offset;
@@ -336,8 +337,8 @@ TEST_F(BoneRobustness, ContrastInTheOrgans) {
 TEST_F(BoneRobustness, ReconstructionKernels) {
   const auto name = [](double gain) {
     char text[96];
-    std::snprintf(text, sizeof text, "%s kernel: HU + %.1f (HU - HU smoothed [1 2 1]/4)",
-                  gain < 0 ? "softer" : "sharper", gain);
+    std::snprintf(text, sizeof text, "%s kernel: HU %s %.1f (HU - HU smoothed [1 2 1]/4)",
+                  gain < 0 ? "softer" : "sharper", gain < 0 ? "-" : "+", std::fabs(gain));
     return std::string(text);
   };
   for (const double gain : {-0.5, 0.5, 1.0}) {
