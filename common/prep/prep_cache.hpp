@@ -20,8 +20,9 @@ namespace palp {
 // plates bracketed within 20 mm and along the body axis (bone_enclosure.cpp); 12: notches
 // narrower than a voxel filled after the edge trim (bone_notch_faces); 13: compact detached
 // islands (calculi) removed (bone_calculus_max_length_mm, bone_islands.cpp); 14: the bone
-// levels rise with the soft-tissue peak only as far as the fat peak confirms (hu_levels.cpp)
-inline constexpr int kPrepAlgorithmVersion = 14;
+// levels rise with the soft-tissue peak only as far as the fat peak confirms (hu_levels.cpp); 15:
+// thick contrast-filled lumens resting on the cortex removed (bone_lumens.cpp)
+inline constexpr int kPrepAlgorithmVersion = 15;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);
