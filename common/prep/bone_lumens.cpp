@@ -25,18 +25,6 @@ bool face_neighbour(const Grid& g, std::size_t n, Pred pred) {
          (k + 1 < nz && pred(m + nx * ny));
 }
 
-// Calls visit(component, linear index) for every voxel of the runs, in order.
-template <class Visit>
-void for_each_labelled(const Grid& g, const RunTable& t, const RunLabels& l, Visit visit) {
-  const std::int64_t rows = g.dims[1] * g.dims[2];
-  for (std::int64_t r = 0; r < rows; ++r)
-    for (std::int64_t n = t.row_start[r]; n < t.row_start[r + 1]; ++n) {
-      const auto first = static_cast<std::size_t>(r * g.dims[0] + t.runs[n].begin);
-      for (std::int64_t i = 0; i < t.runs[n].end - t.runs[n].begin; ++i)
-        visit(l.of_run[n], first + static_cast<std::size_t>(i));
-    }
-}
-
 }  // namespace
 
 std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone) {
@@ -59,46 +47,69 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   if (runs.runs.empty()) return 0;
   const RunLabels labels = label_runs(g, runs);
   const std::size_t pieces = labels.voxels.size();
-  // Per piece: its surface voxels, and those of them beside the rim.
+  // Per piece: its surface voxels, those of them beside the rim, and its extent (runs counted in
+  // parallel, summed per piece).
   const auto on_rim = [&](std::int64_t m) { return rim.data[m] != 0; };
   const auto off_piece = [&](std::int64_t m) { return !piece.data[m]; };
-  std::vector<std::int64_t> surface(pieces, 0), contact(pieces, 0);
-  for_each_labelled(g, runs, labels, [&](std::int64_t c, std::size_t n) {
-    if (!face_neighbour(g, n, off_piece)) return;
-    ++surface[c];
-    if (face_neighbour(g, n, on_rim)) ++contact[c];
-  });
-  // Candidates: pieces resting on the rim along a minor share of their surface (marrow of seed
-  // level is enclosed by its cortex). A piece that touches no cortex at all is a region without
-  // any cortical voxel, which this cannot tell from bone (a solid bone whose cortex reads below
-  // the level): it stays.
-  Mask candidates(g, 0, "bone lumen candidates");
-  bool any = false;
-  for_each_labelled(g, runs, labels, [&](std::int64_t c, std::size_t n) {
-    if (contact[c] > 0 && static_cast<double>(contact[c]) <
-                              params.bone_lumen_max_contact * static_cast<double>(surface[c])) {
-      candidates.data[n] = 1;
-      any = true;
+  std::vector<std::int64_t> surface_of_run(runs.runs.size(), 0), contact_of_run(runs.runs.size());
+  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    for (std::int64_t i = 0; i < runs.runs[r].end - runs.runs[r].begin; ++i) {
+      const std::size_t n = first + static_cast<std::size_t>(i);
+      if (!face_neighbour(g, n, off_piece)) continue;
+      ++surface_of_run[r];
+      if (face_neighbour(g, n, on_rim)) ++contact_of_run[r];
     }
   });
+  std::vector<std::int64_t> surface(pieces, 0), contact(pieces, 0);
+  std::vector<Index3> lo(pieces, Index3{g.dims[0], g.dims[1], g.dims[2]}),
+      hi(pieces, Index3{-1, -1, -1});
+  for (std::int64_t row = 0; row < g.dims[1] * g.dims[2]; ++row)
+    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
+      const std::int64_t c = labels.of_run[r];
+      surface[c] += surface_of_run[r];
+      contact[c] += contact_of_run[r];
+      const Index3 a{runs.runs[r].begin, row % g.dims[1], row / g.dims[1]};
+      const Index3 b{runs.runs[r].end - 1, a[1], a[2]};
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[c][axis] = std::min(lo[c][axis], a[axis]);
+        hi[c][axis] = std::max(hi[c][axis], b[axis]);
+      }
+    }
+  // Candidates: pieces resting on the rim along a minor share of their surface (marrow of seed
+  // level is enclosed by its cortex), wide enough along every axis to hold a core (below). A
+  // piece that touches no cortex at all is a region without any cortical voxel, which this
+  // cannot tell from bone (a solid bone whose cortex reads below the level): it stays.
+  const double radius = params.bone_lumen_radius_mm;
+  std::vector<std::uint8_t> candidate(pieces, 0);
+  bool any = false;
+  for (std::size_t c = 0; c < pieces; ++c) {
+    bool wide = true;
+    for (int axis = 0; axis < 3; ++axis)
+      wide = wide &&
+             static_cast<double>(hi[c][axis] - lo[c][axis] + 2) * g.spacing[axis] >= 2.0 * radius;
+    candidate[c] = wide && contact[c] > 0 &&
+                   static_cast<double>(contact[c]) <
+                       params.bone_lumen_max_contact * static_cast<double>(surface[c]);
+    any = any || candidate[c];
+  }
   if (!any) return 0;
+  Mask candidates(g, 0, "bone lumen candidates");
+  rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return candidate[c]; }, candidates);
   // The lumens: the candidates' opening by a ball of the radius, i.e. the voxels within the
   // radius of a core voxel (one at least the radius from every voxel outside the candidates),
   // and one voxel more (the wedges where the tube meets the cortex, which the ball cannot enter).
   // A thin part — a rib, a cortex, a shell of dim cortex joined to a lumen — holds no core and
   // lies beyond that reach.
-  const double radius = params.bone_lumen_radius_mm;
   const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const DistanceParams band{radius + 2.0 * largest, 0};
   const DistanceMap depth = signed_distance(candidates, band);
   Mask core(g, 0, "bone lumen cores");
-  bool cored = false;
   for_each_nonzero(candidates, [&](std::size_t n) {
     if (depth.data[n] + 0.5 * h >= radius) core.data[n] = 1;
   });
-  for (auto v : core.data) cored = cored || v;
-  if (!cored) return 0;
+  if (count_nonzero(core) == 0) return 0;
   const DistanceParams wider{radius + 3.0 * largest, 0};
   const DistanceMap reach = signed_distance(core, wider);
   Mask lumen(g, 0, "bone lumens");
@@ -136,12 +147,9 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
         ct.data[n] <= out || ct.data[n] < out + params.bone_edge_fraction * (top - out);
     rim.data[n] = edge;
   });
-  std::uint64_t removed = 0;
-  for (std::size_t n = 0; n < bone.data.size(); ++n) {
-    if (!lumen.data[n] && !rim.data[n]) continue;
-    bone.data[n] = 0;
-    ++removed;
-  }
+  const std::uint64_t removed = count_nonzero(lumen) + count_nonzero(rim);
+  for_each_nonzero(lumen, [&](std::size_t n) { bone.data[n] = 0; });
+  for_each_nonzero(rim, [&](std::size_t n) { bone.data[n] = 0; });
   return removed;
 }
 
