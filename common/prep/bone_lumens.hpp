@@ -12,11 +12,12 @@ namespace palp::segmentation {
 // voxels that took. The cortex level is params.bone_seed_hu + params.bone_lumen_cortex_margin_hu;
 // the bone's voxels from the seed level up to below it form pieces, apart from those beside a
 // voxel at or above it (the rim). A piece that touches the rim, but with fewer than
-// params.bone_lumen_max_contact of its surface voxels, is a candidate; its lumen is its opening by
-// a ball of params.bone_lumen_radius_mm: the voxels within that radius of a core voxel, one at
-// least that far from every voxel outside the candidates. The lumens go, and with them the rim
-// voxels that touch them (the lumen's own edge against the cortex). Nothing with
-// bone_lumen_radius_mm 0.
+// params.bone_lumen_max_contact of its surface voxels, is a candidate (one that touches no
+// cortex at all stays); its lumen is its opening by a ball of params.bone_lumen_radius_mm and one
+// voxel more: the voxels within that reach of a core voxel, one at least the radius from every
+// voxel outside the candidates. The lumens go, and with them the rim voxels beside them that do
+// not pass the edge trim's level (params.bone_edge_fraction) with the lumen as their outside: the
+// lumen's own edge against the cortex. Nothing with bone_lumen_radius_mm 0.
 //
 // Why: in an arterial-phase or angiographic scan a vessel's lumen reaches the seed level itself
 // (300-600 HU), so the region growing takes it whole, and where it rests on a vertebra or the
