@@ -1,5 +1,5 @@
-// The bone mask (segment_bone): seeded region growing, leak removal, marrow, surface, notches,
-// islands, calculi.
+// The bone mask (segment_bone): seeded region growing, lumen and leak removal, marrow,
+// surface, notches, islands, calculi.
 //
 // Values while growing: 2 = seed, 1 = grown voxel below the seed level.
 #include "prep/segmentation.hpp"
@@ -15,6 +15,7 @@
 #include "base/parallel.hpp"
 #include "prep/bone_enclosure.hpp"
 #include "prep/bone_islands.hpp"
+#include "prep/bone_lumens.hpp"
 #include "prep/bone_marrow.hpp"
 #include "prep/components.hpp"
 #include "prep/segmentation_shared.hpp"
@@ -293,7 +294,8 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   Mask bone = bone_candidates(ct, body, params);          // seeds and growable voxels
   clear_skin(body, params.bone_skin_clearance_mm, bone);  // none on the skin (kernel overshoot)
   keep_seeded_regions(bone);                              // region growing from the seeds
-  remove_leaks(params.bone_leak_contact_fraction, bone);  // vessels resting on bone
+  if (remove_lumens(ct, params, bone) > 0) keep_seeded_regions(bone);  // seed-bright lumens
+  remove_leaks(params.bone_leak_contact_fraction, bone);               // vessels resting on bone
   for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });
   fill_marrow_by_votes(axes, params, bone);                 // marrow: enclosed in 2 of 3 planes
   fill_between_cortices(axes, params, body, bone);          // marrow: bracketed along most lines

@@ -23,8 +23,9 @@ namespace palp {
 // levels rise with the soft-tissue peak only as far as the fat peak confirms (hu_levels.cpp); 15:
 // no bone within the skin clearance of the outside (bone_skin_clearance_mm); 16: the table also
 // looked for in front of the patient (prone); 17: d_surf's skin projection in a canonical storage
-// order (iso_projection.cpp: CTs stored other than LPS change)
-inline constexpr int kPrepAlgorithmVersion = 17;
+// order (iso_projection.cpp: CTs stored other than LPS change); 18: thick contrast-filled lumens
+// resting on the cortex removed (bone_lumens.cpp)
+inline constexpr int kPrepAlgorithmVersion = 18;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

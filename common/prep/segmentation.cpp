@@ -27,7 +27,10 @@ void check_params(const SegmentationParams& p) {
                            p.bone_enclosure_radius_mm,
                            p.bone_plate_radius_mm,
                            p.bone_calculus_max_length_mm,
-                           p.bone_skin_clearance_mm};
+                           p.bone_skin_clearance_mm,
+                           p.bone_lumen_cortex_margin_hu,
+                           p.bone_lumen_max_contact,
+                           p.bone_lumen_radius_mm};
   for (double v : values)
     if (!std::isfinite(v)) throw UsageError("segmentation: parameters must be finite numbers");
   if (p.min_body_part_ml < 0 || p.body_core_radius_mm < 0 || p.max_table_thickness_mm < 0 ||
@@ -48,6 +51,11 @@ void check_params(const SegmentationParams& p) {
     throw UsageError("segmentation: bone_calculus_max_length_mm must lie in [0, 200]");
   if (p.bone_skin_clearance_mm < 0 || p.bone_skin_clearance_mm > 20)
     throw UsageError("segmentation: bone_skin_clearance_mm must lie in [0, 20]");
+  if (p.bone_lumen_cortex_margin_hu < 0 || p.bone_lumen_max_contact < 0 ||
+      p.bone_lumen_max_contact > 1 || p.bone_lumen_radius_mm < 0 || p.bone_lumen_radius_mm > 100)
+    throw UsageError(
+        "segmentation: bone_lumen_cortex_margin_hu must not be negative, bone_lumen_max_contact "
+        "must lie in [0, 1] and bone_lumen_radius_mm in [0, 100]");
   if (p.bone_notch_faces != 0 && (p.bone_notch_faces < 4 || p.bone_notch_faces > 6))
     throw UsageError("segmentation: bone_notch_faces must be 0 (off), 4, 5 or 6");
   if (p.bone_grow_hu > p.bone_seed_hu)

@@ -9,10 +9,11 @@
 // slice (lungs and bowel gas that reach the first or last slice stay inside).
 // Bone: seeds at high HU grown into lower-HU bone inside the body; medium-HU regions that touch
 // bone only across a narrow contact (contrast-filled vessels, enhancing organs) are dropped with
-// that contact; marrow filled where two of the three orthogonal slice planes find it enclosed,
-// where bone brackets it along most lines through it, and in small cavities enclosed in 3D; the
-// edge trimmed to a partial-volume level; notches narrower than a voxel filled; small islands
-// and compact detached ones (calculi) removed.
+// that contact, and so are thick lumens of seed-level contrast below cortical HU that rest on the
+// cortex along a strip; marrow filled where two of the three orthogonal slice planes find it
+// enclosed, where bone brackets it along most lines through it, and in small cavities enclosed in
+// 3D; the edge trimmed to a partial-volume level; notches narrower than a voxel filled; small
+// islands and compact detached ones (calculi) removed.
 #pragma once
 
 #include <cstdint>
@@ -40,6 +41,18 @@ struct SegmentationParams {
   // A grown region below bone_seed_hu that touches the seeds' rim with fewer than this fraction of
   // its voxels is a leak (a contrast-filled vessel or organ resting on bone) and is dropped.
   double bone_leak_contact_fraction = 0.05;
+  // Lumens: contrast-filled vessels bright enough to seed (arterial phase, angiography) that rest
+  // on bone (common/prep/bone_lumens.hpp). The cortex level is bone_seed_hu +
+  // bone_lumen_cortex_margin_hu (700 HU nominal, moving with the seed level): only cortical bone
+  // reaches it, a lumen's 300-600 HU do not. A piece of the seeded regions from the seed level to
+  // below it that touches the cortex along fewer than bone_lumen_max_contact of its surface
+  // voxels (seed-level marrow is enclosed by its cortex) loses its opening by a ball of
+  // bone_lumen_radius_mm: the thick part, a lumen 14 mm or more across (the aorta, the vena cava);
+  // a rib or cortex holds no such ball. 5 mm took bone of the shared CT at 6 mm slices (recall
+  // 0.838 -> 0.826; docs/prep.md). bone_lumen_radius_mm 0: off.
+  double bone_lumen_cortex_margin_hu = 400.0;
+  double bone_lumen_max_contact = 0.5;
+  double bone_lumen_radius_mm = 7.0;
   // Marrow: a voxel is filled when at least bone_marrow_votes of the three orthogonal slice planes
   // through it (axial, coronal, sagittal) find it enclosed by the bone after a 3x3 closing (a hole
   // of at most bone_max_hole_mm2, or a voxel the closing adds). Marrow is enclosed in all three,

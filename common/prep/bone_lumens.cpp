@@ -1,0 +1,156 @@
+// Contrast-filled lumens resting on bone (bone_lumens.hpp).
+#include "prep/bone_lumens.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "prep/components.hpp"
+#include "prep/distance_transform.hpp"
+#include "prep/segmentation_shared.hpp"
+
+namespace palp::segmentation {
+namespace {
+
+// Whether voxel n lies on the volume's border, and whether a face neighbour satisfies `pred`.
+template <class Pred>
+bool face_neighbour(const Grid& g, std::size_t n, Pred pred) {
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const auto m = static_cast<std::int64_t>(n);
+  const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
+  return (i > 0 && pred(m - 1)) || (i + 1 < nx && pred(m + 1)) || (j > 0 && pred(m - nx)) ||
+         (j + 1 < ny && pred(m + nx)) || (k > 0 && pred(m - nx * ny)) ||
+         (k + 1 < nz && pred(m + nx * ny));
+}
+
+}  // namespace
+
+std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone) {
+  if (params.bone_lumen_radius_mm <= 0.0) return 0;
+  const Grid& g = bone.grid;
+  const int cortex =
+      integer_floor(std::ceil(params.bone_seed_hu + params.bone_lumen_cortex_margin_hu));
+  const int seed = integer_floor(std::ceil(params.bone_seed_hu));
+  const auto bright = [&](std::int64_t m) { return bone.data[m] && ct.data[m] >= cortex; };
+  const auto between = [&](std::size_t n) { return ct.data[n] >= seed && ct.data[n] < cortex; };
+  // Pieces: the bone's voxels of seed level below the cortex level, apart from the cortex by one
+  // voxel (the rim: the voxels of that range beside the cortex).
+  Mask piece(g, 0, "bone lumen pieces");
+  Mask rim(g, 0, "bone lumen rim");
+  for_each_nonzero(bone, [&](std::size_t n) {
+    if (!between(n)) return;
+    (face_neighbour(g, n, bright) ? rim : piece).data[n] = 1;
+  });
+  const RunTable runs = extract_runs(piece, false);
+  if (runs.runs.empty()) return 0;
+  const RunLabels labels = label_runs(g, runs);
+  const std::size_t pieces = labels.voxels.size();
+  // Per piece: its surface voxels, those of them beside the rim, and its extent (runs counted in
+  // parallel, summed per piece).
+  const auto on_rim = [&](std::int64_t m) { return rim.data[m] != 0; };
+  const auto off_piece = [&](std::int64_t m) { return !piece.data[m]; };
+  std::vector<std::int64_t> surface_of_run(runs.runs.size(), 0), contact_of_run(runs.runs.size());
+  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    for (std::int64_t i = 0; i < runs.runs[r].end - runs.runs[r].begin; ++i) {
+      const std::size_t n = first + static_cast<std::size_t>(i);
+      if (!face_neighbour(g, n, off_piece)) continue;
+      ++surface_of_run[r];
+      if (face_neighbour(g, n, on_rim)) ++contact_of_run[r];
+    }
+  });
+  std::vector<std::int64_t> surface(pieces, 0), contact(pieces, 0);
+  std::vector<Index3> lo(pieces, Index3{g.dims[0], g.dims[1], g.dims[2]}),
+      hi(pieces, Index3{-1, -1, -1});
+  for (std::int64_t row = 0; row < g.dims[1] * g.dims[2]; ++row)
+    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
+      const std::int64_t c = labels.of_run[r];
+      surface[c] += surface_of_run[r];
+      contact[c] += contact_of_run[r];
+      const Index3 a{runs.runs[r].begin, row % g.dims[1], row / g.dims[1]};
+      const Index3 b{runs.runs[r].end - 1, a[1], a[2]};
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[c][axis] = std::min(lo[c][axis], a[axis]);
+        hi[c][axis] = std::max(hi[c][axis], b[axis]);
+      }
+    }
+  // Candidates: pieces resting on the rim along a minor share of their surface (marrow of seed
+  // level is enclosed by its cortex), wide enough along every axis to hold a core (below). A
+  // piece that touches no cortex at all is a region without any cortical voxel, which this
+  // cannot tell from bone (a solid bone whose cortex reads below the level): it stays.
+  const double radius = params.bone_lumen_radius_mm;
+  std::vector<std::uint8_t> candidate(pieces, 0);
+  bool any = false;
+  for (std::size_t c = 0; c < pieces; ++c) {
+    bool wide = true;
+    for (int axis = 0; axis < 3; ++axis)
+      wide = wide &&
+             static_cast<double>(hi[c][axis] - lo[c][axis] + 2) * g.spacing[axis] >= 2.0 * radius;
+    candidate[c] = wide && contact[c] > 0 &&
+                   static_cast<double>(contact[c]) <
+                       params.bone_lumen_max_contact * static_cast<double>(surface[c]);
+    any = any || candidate[c];
+  }
+  if (!any) return 0;
+  Mask candidates(g, 0, "bone lumen candidates");
+  rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return candidate[c]; }, candidates);
+  // The lumens: the candidates' opening by a ball of the radius, i.e. the voxels within the
+  // radius of a core voxel (one at least the radius from every voxel outside the candidates),
+  // and one voxel more (the wedges where the tube meets the cortex, which the ball cannot enter).
+  // A thin part — a rib, a cortex, a shell of dim cortex joined to a lumen — holds no core and
+  // lies beyond that reach.
+  const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const DistanceParams band{radius + 2.0 * largest, 0};
+  const DistanceMap depth = signed_distance(candidates, band);
+  Mask core(g, 0, "bone lumen cores");
+  for_each_nonzero(candidates, [&](std::size_t n) {
+    if (depth.data[n] + 0.5 * h >= radius) core.data[n] = 1;
+  });
+  if (count_nonzero(core) == 0) return 0;
+  const DistanceParams wider{radius + 3.0 * largest, 0};
+  const DistanceMap reach = signed_distance(core, wider);
+  Mask lumen(g, 0, "bone lumens");
+  for_each_nonzero(candidates, [&](std::size_t n) {
+    if (0.5 * h - reach.data[n] <= radius + largest) lumen.data[n] = 1;
+  });
+  // The lumen's edge against the cortex: a rim voxel beside the lumen stays bone only when it is
+  // brighter than its lumen neighbours (their mean) and passes the edge trim's partial-volume
+  // level (bone_edge_fraction of the way up to its brightest cortex neighbour) with the lumen as
+  // its outside; the rest of the rim is the lumen's and goes with it.
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  for_each_nonzero(rim, [&](std::size_t n) {
+    const auto m = static_cast<std::int64_t>(n);
+    const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
+    const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+    double top = -1e9, lumen_sum = 0.0;
+    int lumen_count = 0;
+    for (int d = 0; d < 6; ++d) {
+      if (!inside[d]) continue;
+      const auto o = static_cast<std::size_t>(m + steps[d]);
+      if (lumen.data[o]) {
+        lumen_sum += ct.data[o];
+        ++lumen_count;
+      } else if (bright(static_cast<std::int64_t>(o))) {
+        top = std::max(top, static_cast<double>(ct.data[o]));
+      }
+    }
+    if (lumen_count == 0) {
+      rim.data[n] = 0;
+      return;
+    }
+    const double out = lumen_sum / lumen_count;
+    const bool edge =
+        ct.data[n] <= out || ct.data[n] < out + params.bone_edge_fraction * (top - out);
+    rim.data[n] = edge;
+  });
+  const std::uint64_t removed = count_nonzero(lumen) + count_nonzero(rim);
+  for_each_nonzero(lumen, [&](std::size_t n) { bone.data[n] = 0; });
+  for_each_nonzero(rim, [&](std::size_t n) { bone.data[n] = 0; });
+  return removed;
+}
+
+}  // namespace palp::segmentation
