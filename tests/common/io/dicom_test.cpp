@@ -18,6 +18,7 @@
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
 #include "io/dicom_layout.hpp"
+#include "support/dicom_slice_writer.hpp"
 #include "support/io_test_util.hpp"
 
 namespace palp {
@@ -49,13 +50,6 @@ std::int16_t expected_hu(unsigned i, unsigned j, int k) {
          1500;
 }
 
-template <std::uint16_t G, std::uint16_t E>
-void set_string(gdcm::DataSet& ds, const std::string& value) {
-  gdcm::Attribute<G, E> attribute;
-  attribute.SetValue(value.c_str());
-  ds.Replace(attribute.GetAsDataElement());
-}
-
 // Writes slice k of the series; `position_shift` moves it along the normal (mm).
 void write_slice(const std::string& path, const SeriesSpec& spec, int k,
                  double position_shift = 0.0) {
@@ -83,20 +77,10 @@ void write_slice(const std::string& path, const SeriesSpec& spec, int k,
     for (unsigned i = 0; i < spec.columns; ++i)
       pixels[j * spec.columns + i] = static_cast<std::int16_t>(
           std::lround((expected_hu(i, j, k) - spec.intercept) / spec.slope));
-  gdcm::DataElement pixel_data(gdcm::Tag(0x7fe0, 0x0010));
-  pixel_data.SetByteValue(reinterpret_cast<const char*>(pixels.data()),
-                          static_cast<std::uint32_t>(pixels.size() * sizeof(std::int16_t)));
-  image.SetDataElement(pixel_data);
+  testing::set_int16_pixels(image, pixels);
 
   gdcm::DataSet& ds = writer.GetFile().GetDataSet();
-  gdcm::UIDGenerator uid;
-  set_string<0x0008, 0x0016>(ds, "1.2.840.10008.5.1.4.1.1.2");  // CT Image Storage
-  set_string<0x0008, 0x0018>(ds, uid.Generate());
-  set_string<0x0008, 0x0060>(ds, "CT");
-  set_string<0x0020, 0x000d>(ds, "1.2.826.0.1.3680043.2.1125.1");
-  set_string<0x0020, 0x000e>(ds, spec.series_uid);
-  gdcm::Attribute<0x0020, 0x0013> instance_number{k + 1};
-  ds.Replace(instance_number.GetAsDataElement());
+  testing::set_ct_slice_identity(ds, "1.2.826.0.1.3680043.2.1125.1", spec.series_uid, k + 1);
   writer.SetFileName(path.c_str());
   ASSERT_TRUE(writer.Write()) << path;
 }

@@ -20,6 +20,7 @@
 #include "prep/reorient.hpp"
 #include "prep/segmentation.hpp"
 #include "support/shared_ct_labels.hpp"
+#include "support/torso_scenes.hpp"
 
 namespace palp {
 namespace {
@@ -209,18 +210,6 @@ LabelledCt cropped(const LabelledCt& d, std::int64_t first, std::int64_t count) 
           slices(d.organs, first, count)};
 }
 
-// Turned 180 degrees about the body axis (i and j reversed, the direction matrix kept): the table
-// lies on the frame's anterior side, as under a prone patient.
-template <class T>
-Volume<T> turned(const Volume<T>& v) {
-  Volume<T> out(v.grid);
-  const Index3& n = v.grid.dims;
-  for (std::int64_t k = 0; k < n[2]; ++k)
-    for (std::int64_t j = 0; j < n[1]; ++j)
-      for (std::int64_t i = 0; i < n[0]; ++i) out.at(i, j, k) = v.at(n[0] - 1 - i, n[1] - 1 - j, k);
-  return out;
-}
-
 // A mask stored in another axis order, through the CT's reordering (reorient.hpp).
 Mask reorder_mask(const Mask& m, std::string_view code) {
   CtVolume as_ct(m.grid);
@@ -391,18 +380,20 @@ TEST_F(BoneRobustness, ShorterScan) {
 // Prone: the table in front of the patient. It is found there too (body_segmentation.cpp looks
 // for it from both sides), and body and bone are the supine scan's, turned.
 TEST_F(BoneRobustness, ProneWithTheTableInFront) {
-  LabelledCt prone{turned(shared_->ct), turned(shared_->truth_bone), turned(shared_->organs)};
+  LabelledCt prone{testing::turned_about_body_axis(shared_->ct),
+                   testing::turned_about_body_axis(shared_->truth_bone),
+                   testing::turned_about_body_axis(shared_->organs)};
   SegmentationStats supine_stats, prone_stats;
   const Mask supine_body = segment_body(shared_->ct, SegmentationParams{}, &supine_stats);
   const Mask prone_body = segment_body(prone.ct, SegmentationParams{}, &prone_stats);
   ASSERT_GT(supine_stats.table_voxels, 1000u);
   EXPECT_EQ(prone_stats.table_voxels, supine_stats.table_voxels);
-  const Mask body_back = turned(prone_body);
+  const Mask body_back = testing::turned_about_body_axis(prone_body);
   EXPECT_EQ(testing::count(body_back), testing::count(supine_body));
   EXPECT_EQ(testing::count_both(body_back, supine_body), testing::count(supine_body));
   const Result r =
       run("prone (turned 180 degrees about the body axis: the table in front)", prone, false);
-  const Mask bone_back = turned(r.bone);
+  const Mask bone_back = testing::turned_about_body_axis(r.bone);
   EXPECT_EQ(testing::count(bone_back), testing::count(baseline_->bone));
   EXPECT_EQ(testing::count_both(bone_back, baseline_->bone), testing::count(baseline_->bone));
 }

@@ -29,8 +29,10 @@
 #include "prep/prep.hpp"
 #include "prep/segmentation.hpp"
 #include "support/bone_error_split.hpp"
+#include "support/dicom_slice_writer.hpp"
 #include "support/io_test_util.hpp"
 #include "support/mask_metrics.hpp"
+#include "support/shared_ct_labels.hpp"
 
 namespace palp {
 namespace {
@@ -149,13 +151,6 @@ std::size_t ct_index(const Grid& g, const ScannerLayout& s, const Index3& series
   return g.linear(n[0], n[1], n[2]);
 }
 
-template <std::uint16_t G, std::uint16_t E>
-void set_string(gdcm::DataSet& ds, const std::string& value) {
-  gdcm::Attribute<G, E> attribute;
-  attribute.SetValue(value.c_str());
-  ds.Replace(attribute.GetAsDataElement());
-}
-
 struct SeriesIds {
   std::string study, series;
 };
@@ -186,23 +181,13 @@ void write_slice(const std::string& path, const CtVolume& ct, const ScannerLayou
     for (std::int64_t c = 0; c < sg.dims[0]; ++c)
       pixels[static_cast<std::size_t>(r * sg.dims[0] + c)] = static_cast<std::int16_t>(
           ct.data[ct_index(ct.grid, s, {c, r, slice})] - static_cast<int>(kIntercept));
-  gdcm::DataElement pixel_data(gdcm::Tag(0x7fe0, 0x0010));
-  pixel_data.SetByteValue(reinterpret_cast<const char*>(pixels.data()),
-                          static_cast<std::uint32_t>(pixels.size() * sizeof(std::int16_t)));
-  image.SetDataElement(pixel_data);
+  testing::set_int16_pixels(image, pixels);
 
   gdcm::DataSet& ds = writer.GetFile().GetDataSet();
-  gdcm::UIDGenerator uid;
-  set_string<0x0008, 0x0016>(ds, "1.2.840.10008.5.1.4.1.1.2");  // CT Image Storage
-  set_string<0x0008, 0x0018>(ds, uid.Generate());
-  set_string<0x0008, 0x0060>(ds, "CT");
-  set_string<0x0018, 0x5100>(ds, "HFS");
-  set_string<0x0020, 0x000d>(ds, ids.study);
-  set_string<0x0020, 0x000e>(ds, ids.series);
+  testing::set_ct_slice_identity(ds, ids.study, ids.series, static_cast<int>(slice) + 1);
+  testing::set_dicom_string<0x0018, 0x5100>(ds, "HFS");  // patient position: head first, supine
   gdcm::Attribute<0x0018, 0x0050> thickness{sg.spacing[2]};
   ds.Replace(thickness.GetAsDataElement());
-  gdcm::Attribute<0x0020, 0x0013> instance{static_cast<int>(slice) + 1};
-  ds.Replace(instance.GetAsDataElement());
   writer.SetFileName(path.c_str());
   ASSERT_TRUE(writer.Write()) << path;
 }
@@ -485,11 +470,7 @@ TEST(SharedCtDicom, LossyJpeg2000AtArchiveRatiosKeepsTheBoneMask) {
   Mask lossless_body;
   const Mask lossless_bone = prep_bone(lossless, &lossless_body);
   truth.body = carried(lossless_body, d.nifti.grid, to_series);
-  const std::vector<std::uint8_t> region = testing::body_regions(truth.body);
-  truth.superficial = Mask(d.nifti.grid, 0);
-  for (std::size_t n = 0; n < region.size(); ++n)
-    truth.superficial.data[n] =
-        truth.bone.data[n] && region[n] == static_cast<std::uint8_t>(testing::Region::superficial);
+  truth.superficial = testing::superficial_bone(truth.bone, truth.body);
 
   std::printf(
       "| JPEG 2000 | ratio achieved | RMS HU error | max HU error | RMS HU error in the body | "

@@ -15,16 +15,14 @@
 #include "prep/reorient.hpp"
 #include "prep/segmentation.hpp"
 #include "scene/trajectory_gen.hpp"
+#include "support/torso_scenes.hpp"
 
 namespace palp {
 namespace {
 
 // The torso's field of view at 3 x 3 x 4 mm: 160 x 107 x 48 voxels.
 CtVolume torso() {
-  PhantomOptions o;
-  o.dims = Index3{160, 107, 48};
-  o.spacing = Vec3{3.0, 3.0, 4.0};
-  return make_phantom("torso", o);
+  return testing::coarse_torso();
 }
 
 Vec3d column(const Grid& g, int a) {
