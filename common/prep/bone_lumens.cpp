@@ -12,20 +12,6 @@
 #include "prep/segmentation_shared.hpp"
 
 namespace palp::segmentation {
-namespace {
-
-// Whether voxel n lies on the volume's border, and whether a face neighbour satisfies `pred`.
-template <class Pred>
-bool face_neighbour(const Grid& g, std::size_t n, Pred pred) {
-  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  const auto m = static_cast<std::int64_t>(n);
-  const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
-  return (i > 0 && pred(m - 1)) || (i + 1 < nx && pred(m + 1)) || (j > 0 && pred(m - nx)) ||
-         (j + 1 < ny && pred(m + nx)) || (k > 0 && pred(m - nx * ny)) ||
-         (k + 1 < nz && pred(m + nx * ny));
-}
-
-}  // namespace
 
 std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone) {
   if (params.bone_lumen_radius_mm <= 0.0) return 0;
@@ -41,33 +27,25 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   Mask rim(g, 0, "bone lumen rim");
   for_each_nonzero(bone, [&](std::size_t n) {
     if (!between(n)) return;
-    (face_neighbour(g, n, bright) ? rim : piece).data[n] = 1;
+    (any_face_neighbour(g, n, bright) ? rim : piece).data[n] = 1;
   });
   const RunTable runs = extract_runs(piece, false);
   if (runs.runs.empty()) return 0;
   const RunLabels labels = label_runs(g, runs);
   const std::size_t pieces = labels.voxels.size();
-  // Per piece: its surface voxels, those of them beside the rim, and its extent (runs counted in
-  // parallel, summed per piece).
+  // Per piece: its surface voxels, those of them beside the rim, and its extent.
   const auto on_rim = [&](std::int64_t m) { return rim.data[m] != 0; };
   const auto off_piece = [&](std::int64_t m) { return !piece.data[m]; };
-  std::vector<std::int64_t> surface_of_run(runs.runs.size(), 0), contact_of_run(runs.runs.size());
-  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
-    for (std::int64_t i = 0; i < runs.runs[r].end - runs.runs[r].begin; ++i) {
-      const std::size_t n = first + static_cast<std::size_t>(i);
-      if (!face_neighbour(g, n, off_piece)) continue;
-      ++surface_of_run[r];
-      if (face_neighbour(g, n, on_rim)) ++contact_of_run[r];
-    }
-  });
-  std::vector<std::int64_t> surface(pieces, 0), contact(pieces, 0);
+  const auto on_surface = [&](std::size_t n) { return any_face_neighbour(g, n, off_piece); };
+  const std::vector<std::int64_t> surface = count_per_component(g, runs, labels, on_surface);
+  const std::vector<std::int64_t> contact = count_per_component(
+      g, runs, labels,
+      [&](std::size_t n) { return on_surface(n) && any_face_neighbour(g, n, on_rim); });
   std::vector<Index3> lo(pieces, Index3{g.dims[0], g.dims[1], g.dims[2]}),
       hi(pieces, Index3{-1, -1, -1});
   for (std::int64_t row = 0; row < g.dims[1] * g.dims[2]; ++row)
     for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
       const std::int64_t c = labels.of_run[r];
-      surface[c] += surface_of_run[r];
-      contact[c] += contact_of_run[r];
       const Index3 a{runs.runs[r].begin, row % g.dims[1], row / g.dims[1]};
       const Index3 b{runs.runs[r].end - 1, a[1], a[2]};
       for (int axis = 0; axis < 3; ++axis) {

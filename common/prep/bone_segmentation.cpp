@@ -84,19 +84,6 @@ void keep_seeded_regions(Mask& bone) {
   });
 }
 
-// Whether any face neighbour of voxel n satisfies `pred`.
-template <class Pred>
-bool any_face_neighbour(const Grid& g, std::size_t n, Pred pred) {
-  const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(g.dims[0]));
-  const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(g.dims[0]));
-  const std::int64_t j = jk % g.dims[1], k = jk / g.dims[1];
-  const std::int64_t sy = g.dims[0], sz = g.dims[0] * g.dims[1];
-  const auto m = static_cast<std::int64_t>(n);
-  return (i > 0 && pred(m - 1)) || (i + 1 < g.dims[0] && pred(m + 1)) || (j > 0 && pred(m - sy)) ||
-         (j + 1 < g.dims[1] && pred(m + sy)) || (k > 0 && pred(m - sz)) ||
-         (k + 1 < g.dims[2] && pred(m + sz));
-}
-
 // Leak removal: the grown voxels below the seed level that are not next to a seed form pieces;
 // a piece that touches the seeds' rim with fewer than `fraction` of its voxels hangs on the bone by
 // a narrow contact — a contrast-filled vessel or an enhancing organ — and is dropped, and with it
@@ -112,14 +99,8 @@ void remove_leaks(double fraction, Mask& bone) {
   const RunTable runs = extract_runs(piece, false);
   const RunLabels labels = label_runs(g, runs);
   const auto is_rim = [&](std::int64_t m) { return bone.data[m] == 1 && !piece.data[m]; };
-  std::vector<std::int64_t> contact_per_run(runs.runs.size(), 0);
-  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
-    for (std::int64_t i = 0; i < runs.runs[r].end - runs.runs[r].begin; ++i)
-      if (any_face_neighbour(g, first + static_cast<std::size_t>(i), is_rim)) ++contact_per_run[r];
-  });
-  std::vector<std::int64_t> contact(labels.voxels.size(), 0);
-  for (std::size_t r = 0; r < runs.runs.size(); ++r)
-    contact[labels.of_run[r]] += contact_per_run[r];
+  const std::vector<std::int64_t> contact = count_per_component(
+      g, runs, labels, [&](std::size_t n) { return any_face_neighbour(g, n, is_rim); });
   for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
     const std::int64_t c = labels.of_run[r];
     if (static_cast<double>(contact[c]) >= fraction * static_cast<double>(labels.voxels[c])) return;

@@ -117,6 +117,33 @@ std::vector<std::uint8_t> components_with(const Grid& g, const RunTable& t, cons
   return result;
 }
 
+// Per component: how many of its voxels satisfy `counted` (runs counted in parallel, summed).
+template <class Counted>
+std::vector<std::int64_t> count_per_component(const Grid& g, const RunTable& t, const RunLabels& l,
+                                              Counted counted) {
+  std::vector<std::int64_t> per_run(t.runs.size(), 0);
+  for_each_run(g, t, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    for (std::int64_t i = 0; i < t.runs[r].end - t.runs[r].begin; ++i)
+      if (counted(first + static_cast<std::size_t>(i))) ++per_run[r];
+  });
+  std::vector<std::int64_t> result(l.voxels.size(), 0);
+  for (std::size_t r = 0; r < per_run.size(); ++r) result[l.of_run[r]] += per_run[r];
+  return result;
+}
+
+// Whether any face neighbour of voxel n (linear index on g) satisfies pred(linear index).
+template <class Pred>
+bool any_face_neighbour(const Grid& g, std::size_t n, Pred pred) {
+  const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(g.dims[0]));
+  const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(g.dims[0]));
+  const std::int64_t j = jk % g.dims[1], k = jk / g.dims[1];
+  const std::int64_t sy = g.dims[0], sz = g.dims[0] * g.dims[1];
+  const auto m = static_cast<std::int64_t>(n);
+  return (i > 0 && pred(m - 1)) || (i + 1 < g.dims[0] && pred(m + 1)) || (j > 0 && pred(m - sy)) ||
+         (j + 1 < g.dims[1] && pred(m + sy)) || (k > 0 && pred(m - sz)) ||
+         (k + 1 < g.dims[2] && pred(m + sz));
+}
+
 // Writes `value(label)` over every run of the table.
 template <class Value>
 void rewrite_runs(const Grid& g, const RunTable& t, const RunLabels& l, Value value, Mask& mask) {
