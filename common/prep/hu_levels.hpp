@@ -14,8 +14,8 @@
 //   fat         the mode between -150 and -50 HU, when that range holds 1 % of the body or more
 //   offset      peak - 50 HU, limited to +-40 HU (a scan off by more is not a calibration error
 //               this should follow: the levels stay at the nominal ones and prep.json says so);
-//               a rise larger than the fat's (fat - (-100 HU), within 10 HU) is cut to the fat's
-//               rise, or to 0 without fat; a fall is followed as it is (measured on the shared CT:
+//               a rise more than 10 HU larger than the fat's (fat - (-100 HU); 0 without a fat
+//               peak) is cut to the fat's rise, or to 0 if the fat fell; a fall is followed as it is (measured on the shared CT:
 //               docs/prep.md, "Bone levels from the scan")
 //   levels      bone_seed, bone_grow and the bone iso level, each nominal + offset
 #pragma once

@@ -3,6 +3,8 @@
 // handed to the segmentation.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -18,7 +20,8 @@ struct LabelledCt {
   Mask truth_bone, organs;
 };
 
-// The shared CT and its labels; false when either file is absent.
+// The shared CT and its labels; false when either file is absent (or, a failure of the calling
+// test, when the labels are not on the CT's grid).
 inline bool load_labelled_shared_ct(LabelledCt& d) {
   const std::string dir = PALP_SHARED_DATA_DIR;
   const std::string ct_path = dir + "/ct_abdomen_3mm.nii.gz";
@@ -26,7 +29,10 @@ inline bool load_labelled_shared_ct(LabelledCt& d) {
   if (!std::filesystem::exists(ct_path) || !std::filesystem::exists(labels_path)) return false;
   d.ct = read_ct(ct_path);
   const DistanceMap labels = read_nifti_float(labels_path);  // 0, 1, 2 as read
-  if (labels.grid.dims != d.ct.grid.dims) return false;
+  if (labels.grid.dims != d.ct.grid.dims) {
+    ADD_FAILURE() << labels_path << " is not on the grid of " << ct_path;
+    return false;
+  }
   d.truth_bone = Mask(d.ct.grid, 0);
   d.organs = Mask(d.ct.grid, 0);
   for (std::size_t n = 0; n < labels.data.size(); ++n) {

@@ -22,6 +22,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/ct_io.hpp"
@@ -44,7 +45,6 @@ constexpr double kIntercept = -1024.0;  // stored value = HU + 1024, slope 1, as
 
 const std::string kDataDir = PALP_SHARED_DATA_DIR;
 const std::string kCtPath = kDataDir + "/ct_abdomen_3mm.nii.gz";
-const std::string kLabelsPath = kDataDir + "/ct_abdomen_3mm_reference_labels.nii.gz";
 
 Vec3 world_of(const Grid& g, const Vec3& index) {
   Vec3 p = g.world.origin;
@@ -459,14 +459,14 @@ void print_row(const char* name, const LossyRow& r) {
 TEST(SharedCtDicom, LossyJpeg2000AtArchiveRatiosKeepsTheBoneMask) {
   SharedSeries d;
   if (!make_series(d)) GTEST_SKIP() << "the shared CT is not in the data folder";
-  if (!fs::exists(kLabelsPath)) GTEST_SKIP() << "the expert labels are not in the data folder";
+  testing::LabelledCt labelled;  // the labels are measured against only
+  if (!testing::load_labelled_shared_ct(labelled))
+    GTEST_SKIP() << "the expert labels are not in the data folder";
+  ASSERT_EQ(labelled.truth_bone.grid.dims, d.nifti.grid.dims);
   const CtVolume lossless = read_ct(d.j2k.string());
   const auto to_series = same_position_voxels(d.nifti.grid, lossless.grid, nullptr);
   Truth truth;
-  const DistanceMap labels = read_nifti_float(kLabelsPath);  // 0, 1, 2 as read; measure only
-  ASSERT_EQ(labels.grid.dims, d.nifti.grid.dims);
-  truth.bone = Mask(d.nifti.grid, 0);
-  for (std::size_t n = 0; n < labels.size(); ++n) truth.bone.data[n] = labels.data[n] == 2.0f;
+  truth.bone = std::move(labelled.truth_bone);
   Mask lossless_body;
   const Mask lossless_bone = prep_bone(lossless, &lossless_body);
   truth.body = carried(lossless_body, d.nifti.grid, to_series);
