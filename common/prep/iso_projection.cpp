@@ -17,6 +17,7 @@
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
+#include "base/patient_frame.hpp"
 #include "prep/map_refine.hpp"
 
 namespace palp {
@@ -27,24 +28,25 @@ constexpr int kNewtonSteps = 4;
 constexpr double kOnSurface = 5e-3;  // mm: |HU - iso| / |grad HU| on the level set
 constexpr double kTangent = 0.05;    // mm: the last tangent move (see closest_point)
 
-// Canonical axis d is the grid axis nearest LPS axis d, pointing along it.
+// Canonical axis d is the grid axis nearest the patient's left, posterior and superior in turn
+// (base/patient_frame.hpp), pointing along it; the storage order itself where those do not name
+// three different axes (a direction matrix at 45 degrees to them, or none usable).
 struct Order {
   int axis[3] = {0, 1, 2};  // the storage axis of canonical axis d
   bool flip[3] = {false, false, false};
 };
 
-Order canonical_order(const WorldPlacement& world) {
+Order canonical_order(const Grid& grid) {
+  const PatientFrame frame = patient_frame(grid);
+  const Anatomy toward[3] = {Anatomy::Left, Anatomy::Posterior, Anatomy::Superior};
   Order o;
   bool used[3] = {false, false, false};
   for (int d = 0; d < 3; ++d) {
-    int best = -1;
-    for (int a = 0; a < 3; ++a)
-      if (!used[a] && (best < 0 || std::fabs(world.direction[d * 3 + a]) >
-                                       std::fabs(world.direction[d * 3 + best])))
-        best = a;
-    used[best] = true;
-    o.axis[d] = best;
-    o.flip[d] = world.direction[d * 3 + best] < 0.0;
+    const SignedAxis nearest = frame.nearest_axis(toward[d]);
+    if (used[nearest.axis]) return Order{};
+    used[nearest.axis] = true;
+    o.axis[d] = nearest.axis;
+    o.flip[d] = nearest.sign < 0;
   }
   return o;
 }
@@ -253,7 +255,7 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2) return stats;
   if (threads == 0) threads = default_thread_count();
-  const Order order = canonical_order(ct.grid.world);
+  const Order order = canonical_order(ct.grid);
   const View ct_view(ct.grid, order), map_view(grid, order);
   const std::int64_t step[3] = {refine[order.axis[0]], refine[order.axis[1]],
                                 refine[order.axis[2]]};
