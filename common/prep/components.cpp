@@ -84,8 +84,20 @@ double voxel_ml(const Grid& g) {
 }
 
 std::uint64_t count_nonzero(const Mask& mask) {
-  return static_cast<std::uint64_t>(mask.data.size() - static_cast<std::size_t>(std::count(
-                                                           mask.data.begin(), mask.data.end(), 0)));
+  // Byte counters per lane, emptied before they can overflow: the inner loop vectorizes to
+  // byte compares and adds (std::count widens every byte to 64 bits; about 8x slower).
+  constexpr std::size_t kLanes = 64, kBlock = kLanes * 255;
+  const std::uint8_t* p = mask.data.data();
+  std::size_t left = mask.data.size();
+  std::uint64_t total = 0;
+  for (; left >= kBlock; p += kBlock, left -= kBlock) {
+    std::uint8_t lanes[kLanes] = {};
+    for (std::size_t i = 0; i < kBlock; i += kLanes)
+      for (std::size_t l = 0; l < kLanes; ++l) lanes[l] += p[i + l] != 0 ? 1 : 0;
+    for (const std::uint8_t n : lanes) total += n;
+  }
+  for (std::size_t i = 0; i < left; ++i) total += p[i] != 0 ? 1 : 0;
+  return total;
 }
 
 }  // namespace palp::segmentation

@@ -19,6 +19,7 @@
 #include "base/parallel.hpp"
 #include "base/patient_frame.hpp"
 #include "prep/map_refine.hpp"
+#include "prep/map_rounding.hpp"
 
 namespace palp {
 namespace {
@@ -262,7 +263,6 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
   const Trilinear hu(ct, ct_view, iso_hu);
   const Index3 n = grid.dims;
   const float clamp = static_cast<float>(clamp_mm);
-  constexpr float kSteps = 1024.0f;
   using Update = std::pair<std::size_t, float>;
   std::vector<std::vector<Update>> updates(static_cast<std::size_t>(n[2]));
   std::vector<std::size_t> visited(static_cast<std::size_t>(n[2]), 0);
@@ -307,8 +307,7 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
               if (!(dist >= 0.0)) continue;
               if (!cell_cut_by_mask(mask, ct_view, hu.at(x).cell)) continue;
               if (std::abs(dist - std::abs(d)) > max_change_mm) continue;
-              const float rounded =
-                  std::min(clamp, std::nearbyint(static_cast<float>(dist) * kSteps) / kSteps);
+              const float rounded = std::min(clamp, round_to_map_step(static_cast<float>(dist)));
               out.emplace_back(v, inside ? rounded : -rounded);
             }
           visited[static_cast<std::size_t>(k)] = seen;

@@ -29,6 +29,7 @@
 #include "base/patient_frame.hpp"
 #include "io/ct_io.hpp"
 #include "prep/background_writes.hpp"
+#include "prep/components.hpp"
 #include "prep/ct_check.hpp"
 #include "prep/iso_projection.hpp"
 #include "prep/map_refine.hpp"
@@ -91,8 +92,24 @@ void value_range(const DistanceMap& map, float range[2], unsigned threads) {
   parallel_for_chunks(
       n, kGrain,
       [&](std::int64_t begin, std::int64_t end) {
-        const auto [lo, hi] = std::minmax_element(map.data.begin() + begin, map.data.begin() + end);
-        parts[static_cast<std::size_t>(begin / kGrain)] = {*lo, *hi};
+        // Independent minima and maxima per lane, so the loop vectorizes (minmax_element does not).
+        constexpr std::int64_t kLanes = 16;
+        const float* v = map.data.data();
+        float lo[kLanes], hi[kLanes];
+        std::fill_n(lo, kLanes, v[begin]);
+        std::fill_n(hi, kLanes, v[begin]);
+        std::int64_t i = begin;
+        for (; i + kLanes <= end; i += kLanes)
+          for (std::int64_t l = 0; l < kLanes; ++l) {
+            lo[l] = v[i + l] < lo[l] ? v[i + l] : lo[l];
+            hi[l] = hi[l] < v[i + l] ? v[i + l] : hi[l];
+          }
+        for (; i < end; ++i) {
+          lo[0] = std::min(lo[0], v[i]);
+          hi[0] = std::max(hi[0], v[i]);
+        }
+        parts[static_cast<std::size_t>(begin / kGrain)] = {*std::min_element(lo, lo + kLanes),
+                                                           *std::max_element(hi, hi + kLanes)};
       },
       threads);
   range[0] = range[1] = 0.0f;
@@ -105,10 +122,7 @@ void value_range(const DistanceMap& map, float range[2], unsigned threads) {
   }
 }
 
-std::uint64_t count_nonzero(const Mask& mask) {
-  return static_cast<std::uint64_t>(
-      std::count_if(mask.data.begin(), mask.data.end(), [](std::uint8_t v) { return v != 0; }));
-}
+using segmentation::count_nonzero;
 
 }  // namespace
 

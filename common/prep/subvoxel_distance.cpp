@@ -14,6 +14,7 @@
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
+#include "prep/map_rounding.hpp"
 
 namespace palp {
 namespace {
@@ -75,7 +76,7 @@ struct Parabolas {
       const double bound = bounds[segment + 1];
       const std::int64_t end = bound >= static_cast<double>(n - 1) ? n
                                : bound < 0.0                       ? 0
-                                             : static_cast<std::int64_t>(std::floor(bound)) + 1;
+                                             : static_cast<std::int64_t>(bound) + 1;  // floor
       const double height = site_f[segment];
       const std::int64_t q = sites[segment];
       for (; x < end; ++x) {
@@ -88,27 +89,33 @@ struct Parabolas {
 
 // 1D pass along a line: on entry f[q] holds the fraction t of the point on the edge (q, q+1), or
 // a negative value for none; on exit the squared distance (mm^2) to the nearest point, or kNone.
-void nearest_on_line(float* f, std::int64_t n, double w, std::vector<float>& scratch) {
-  // A line without points (most of them) is kNone throughout.
-  const float* first = std::find_if(f, f + n, [](float t) { return t >= 0.0f; });
-  if (first == f + n) {
+// A voxel x sees the nearest point on an edge q < x (at q + t, below it) and the nearest on an
+// edge q >= x (above it); both are found by walking the line's points in order.
+void nearest_on_line(float* f, std::int64_t n, double w, std::vector<double>& points) {
+  points.clear();
+  for (std::int64_t q = 0; q < n; ++q)
+    if (f[q] >= 0.0f) points.push_back(static_cast<double>(q) + f[q]);
+  if (points.empty()) {  // most lines
     std::fill(f, f + n, kNone);
     return;
   }
-  scratch.assign(f, f + n);
-  double last = -std::numeric_limits<double>::infinity();  // position of the nearest point left
-  for (std::int64_t x = 0; x < n; ++x) {
-    if (x > 0 && scratch[static_cast<std::size_t>(x - 1)] >= 0.0f)
-      last = static_cast<double>(x - 1) + scratch[static_cast<std::size_t>(x - 1)];
-    const double d = (static_cast<double>(x) - last) * w;
-    f[x] = std::isfinite(d) ? static_cast<float>(d * d) : kNone;
-  }
-  double next = std::numeric_limits<double>::infinity();
-  for (std::int64_t x = n - 1; x >= 0; --x) {
-    if (scratch[static_cast<std::size_t>(x)] >= 0.0f)
-      next = static_cast<double>(x) + scratch[static_cast<std::size_t>(x)];
-    const double d = (next - static_cast<double>(x)) * w;
-    if (std::isfinite(d)) f[x] = std::min(f[x], static_cast<float>(d * d));
+  // Point p lies on edge floor(p): voxels x <= floor(p) have it above, the others below.
+  std::int64_t x = 0;
+  for (std::size_t p = 0; p <= points.size(); ++p) {
+    const bool has_above = p < points.size();
+    const std::int64_t end = has_above ? static_cast<std::int64_t>(points[p]) + 1 : n;
+    for (; x < end; ++x) {
+      float d2 = kNone;
+      if (p > 0) {
+        const double d = (static_cast<double>(x) - points[p - 1]) * w;
+        d2 = static_cast<float>(d * d);
+      }
+      if (has_above) {
+        const double d = (points[p] - static_cast<double>(x)) * w;
+        d2 = std::min(d2, static_cast<float>(d * d));
+      }
+      f[x] = d2;
+    }
   }
 }
 
@@ -286,8 +293,8 @@ void squared_point_distance(const SurfacePoints& surface, double reach2, std::ve
   };
   auto nearest = [](double w) {
     return [w](float* f, std::int64_t len) {
-      thread_local std::vector<float> scratch;
-      nearest_on_line(f, len, w, scratch);
+      thread_local std::vector<double> points;
+      nearest_on_line(f, len, w, points);
     };
   };
 
@@ -361,7 +368,6 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
   Index3 reach;
   for (int a = 0; a < 3; ++a) reach[a] = static_cast<std::int64_t>(std::ceil(band_mm / s[a])) + 1;
   const float clamp = static_cast<float>(clamp_mm);
-  constexpr float kSteps = 1024.0f;
 
   parallel_for_chunks(
       n[2], 2,
@@ -412,13 +418,15 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
             }
           }
         }
-        // Clamp, and round to 1/1024 mm: 0.0005 mm at most, far below any surface's own
-        // uncertainty, and the maps' low mantissa bits become zeros that gzip packs well.
+        // Round to 1/1024 mm (map_rounding.hpp) and clamp.
         for (std::int64_t k = k0; k < k1; ++k) {
           float* slice = &map.data[grid.linear(0, 0, k)];
           const std::size_t count = static_cast<std::size_t>(n[0] * n[1]);
-          for (std::size_t v = 0; v < count; ++v)
-            slice[v] = std::clamp(std::nearbyint(slice[v] * kSteps) / kSteps, -clamp, clamp);
+          for (std::size_t v = 0; v < count; ++v) {
+            const float rounded = round_to_map_step(slice[v]);
+            const float above = rounded < -clamp ? -clamp : rounded;  // std::clamp, by value:
+            slice[v] = clamp < above ? clamp : above;                 // a select vectorizes
+          }
         }
       },
       threads);
