@@ -13,15 +13,6 @@
 namespace palp::segmentation {
 namespace {
 
-// Per island: voxel count, first and second moments of the voxel centres (mm), border contact.
-struct Moments {
-  double n = 0.0;
-  std::array<double, 3> sum{};
-  std::array<double, 6> sum2{};  // xx, yy, zz, xy, xz, yz
-  bool border = false;
-  std::array<std::int64_t, 3> lo{INT64_MAX, INT64_MAX, INT64_MAX}, hi{-1, -1, -1};
-};
-
 // The eigenvalues of a symmetric 3x3 matrix (xx, yy, zz, xy, xz, yz), largest first (closed form).
 std::array<double, 3> eigenvalues(const std::array<double, 6>& c) {
   const double p1 = c[3] * c[3] + c[4] * c[4] + c[5] * c[5];
@@ -107,15 +98,17 @@ bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& la
 
 }  // namespace
 
-void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
-  const double max_length = params.bone_calculus_max_length_mm;
-  if (max_length <= 0.0) return;
-  const Grid& g = bone.grid;
-  const RunTable runs = extract_runs(bone, false);
-  const RunLabels labels = label_runs(g, runs);
+std::vector<IslandShape> island_shapes(const Grid& g, const RunTable& runs,
+                                       const RunLabels& labels) {
+  // Per island: voxel count, first and second moments of the voxel centres (mm).
+  struct Moments {
+    double n = 0.0;
+    std::array<double, 3> sum{};
+    std::array<double, 6> sum2{};  // xx, yy, zz, xy, xz, yz
+  };
   const std::size_t count = labels.voxels.size();
-  if (count < 2) return;
   std::vector<Moments> m(count);
+  std::vector<IslandShape> shapes(count);
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   // Serial: one pass over the runs, sums per island (a run adds its voxels in closed form along i).
   for (std::int64_t row = 0; row < ny * nz; ++row) {
@@ -124,11 +117,15 @@ void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
     const double z = static_cast<double>(k) * g.spacing[2];
     const bool border_row = j == 0 || j == ny - 1 || k == 0 || k == nz - 1;
     for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
-      Moments& s = m[static_cast<std::size_t>(labels.of_run[r])];
+      const auto c = static_cast<std::size_t>(labels.of_run[r]);
+      Moments& s = m[c];
+      IslandShape& shape = shapes[c];
       const Run run = runs.runs[r];
-      if (border_row || run.begin == 0 || run.end == nx) s.border = true;
-      s.lo = {std::min(s.lo[0], run.begin), std::min(s.lo[1], j), std::min(s.lo[2], k)};
-      s.hi = {std::max(s.hi[0], run.end - 1), std::max(s.hi[1], j), std::max(s.hi[2], k)};
+      if (border_row || run.begin == 0 || run.end == nx) shape.border = true;
+      shape.lo = {std::min(shape.lo[0], run.begin), std::min(shape.lo[1], j),
+                  std::min(shape.lo[2], k)};
+      shape.hi = {std::max(shape.hi[0], run.end - 1), std::max(shape.hi[1], j),
+                  std::max(shape.hi[2], k)};
       const double len = static_cast<double>(run.end - run.begin);
       const double a = static_cast<double>(run.begin), b = static_cast<double>(run.end - 1);
       const double sx = (a + b) * len / 2.0 * g.spacing[0];
@@ -141,27 +138,42 @@ void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
       s.sum2[3] += sx * y, s.sum2[4] += sx * z, s.sum2[5] += y * z * len;
     }
   }
+  // The spread of the voxels' centres plus each voxel's own (a box of side h: h^2 / 12), so that
+  // an island one slice thick is as thick as its slice, and a cube of side L is L long.
+  const auto own = [&](int axis) { return g.spacing[axis] * g.spacing[axis] / 12.0; };
+  for (std::size_t c = 0; c < count; ++c) {
+    const Moments& s = m[c];
+    if (s.n <= 0.0) continue;
+    const double mx = s.sum[0] / s.n, my = s.sum[1] / s.n, mz = s.sum[2] / s.n;
+    const std::array<double, 6> cov{
+        s.sum2[0] / s.n - mx * mx + own(0), s.sum2[1] / s.n - my * my + own(1),
+        s.sum2[2] / s.n - mz * mz + own(2), s.sum2[3] / s.n - mx * my,
+        s.sum2[4] / s.n - mx * mz,          s.sum2[5] / s.n - my * mz};
+    const std::array<double, 3> e = eigenvalues(cov);
+    for (int a = 0; a < 3; ++a) shapes[c].sd[a] = std::sqrt(std::max(e[a], 0.0));
+  }
+  return shapes;
+}
+
+void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
+  const double max_length = params.bone_calculus_max_length_mm;
+  if (max_length <= 0.0) return;
+  const Grid& g = bone.grid;
+  const RunTable runs = extract_runs(bone, false);
+  const RunLabels labels = label_runs(g, runs);
+  const std::size_t count = labels.voxels.size();
+  if (count < 2) return;
+  const std::vector<IslandShape> shapes = island_shapes(g, runs, labels);
   const auto largest = static_cast<std::int64_t>(
       std::max_element(labels.voxels.begin(), labels.voxels.end()) - labels.voxels.begin());
   std::vector<std::uint8_t> keep(count, 1);
   // A gap of up to kBoneJointGapMm of non-bone between two voxels: centres that far plus a voxel.
   const double reach = kBoneJointGapMm + g.max_spacing();
   for (std::size_t c = 0; c < count; ++c) {
-    const Moments& s = m[c];
+    const IslandShape& s = shapes[c];
     if (static_cast<std::int64_t>(c) == largest || s.border) continue;
-    const double mx = s.sum[0] / s.n, my = s.sum[1] / s.n, mz = s.sum[2] / s.n;
-    // The spread of the voxels' centres plus each voxel's own (a box of side h: h^2 / 12), so that
-    // an island one slice thick is as thick as its slice, and a cube of side L is L long.
-    const auto own = [&](int axis) { return g.spacing[axis] * g.spacing[axis] / 12.0; };
-    const std::array<double, 6> cov{
-        s.sum2[0] / s.n - mx * mx + own(0), s.sum2[1] / s.n - my * my + own(1),
-        s.sum2[2] / s.n - mz * mz + own(2), s.sum2[3] / s.n - mx * my,
-        s.sum2[4] / s.n - mx * mz,          s.sum2[5] / s.n - my * mz};
-    const std::array<double, 3> e = eigenvalues(cov);
-    const double long_sd = std::sqrt(std::max(e[0], 0.0));
-    const double thin_sd = std::sqrt(std::max(e[2], 0.0));
-    const double length = 2.0 * std::sqrt(3.0) * long_sd;
-    const bool compact = long_sd < kBoneIslandElongation * thin_sd;
+    const double length = 2.0 * std::sqrt(3.0) * s.sd[0];
+    const bool compact = s.sd[0] < kBoneIslandElongation * s.sd[2];
     if (length >= max_length || !compact) continue;
     if (near_other_bone(bone, runs, labels, static_cast<std::int64_t>(c), s.lo, s.hi, reach))
       continue;

@@ -1,9 +1,27 @@
 // Compact detached islands: calculi and calcifications, not bone (bone_islands.cpp).
 #pragma once
 
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "prep/components.hpp"
 #include "prep/segmentation.hpp"
 
 namespace palp::segmentation {
+
+// The shape of each component of a run table: its principal spreads and whether it reaches the
+// scan's border.
+struct IslandShape {
+  // Standard deviations (mm) of the voxel centres along the principal axes, largest first, each
+  // voxel counted as a box (its own spacing^2 / 12 added per axis): a rod L mm long has
+  // sd[0] = L / sqrt(12).
+  std::array<double, 3> sd{};
+  bool border = false;  // a voxel on the scan's first or last index along some axis
+  std::array<std::int64_t, 3> lo{INT64_MAX, INT64_MAX, INT64_MAX}, hi{-1, -1, -1};  // bounding box
+};
+std::vector<IslandShape> island_shapes(const Grid& g, const RunTable& runs,
+                                       const RunLabels& labels);
 
 // Removes from `bone` (0/1) every island (6-connected) other than the largest that does not reach
 // the scan's border, is shorter than params.bone_calculus_max_length_mm along its principal axis
