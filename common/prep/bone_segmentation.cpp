@@ -17,6 +17,7 @@
 #include "prep/bone_islands.hpp"
 #include "prep/bone_lumens.hpp"
 #include "prep/bone_marrow.hpp"
+#include "prep/bone_ribs.hpp"
 #include "prep/components.hpp"
 #include "prep/segmentation_shared.hpp"
 
@@ -70,18 +71,29 @@ void clear_skin(const Mask& body, double clearance_mm, Mask& bone) {
   });
 }
 
-// Region growing: the candidate regions (6-connected) that hold a seed, values kept.
-void keep_seeded_regions(Mask& bone) {
+// Region growing: the candidate regions (6-connected) that hold a seed, values kept, and those
+// that `also(runs, labels, seeded)` marks (per component), made seeds throughout.
+template <class Also>
+void keep_seeded_regions(Mask& bone, Also also) {
   const Grid& g = bone.grid;
   const RunTable runs = extract_runs(bone, false);
   const RunLabels labels = label_runs(g, runs);
   const auto seeded =
       components_with(g, runs, labels, [&](std::size_t n) { return bone.data[n] == 2; });
+  const std::vector<std::uint8_t> kept = also(runs, labels, seeded);
   for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
-    if (seeded[labels.of_run[r]]) return;
+    const std::int64_t c = labels.of_run[r];
+    if (seeded[c]) return;
     std::fill_n(bone.data.begin() + static_cast<std::ptrdiff_t>(first),
-                runs.runs[r].end - runs.runs[r].begin, std::uint8_t{0});
+                runs.runs[r].end - runs.runs[r].begin, static_cast<std::uint8_t>(kept[c] ? 2 : 0));
   });
+}
+
+void keep_seeded_regions(Mask& bone) {
+  keep_seeded_regions(
+      bone, [](const RunTable&, const RunLabels&, const std::vector<std::uint8_t>& seeded) {
+        return std::vector<std::uint8_t>(seeded.size(), 0);
+      });
 }
 
 // Leak removal: the grown voxels below the seed level that are not next to a seed form pieces;
@@ -274,7 +286,11 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   const PatientAxes axes = patient_axes(ct.grid);
   Mask bone = bone_candidates(ct, body, params);          // seeds and growable voxels
   clear_skin(body, params.bone_skin_clearance_mm, bone);  // none on the skin (kernel overshoot)
-  keep_seeded_regions(bone);                              // region growing from the seeds
+  // Region growing from the seeds; ribs blurred under the seed level kept without one.
+  keep_seeded_regions(bone, [&](const RunTable& runs, const RunLabels& labels,
+                                const std::vector<std::uint8_t>& seeded) {
+    return unseeded_ribs(ct, body, axes, runs, labels, seeded, params);
+  });
   if (remove_lumens(ct, params, bone) > 0) keep_seeded_regions(bone);  // seed-bright lumens
   remove_leaks(params.bone_leak_contact_fraction, bone);               // vessels resting on bone
   for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });

@@ -111,6 +111,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
           {"min_bone_island_ml", s.min_bone_island_ml},
           {"bone_calculus_max_length_mm", s.bone_calculus_max_length_mm},
+          {"bone_rib_depth_mm", s.bone_rib_depth_mm},
           {"bone_skin_clearance_mm", s.bone_skin_clearance_mm},
           {"distance_band_mm", params.distance.band_mm},
           {"surface", surface_method_name(params.surface.method)},

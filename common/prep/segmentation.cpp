@@ -30,7 +30,8 @@ void check_params(const SegmentationParams& p) {
                            p.bone_skin_clearance_mm,
                            p.bone_lumen_cortex_margin_hu,
                            p.bone_lumen_max_contact,
-                           p.bone_lumen_radius_mm};
+                           p.bone_lumen_radius_mm,
+                           p.bone_rib_depth_mm};
   for (double v : values)
     if (!std::isfinite(v)) throw UsageError("segmentation: parameters must be finite numbers");
   if (p.min_body_part_ml < 0 || p.body_core_radius_mm < 0 || p.max_table_thickness_mm < 0 ||
@@ -49,6 +50,8 @@ void check_params(const SegmentationParams& p) {
     throw UsageError("segmentation: bone_plate_radius_mm must lie in [0, 100]");
   if (p.bone_calculus_max_length_mm < 0 || p.bone_calculus_max_length_mm > 200)
     throw UsageError("segmentation: bone_calculus_max_length_mm must lie in [0, 200]");
+  if (p.bone_rib_depth_mm < 0 || p.bone_rib_depth_mm > 200)
+    throw UsageError("segmentation: bone_rib_depth_mm must lie in [0, 200]");
   if (p.bone_skin_clearance_mm < 0 || p.bone_skin_clearance_mm > 20)
     throw UsageError("segmentation: bone_skin_clearance_mm must lie in [0, 20]");
   if (p.bone_lumen_cortex_margin_hu < 0 || p.bone_lumen_max_contact < 0 ||

@@ -7,13 +7,14 @@
 // mattress, cables lying on them), also where a pad touches the back; keep the 3D parts that are
 // large and have a core deeper than body_core_radius_mm (torso, arms); fill internal air slice by
 // slice (lungs and bowel gas that reach the first or last slice stay inside).
-// Bone: seeds at high HU grown into lower-HU bone inside the body; medium-HU regions that touch
-// bone only across a narrow contact (contrast-filled vessels, enhancing organs) are dropped with
-// that contact, and so are thick lumens of seed-level contrast below cortical HU that rest on the
-// cortex along a strip; marrow filled where two of the three orthogonal slice planes find it
-// enclosed, where bone brackets it along most lines through it, and in small cavities enclosed in
-// 3D; the edge trimmed to a partial-volume level; notches narrower than a voxel filled; small
-// islands and compact detached ones (calculi) removed.
+// Bone: seeds at high HU grown into lower-HU bone inside the body, and superficial rods of rib
+// width that reach only the growing level (ribs a soft kernel or thick slices blurred); medium-HU
+// regions that touch bone only across a narrow contact (contrast-filled vessels, enhancing organs)
+// are dropped with that contact, and so are thick lumens of seed-level contrast below cortical HU
+// that rest on the cortex along a strip; marrow filled where two of the three orthogonal slice
+// planes find it enclosed, where bone brackets it along most lines through it, and in small
+// cavities enclosed in 3D; the edge trimmed to a partial-volume level; notches narrower than a
+// voxel filled; small islands and compact detached ones (calculi) removed.
 #pragma once
 
 #include <cstdint>
@@ -99,6 +100,13 @@ struct SegmentationParams {
   // skin reads 200-450 HU there: without this a shell of "bone" forms under the skin (the shared
   // CT with its edges sharpened: docs/prep.md). The scan's own border is not outside. 0: off.
   double bone_skin_clearance_mm = 2.0;
+  // Ribs without a seed: a softer kernel or thicker slices lower a thin rib's peak under the seed
+  // level. A region of growable voxels that holds no seed is bone when it is a rod of rib width,
+  // lies beside no gas (common/prep/bone_ribs.hpp) and each of its voxels lies within this
+  // distance of the body's outside in its slice plane, where ribs and costal cartilage lie and
+  // contrast vessels or fluid-filled tubes of the same HU do not. 25 mm lost ribs of the shared CT
+  // with its kernel softened, 40-60 mm took a sharpened kernel's overshoot (docs/prep.md). 0: off.
+  double bone_rib_depth_mm = 30.0;
 };
 
 struct SegmentationStats {

@@ -6,8 +6,9 @@
 // Usage: bone_mask_timing [runs=5] [nx ny nz sx sy sz] [step]   (default 384 384 160 0.8 0.8 1.5)
 // step: the step the second variant leaves out, "enclosure" (default), "notches" (the notch
 // fill after the edge trim), "calculi" (compact detached islands removed), "lumens" (thick
-// contrast lumens resting on the cortex removed) or "skin" (the skin clearance); it also prints how
-// many voxels only the full mask holds and how many of them the phantom's truth calls bone.
+// contrast lumens resting on the cortex removed), "ribs" (ribs without a seed kept) or "skin" (the
+// skin clearance); it also prints how many voxels only the full mask holds and how many of them
+// the phantom's truth calls bone.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -45,13 +46,16 @@ int main(int argc, char** argv) {
     without.bone_calculus_max_length_mm = 0.0;
   } else if (step == "lumens") {
     without.bone_lumen_radius_mm = 0.0;
+  } else if (step == "ribs") {
+    without.bone_rib_depth_mm = 0.0;
   } else if (step == "skin") {
     without.bone_skin_clearance_mm = 0.0;
   } else if (step == "enclosure") {
     without.bone_enclosure_directions = 0;
   } else {
-    std::fprintf(stderr,
-                 "bone_mask_timing: step must be enclosure, notches, calculi, lumens or skin\n");
+    std::fprintf(
+        stderr,
+        "bone_mask_timing: step must be enclosure, notches, calculi, lumens, ribs or skin\n");
     return 2;
   }
   std::vector<double> t_with, t_without, cpu_with, cpu_without;

@@ -316,13 +316,12 @@ TEST_F(BoneRobustness, ContrastInTheOrgans) {
   }
 }
 
-// Another reconstruction kernel: softer (the CT smoothed, thin ribs' peaks lowered) or sharper
-// (edges overshoot: a dark rim beside the bone, a brighter cortex).
 // Another reconstruction kernel: softer (the CT smoothed: thin ribs' peaks lowered) or sharper
 // (an unsharp mask: edges overshoot, a dark rim beside the bone, a bright one on the skin). Half a
-// step either way and a full sharpening hold; a full smoothing (ribs' peaks under the seed level)
-// and a doubled sharpening are the method's limits here (docs/prep.md): their bounds only keep
-// them from getting worse unnoticed.
+// step either way and a full sharpening hold. A full smoothing puts the thin ribs' peaks under the
+// seed level: the ribs without a seed (bone_ribs.hpp) bring back those still at the growing level
+// (rib recall 0.503 and 4.02 mm without them, 0.699 and 2.18 mm with). A doubled sharpening is the
+// method's limit here (docs/prep.md): its bound only keeps it from getting worse unnoticed.
 TEST_F(BoneRobustness, ReconstructionKernels) {
   const auto name = [](double gain) {
     char text[96];
@@ -337,10 +336,13 @@ TEST_F(BoneRobustness, ReconstructionKernels) {
     EXPECT_GE(r.score.rib_recall, baseline_->score.rib_recall - 0.09) << gain;
     EXPECT_LE(r.score.assd_mm, 2.5) << gain;
   }
-  for (const double gain : {-1.0, 2.0}) {
-    const Result r = run(name(gain), sharpened(*shared_, gain));
-    EXPECT_GE(r.score.dice, 0.78) << gain;
-  }
+  const Result soft = run(name(-1.0), sharpened(*shared_, -1.0));
+  EXPECT_GE(soft.score.dice, 0.78);
+  EXPECT_GE(soft.score.precision, 0.82);
+  EXPECT_GE(soft.score.rib_recall, 0.65);
+  EXPECT_LE(soft.score.assd_mm, 2.6);
+  const Result sharp = run(name(2.0), sharpened(*shared_, 2.0));
+  EXPECT_GE(sharp.score.dice, 0.78);
 }
 
 TEST_F(BoneRobustness, ThickerSlices) {
