@@ -1,6 +1,10 @@
 // Compact detached islands: calculi and calcifications, not bone (bone_islands.cpp).
 #pragma once
 
+#include <array>
+#include <cstdint>
+
+#include "prep/components.hpp"
 #include "prep/segmentation.hpp"
 
 namespace palp::segmentation {
@@ -22,6 +26,12 @@ namespace palp::segmentation {
 // from its neighbour across a joint space or growth plate (a coccygeal segment, a carpal bone, an
 // ossification centre, an arch across its facet joints) lies within a few mm of it and stays too.
 void remove_compact_islands(const SegmentationParams& params, Mask& bone);
+
+// Whether bone other than island `c` (of `labels` over `runs`, the runs of `bone`; its box
+// [lo, hi]) has a voxel centre within `reach_mm` of one of the island's.
+bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& labels,
+                     std::int64_t c, const std::array<std::int64_t, 3>& lo,
+                     const std::array<std::int64_t, 3>& hi, double reach_mm);
 
 // A rib or cartilage segment is at least this many times as long as thick, a plate this many
 // times as wide as thick (standard deviations along the largest and smallest principal axes); a
