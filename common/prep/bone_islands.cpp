@@ -36,9 +36,10 @@ std::array<double, 3> eigenvalues(const std::array<double, 6>& c) {
   return {e1, 3.0 * q - e1 - e3, e3};
 }
 
-// Whether bone other than island `c` has a voxel centre within `reach_mm` of one of the island's:
-// in a box around the island, the squared distance to the island, one axis after the other
-// (min over offsets within the reach of value + offset^2: exact for distances up to the reach),
+}  // namespace
+
+// In a box around the island, the squared distance to the island, one axis after the other (min
+// over offsets within the reach of value + offset^2: exact for distances up to the reach),
 // compared with the bone there.
 bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& labels,
                      std::int64_t c, const std::array<std::int64_t, 3>& lo,
@@ -95,8 +96,6 @@ bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& la
       }
   return false;
 }
-
-}  // namespace
 
 std::vector<IslandShape> island_shapes(const Grid& g, const RunTable& runs,
                                        const RunLabels& labels) {

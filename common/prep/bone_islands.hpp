@@ -41,6 +41,12 @@ std::vector<IslandShape> island_shapes(const Grid& g, const RunTable& runs,
 // ossification centre, an arch across its facet joints) lies within a few mm of it and stays too.
 void remove_compact_islands(const SegmentationParams& params, Mask& bone);
 
+// Whether bone other than island `c` (of `labels` over `runs`, the runs of `bone`; its box
+// [lo, hi]) has a voxel centre within `reach_mm` of one of the island's.
+bool near_other_bone(const Mask& bone, const RunTable& runs, const RunLabels& labels,
+                     std::int64_t c, const std::array<std::int64_t, 3>& lo,
+                     const std::array<std::int64_t, 3>& hi, double reach_mm);
+
 // A rib or cartilage segment is at least this many times as long as thick, a plate this many
 // times as wide as thick (standard deviations along the largest and smallest principal axes); a
 // stone or node is roundish or ovoid, below it.

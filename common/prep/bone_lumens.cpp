@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "prep/bone_islands.hpp"
 #include "prep/components.hpp"
 #include "prep/distance_transform.hpp"
 #include "prep/segmentation_shared.hpp"
@@ -128,6 +129,129 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   const std::uint64_t removed = count_nonzero(lumen) + count_nonzero(rim);
   for_each_nonzero(lumen, [&](std::size_t n) { bone.data[n] = 0; });
   for_each_nonzero(rim, [&](std::size_t n) { bone.data[n] = 0; });
+  return removed;
+}
+
+}  // namespace palp::segmentation
+
+namespace palp::segmentation {
+
+std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams& params,
+                                   Mask& bone) {
+  const double radius = params.bone_lumen_radius_mm;
+  if (radius <= 0.0) return 0;
+  const Grid& g = bone.grid;
+  const double cortex = params.bone_seed_hu + params.bone_lumen_cortex_margin_hu;
+  const RunTable runs = extract_runs(bone, false);
+  if (runs.runs.empty()) return 0;
+  const RunLabels labels = label_runs(g, runs);
+  const std::size_t islands = labels.voxels.size();
+  if (islands < 2) return 0;
+  const auto skeleton = static_cast<std::size_t>(
+      std::max_element(labels.voxels.begin(), labels.voxels.end()) - labels.voxels.begin());
+  // Each island's box.
+  std::vector<Index3> lo(islands, Index3{g.dims[0], g.dims[1], g.dims[2]}),
+      hi(islands, Index3{-1, -1, -1});
+  for (std::int64_t row = 0; row < g.dims[1] * g.dims[2]; ++row)
+    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
+      const auto c = static_cast<std::size_t>(labels.of_run[r]);
+      const Index3 a{runs.runs[r].begin, row % g.dims[1], row / g.dims[1]};
+      const Index3 b{runs.runs[r].end - 1, a[1], a[2]};
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[c][axis] = std::min(lo[c][axis], a[axis]);
+        hi[c][axis] = std::max(hi[c][axis], b[axis]);
+      }
+    }
+  const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
+  std::vector<std::uint8_t> lumen(islands, 0);
+  bool any = false;
+  for (std::size_t c = 0; c < islands; ++c) {
+    if (c == skeleton) continue;
+    bool wide = true;  // a core needs twice the radius along every axis
+    for (int axis = 0; axis < 3; ++axis)
+      wide = wide &&
+             static_cast<double>(hi[c][axis] - lo[c][axis] + 2) * g.spacing[axis] >= 2.0 * radius;
+    if (!wide) continue;
+    // The island alone, in its box with one voxel of outside around it.
+    Index3 first, dims;
+    for (int axis = 0; axis < 3; ++axis) {
+      first[axis] = lo[c][axis] - 1;
+      dims[axis] = hi[c][axis] - lo[c][axis] + 3;
+    }
+    Grid box;
+    box.dims = dims;
+    box.spacing = g.spacing;
+    Mask island(box, 0, "bone lumen island");
+    const auto in_box = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      return box.linear(i - first[0], j - first[1], k - first[2]);
+    };
+    for (std::int64_t k = lo[c][2]; k <= hi[c][2]; ++k)
+      for (std::int64_t j = lo[c][1]; j <= hi[c][1]; ++j) {
+        const std::int64_t row = j + g.dims[1] * k;
+        for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
+          if (static_cast<std::size_t>(labels.of_run[r]) != c) continue;
+          for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i)
+            island.data[in_box(i, j, k)] = 1;
+        }
+      }
+    const DistanceMap depth = signed_distance(island, DistanceParams{radius + 2.0 * largest, 1});
+    double core_sum = 0.0, surface_sum = 0.0;
+    std::int64_t core_count = 0, surface_count = 0;
+    // Outside the island and inside the scan: the scan's own border is no surface (a bone it
+    // cuts shows its interior there).
+    const auto outside = [&](std::int64_t m) {
+      if (island.data[m] != 0) return false;
+      const std::int64_t i = m % dims[0], j = (m / dims[0]) % dims[1], k = m / (dims[0] * dims[1]);
+      const Index3 at{first[0] + i, first[1] + j, first[2] + k};
+      for (int axis = 0; axis < 3; ++axis)
+        if (at[axis] < 0 || at[axis] >= g.dims[axis]) return false;
+      return true;
+    };
+    for (std::int64_t k = 1; k + 1 < dims[2]; ++k)
+      for (std::int64_t j = 1; j + 1 < dims[1]; ++j)
+        for (std::int64_t i = 1; i + 1 < dims[0]; ++i) {
+          const std::size_t m = box.linear(i, j, k);
+          if (!island.data[m]) continue;
+          const double hu = ct.data[g.linear(first[0] + i, first[1] + j, first[2] + k)];
+          if (depth.data[m] + 0.5 * h >= radius) {
+            core_sum += hu;
+            ++core_count;
+          }
+          if (any_face_neighbour(box, m, outside)) {
+            surface_sum += hu;
+            ++surface_count;
+          }
+        }
+    if (core_count == 0 || surface_count == 0) continue;
+    const double core_hu = core_sum / static_cast<double>(core_count);
+    lumen[c] = core_hu < cortex && core_hu >= surface_sum / static_cast<double>(surface_count);
+    any = any || lumen[c];
+  }
+  if (!any) return 0;
+  // A bone the scan shows apart from the skeleton across a joint space (a femoral head, a
+  // vertebra across its facet joints) lies within the joint gap of it (bone_islands.hpp): a
+  // candidate that near the skeleton stays. (Not near any other island: loops of bowel lie beside
+  // each other and beside pieces of themselves too thin to hold a core.)
+  Mask skeleton_only(g, 0, "bone lumen islands' skeleton");
+  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t start) {
+    if (static_cast<std::size_t>(labels.of_run[r]) != skeleton) return;
+    std::fill_n(skeleton_only.data.begin() + static_cast<std::ptrdiff_t>(start),
+                runs.runs[r].end - runs.runs[r].begin, std::uint8_t{1});
+  });
+  const double reach = kBoneJointGapMm + g.max_spacing();
+  for (std::size_t c = 0; c < islands; ++c)
+    if (lumen[c] && near_other_bone(skeleton_only, runs, labels, static_cast<std::int64_t>(c),
+                                    lo[c], hi[c], reach))
+      lumen[c] = 0;
+  std::uint64_t removed = 0;
+  for (std::size_t c = 0; c < islands; ++c)
+    if (lumen[c]) removed += static_cast<std::uint64_t>(labels.voxels[c]);
+  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t start) {
+    if (!lumen[static_cast<std::size_t>(labels.of_run[r])]) return;
+    std::fill_n(bone.data.begin() + static_cast<std::ptrdiff_t>(start),
+                runs.runs[r].end - runs.runs[r].begin, std::uint8_t{0});
+  });
   return removed;
 }
 

@@ -31,3 +31,26 @@ namespace palp::segmentation {
 std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone);
 
 }  // namespace palp::segmentation
+
+namespace palp::segmentation {
+
+// Removes from `bone` (0/1) every island (6-connected; not the largest, the skeleton) that is a
+// filled lumen: it holds a core (voxels at least params.bone_lumen_radius_mm from every voxel
+// outside it, as above) whose mean HU is below the cortex level (as above) and at least that of
+// its surface voxels (those with a face neighbour outside it; the scan's border is not outside).
+// Returns how many voxels went. Nothing with bone_lumen_radius_mm 0.
+//
+// Why: a lumen filled with contrast apart from the skeleton — bowel with positive oral contrast,
+// the aorta of an arterial phase away from the spine, a bladder or renal pelvis of an excretory
+// phase — holds seeds and grows into an island that remove_lumens does not see (it touches no
+// cortex). Bone is brightest at its surface (the cortex) and darker inside (cancellous bone,
+// marrow), so a bone thick enough to hold a core — a femoral or humeral head apart from its
+// socket, a vertebra the scan separates — has its core below its surface; a filled lumen is
+// uniform, and partial volume with its wall only lowers its surface. Ribs, costal cartilage and
+// the sternum are thinner than twice the radius and hold no core, so they are never looked at. A
+// core of cortical HU is bone whatever its surface (dense bone, or contrast this cannot tell from
+// it: a bladder of excreted contrast above the cortex level stays).
+std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams& params,
+                                   Mask& bone);
+
+}  // namespace palp::segmentation

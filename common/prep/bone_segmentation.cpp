@@ -294,6 +294,7 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   if (remove_lumens(ct, params, bone) > 0) keep_seeded_regions(bone);  // seed-bright lumens
   remove_leaks(params.bone_leak_contact_fraction, bone);               // vessels resting on bone
   for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });
+  remove_lumen_islands(ct, params, bone);                   // filled lumens apart from bone
   fill_marrow_by_votes(axes, params, bone);                 // marrow: enclosed in 2 of 3 planes
   fill_between_cortices(axes, params, body, bone);          // marrow: bracketed along most lines
   fill_enclosed_cavities(params.bone_max_cavity_ml, bone);  // marrow enclosed in 3D

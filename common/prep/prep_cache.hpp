@@ -24,10 +24,11 @@ namespace palp {
 // no bone within the skin clearance of the outside (bone_skin_clearance_mm); 16: the table also
 // looked for in front of the patient (prone); 17: d_surf's skin projection in a canonical storage
 // order (iso_projection.cpp: CTs stored other than LPS change); 18: thick contrast-filled lumens
-// resting on the cortex removed (bone_lumens.cpp); 19: (another branch: the sacrum's marrow); 20:
-// superficial rods of rib width that reach only the growing level kept as ribs (bone_ribs.cpp,
-// bone_rib_depth_mm)
-inline constexpr int kPrepAlgorithmVersion = 20;
+// resting on the cortex removed (bone_lumens.cpp); 21: filled lumens apart from the skeleton
+// removed (remove_lumen_islands: positive oral contrast, an arterial aorta away from the spine);
+// 22: superficial rods of rib width that reach only the growing level kept as ribs (bone_ribs.cpp,
+// bone_rib_depth_mm; 20 on its branch, before 21 was merged)
+inline constexpr int kPrepAlgorithmVersion = 22;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

@@ -3,9 +3,9 @@
 (docs/prep.md, "The shared CT changed as other protocols change it"): Dice, precision and rib
 recall per case as bars, the unchanged CT's values as lines, the surface distance written beside.
 
-Reads the Markdown rows build/tests/bone_robustness_test prints on stdin (with PALP_BONE_LIMITS=1
-the known limits too) and writes an SVG (no plotting library: the VM has none). Usage:
-    PALP_BONE_LIMITS=1 build/tests/bone_robustness_test | \
+Reads the Markdown rows build/tests/bone_robustness_test prints on stdin (the oral-contrast rows
+included) and writes an SVG (no plotting library: the VM has none). Usage:
+    build/tests/bone_robustness_test | \
         tests/bench/bone_robustness_chart.py docs/bench/bone_robustness.svg
 """
 import html

@@ -3,7 +3,9 @@
 // block at 1 mm and at 3 mm voxels, and the torso phantom's aorta raised to that brightness on
 // its default grid and on a coarse one, is not bone while the bone stays whole; a dim rib, a bone
 // with a dim cortex around marrow and a thick bone of seed-level HU enclosed by cortex stay.
-// With the rule off (bone_lumen_radius_mm 0, the pipeline before it) each vessel is bone.
+// With the rule off (bone_lumen_radius_mm 0, the pipeline before it) each vessel is bone. A
+// filled lumen apart from the skeleton (remove_lumen_islands) goes whole; a thick bone island
+// with its cortex stays.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -108,6 +110,35 @@ TEST(BoneLumens, ADimRibADimCortexAroundMarrowAndDenseEnclosedBoneStay) {
   EXPECT_EQ(count_in(bone, {8, 8, 4}, {20, 20, 20}), 12 * 12 * 16);
   EXPECT_EQ(count_in(bone, {28, 28, 4}, {40, 40, 20}), 12 * 12 * 16);
   EXPECT_EQ(count_all(bone), count_all(bone_of(ct, rule_off())));
+}
+
+TEST(BoneLumens, AFilledLumenApartFromTheSkeletonIsNotBoneAThickBoneIslandStays) {
+  // 3 mm voxels: the skeleton (a bright block, the largest island); apart from it a filled lumen
+  // 30 x 30 x 36 mm (bowel with oral contrast, 350 or 600 HU, below the cortex level of 700 HU,
+  // inside a 250 HU partial-volume rim), a bone island as thick (an 800 HU cortex around 250 HU
+  // cancellous bone: a femoral head apart from its socket), a thin uniform rib, and a thick
+  // uniform bone 6 mm from the skeleton (across a joint space). Only the lumen goes.
+  for (const std::int16_t fill : {350, 600}) {
+    CtVolume ct = tissue({48, 48, 24}, 3.0, 2);
+    box(ct, {4, 4, 2}, {16, 44, 22}, 800);    // the skeleton
+    box(ct, {22, 4, 4}, {32, 14, 16}, 250);   // the lumen's rim...
+    box(ct, {23, 5, 5}, {31, 13, 15}, fill);  // ...and its content
+    box(ct, {22, 22, 4}, {34, 34, 16}, 800);  // a cortex...
+    box(ct, {23, 23, 5}, {33, 33, 15}, 250);  // ...around cancellous bone
+    box(ct, {38, 6, 10}, {40, 42, 12}, 450);  // a rib: 108 mm long, 6 x 6 mm
+    box(ct, {18, 35, 4}, {28, 43, 16}, 400);  // a bone across a joint space from the skeleton
+    const Mask before = bone_of(ct, rule_off());
+    const std::int64_t lumen_before = count_in(before, {22, 4, 4}, {32, 14, 16});
+    EXPECT_GT(lumen_before, 500) << fill << " HU: no test";
+    const Mask bone = bone_of(ct);
+    EXPECT_EQ(count_in(bone, {22, 4, 4}, {32, 14, 16}), 0) << fill << " HU";
+    EXPECT_EQ(count_in(bone, {4, 4, 2}, {16, 44, 22}), 12 * 40 * 20) << fill << " HU";
+    EXPECT_EQ(count_in(bone, {22, 22, 4}, {34, 34, 16}), 12 * 12 * 12) << fill << " HU";
+    EXPECT_EQ(count_in(bone, {38, 6, 10}, {40, 42, 12}), 2 * 36 * 2) << fill << " HU";
+    EXPECT_EQ(count_in(bone, {18, 35, 4}, {28, 43, 16}), 10 * 8 * 12) << fill << " HU";
+    // Nothing else changes (the marrow rules bridge the 3-6 mm gaps either way).
+    EXPECT_EQ(count_all(bone), count_all(before) - lumen_before) << fill << " HU";
+  }
 }
 
 TEST(BoneLumens, ParametersAreChecked) {
