@@ -223,6 +223,19 @@ void fill_notches(const Mask& body, int faces, Mask& bone) {
     const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
     return bone_faces(i, jk % ny, jk / ny, n) >= faces;
   };
+  // Each row's span of bone, [span_lo, span_hi) (empty: span_lo >= span_hi). A voxel outside the
+  // spans of its four neighbouring rows and its own row's span grown by one has no bone face,
+  // count 0 < faces: the scan below leaves it out and finds the same notches in the same order.
+  const std::int64_t rows = ny * nz;
+  std::vector<std::int64_t> span_lo(static_cast<std::size_t>(rows)),
+      span_hi(static_cast<std::size_t>(rows));
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r) {
+      const std::uint8_t* row = bone.data.data() + r * nx;
+      span_lo[r] = next_byte(row, 0, nx, true);
+      span_hi[r] = span_lo[r] < nx ? last_nonzero_byte(row, nx) + 1 : 0;
+    }
+  });
   // The notches of the mask as it is, slice by slice (each row's face counts summed from the six
   // neighbouring rows, a loop that vectorises); then each filled voxel's neighbours again.
   std::vector<std::vector<std::size_t>> found(static_cast<std::size_t>(nz));
@@ -232,6 +245,19 @@ void fill_notches(const Mask& body, int faces, Mask& bone) {
     std::uint8_t* count = counts.data();
     for (std::int64_t k = k0; k < k1; ++k)
       for (std::int64_t j = 0; j < ny; ++j) {
+        const std::int64_t r = j + ny * k;
+        std::int64_t lo = nx, hi = 0;
+        const auto widen = [&](bool exists, std::int64_t o, std::int64_t by) {
+          if (!exists || span_lo[o] >= span_hi[o]) return;
+          lo = std::min(lo, std::max<std::int64_t>(0, span_lo[o] - by));
+          hi = std::max(hi, std::min(nx, span_hi[o] + by));
+        };
+        widen(true, r, 1);
+        widen(j > 0, r - 1, 0);
+        widen(j + 1 < ny, r + 1, 0);
+        widen(k > 0, r - ny, 0);
+        widen(k + 1 < nz, r + ny, 0);
+        if (lo >= hi) continue;
         const std::size_t first = g.linear(0, j, k);
         const std::uint8_t* row = bone.data.data() + first;
         const std::uint8_t* in_body = body.data.data() + first;
@@ -239,11 +265,11 @@ void fill_notches(const Mask& body, int faces, Mask& bone) {
         const std::uint8_t* y1 = j + 1 < ny ? row + nx : none.data();
         const std::uint8_t* z0 = k > 0 ? row - nx * ny : none.data();
         const std::uint8_t* z1 = k + 1 < nz ? row + nx * ny : none.data();
-        for (std::int64_t i = 0; i < nx; ++i)
+        for (std::int64_t i = lo; i < hi; ++i)
           count[i] = static_cast<std::uint8_t>(y0[i] + y1[i] + z0[i] + z1[i]);
-        for (std::int64_t i = 1; i < nx; ++i) count[i] += row[i - 1];
-        for (std::int64_t i = 0; i + 1 < nx; ++i) count[i] += row[i + 1];
-        for (std::int64_t i = 0; i < nx; ++i)
+        for (std::int64_t i = std::max<std::int64_t>(lo, 1); i < hi; ++i) count[i] += row[i - 1];
+        for (std::int64_t i = lo; i < std::min(hi, nx - 1); ++i) count[i] += row[i + 1];
+        for (std::int64_t i = lo; i < hi; ++i)
           if (count[i] >= faces && !row[i] && in_body[i])
             found[static_cast<std::size_t>(k)].push_back(first + static_cast<std::size_t>(i));
       }

@@ -67,6 +67,18 @@ inline std::int64_t next_byte(const std::uint8_t* row, std::int64_t i, std::int6
   return i;
 }
 
+// The last nonzero byte of row[0, n), or -1 if none; read backwards eight bytes at a time while
+// they are all zero.
+inline std::int64_t last_nonzero_byte(const std::uint8_t* row, std::int64_t n) {
+  std::uint64_t w = 0;
+  for (; n >= 8; n -= 8) {
+    std::memcpy(&w, row + n - 8, 8);
+    if (w != 0) break;
+  }
+  while (n > 0 && row[n - 1] == 0) --n;
+  return n - 1;
+}
+
 // 3D connected components (6-connected) of a mask's nonzero (or zero) voxels, as runs along i.
 
 struct RunTable {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #include "prep/components.hpp"
 
@@ -24,6 +25,24 @@ TEST(CountNonzero, CountsEveryNonzeroByteWhateverTheSize) {
     EXPECT_EQ(count_nonzero(mask), expected) << "nx " << nx;
     std::fill(mask.data.begin(), mask.data.end(), std::uint8_t{255});
     EXPECT_EQ(count_nonzero(mask), mask.data.size()) << "nx " << nx;
+  }
+}
+
+// last_nonzero_byte reads whole words from the end: every length around a word, the nonzero byte
+// at every place (and none), with zeros and nonzero bytes beyond n that must not count.
+TEST(LastNonzeroByte, FindsTheLastNonzeroByteBeforeN) {
+  for (std::int64_t n = 0; n <= 20; ++n) {
+    std::vector<std::uint8_t> row(static_cast<std::size_t>(n) + 8, 0);
+    std::fill(row.begin() + n, row.end(), std::uint8_t{1});  // beyond n
+    EXPECT_EQ(last_nonzero_byte(row.data(), n), -1) << "n " << n;
+    for (std::int64_t at = 0; at < n; ++at) {
+      row[static_cast<std::size_t>(at)] = static_cast<std::uint8_t>(at + 1);
+      EXPECT_EQ(last_nonzero_byte(row.data(), n), at) << "n " << n << " at " << at;
+      if (at > 0) row[0] = 7;  // an earlier nonzero byte changes nothing
+      EXPECT_EQ(last_nonzero_byte(row.data(), n), at) << "n " << n << " at " << at;
+      row[0] = 0;
+      row[static_cast<std::size_t>(at)] = 0;
+    }
   }
 }
 
