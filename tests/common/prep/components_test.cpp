@@ -46,5 +46,19 @@ TEST(LastNonzeroByte, FindsTheLastNonzeroByteBeforeN) {
   }
 }
 
+// transpose_bytes_8x8 against the definition, with strides wider than the block (and bytes
+// around it that must stay as they are).
+TEST(TransposeBytes8x8, MovesEveryByteToItsTransposedPlace) {
+  constexpr std::int64_t kSrc = 11, kDst = 13;
+  std::vector<std::uint8_t> src(8 * kSrc), dst(8 * kDst, 0xEE);
+  for (std::size_t n = 0; n < src.size(); ++n) src[n] = static_cast<std::uint8_t>(n * 37 + 5);
+  transpose_bytes_8x8(src.data(), kSrc, dst.data(), kDst);
+  for (std::int64_t c = 0; c < 8; ++c)  // row c of dst: column c of src, then untouched bytes
+    for (std::int64_t r = 0; r < kDst; ++r)
+      EXPECT_EQ(dst[static_cast<std::size_t>(c * kDst + r)],
+                r < 8 ? src[static_cast<std::size_t>(r * kSrc + c)] : std::uint8_t{0xEE})
+          << r << ", " << c;
+}
+
 }  // namespace
 }  // namespace palp::segmentation
