@@ -120,11 +120,10 @@ void remove_leaks(double fraction, Mask& bone) {
                 runs.runs[r].end - runs.runs[r].begin, std::uint8_t{0});
   });
   const auto dropped = [&](std::int64_t m) { return piece.data[m] && !bone.data[m]; };
-  Mask wall(g, 0, "bone leak contact");
-  for_each_nonzero(bone, [&](std::size_t n) {
-    if (bone.data[n] == 1 && !piece.data[n] && any_face_neighbour(g, n, dropped)) wall.data[n] = 1;
+  const std::vector<std::size_t> wall = nonzero_where(bone, [&](std::size_t n) {
+    return bone.data[n] == 1 && !piece.data[n] && any_face_neighbour(g, n, dropped);
   });
-  for_each_nonzero(wall, [&](std::size_t n) { bone.data[n] = 0; });
+  for (const std::size_t n : wall) bone.data[n] = 0;
 }
 
 // Cavities: regions outside the bone (6-connected) that do not reach the volume's border and hold
@@ -161,7 +160,6 @@ void fill_enclosed_cavities(double max_ml, Mask& bone) {
 void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
   if (fraction <= 0.0) return;
   const Grid& g = bone.grid;
-  Mask trim(g, 0, "bone surface");
   Mask surface(g, 0, "bone surface voxels");
   for_each_nonzero(bone, [&](std::size_t n) {
     if (any_face_neighbour(g, n, [&](std::int64_t m) { return !bone.data[m]; }))
@@ -170,8 +168,8 @@ void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
   const auto interior = [&](std::int64_t m) { return bone.data[m] && !surface.data[m]; };
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
-  for_each_nonzero(bone, [&](std::size_t n) {
-    if (!any_face_neighbour(g, n, interior)) return;  // thin: no voxel of full HU beside it
+  const std::vector<std::size_t> trim = nonzero_where(bone, [&](std::size_t n) {
+    if (!any_face_neighbour(g, n, interior)) return false;  // thin: no voxel of full HU beside it
     const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
     const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
     const std::int64_t j = jk % ny, k = jk / ny;
@@ -188,11 +186,11 @@ void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
         ++outside;
       }
     }
-    if (outside == 0 || bright < -1e8) return;
+    if (outside == 0 || bright < -1e8) return false;
     const double out_hu = outside_sum / outside;
-    if (ct.data[n] < out_hu + fraction * (bright - out_hu)) trim.data[n] = 1;
+    return ct.data[n] < out_hu + fraction * (bright - out_hu);
   });
-  for_each_nonzero(trim, [&](std::size_t n) { bone.data[n] = 0; });
+  for (const std::size_t n : trim) bone.data[n] = 0;
 }
 
 // Notches: a body voxel outside the bone with bone on at least `faces` (4 or more) of its six faces

@@ -208,4 +208,20 @@ void for_each_nonzero(const Mask& mask, Visit visit) {
   });
 }
 
+// The linear indices of the nonzero voxels of `mask` that satisfy keep(linear index), in
+// increasing order: each slice's list is filled by the one thread that visits that slice
+// (for_each_nonzero shares slices out whole), then the lists are joined. For a stage whose few
+// changes must wait until every voxel is judged, instead of a fresh grid-size mask of them.
+template <class Keep>
+std::vector<std::size_t> nonzero_where(const Mask& mask, Keep keep) {
+  const auto slice = static_cast<std::size_t>(mask.grid.dims[0] * mask.grid.dims[1]);
+  std::vector<std::vector<std::size_t>> per_slice(static_cast<std::size_t>(mask.grid.dims[2]));
+  for_each_nonzero(mask, [&](std::size_t n) {
+    if (keep(n)) per_slice[n / slice].push_back(n);
+  });
+  std::vector<std::size_t> all;
+  for (const auto& list : per_slice) all.insert(all.end(), list.begin(), list.end());
+  return all;
+}
+
 }  // namespace palp::segmentation

@@ -60,5 +60,19 @@ TEST(TransposeBytes8x8, MovesEveryByteToItsTransposedPlace) {
           << r << ", " << c;
 }
 
+// nonzero_where: the nonzero voxels the predicate keeps, every slice's, in linear order.
+TEST(NonzeroWhere, ListsTheKeptNonzeroVoxelsInOrder) {
+  Grid grid;
+  grid.dims = {19, 5, 7};
+  Mask mask(grid, 0, "test");
+  std::vector<std::size_t> expected;
+  for (std::size_t n = 0; n < mask.data.size(); ++n) {
+    mask.data[n] = static_cast<std::uint8_t>(n % 3 == 0 ? 0 : n % 7 + 1);
+    if (mask.data[n] != 0 && n % 2 == 0) expected.push_back(n);
+  }
+  EXPECT_EQ(nonzero_where(mask, [](std::size_t n) { return n % 2 == 0; }), expected);
+  EXPECT_TRUE(nonzero_where(Mask(grid, 0, "empty"), [](std::size_t) { return true; }).empty());
+}
+
 }  // namespace
 }  // namespace palp::segmentation
