@@ -52,10 +52,12 @@ void clear_skin(const Mask& body, double clearance_mm, Mask& bone) {
   const std::int64_t stride[3] = {1, g.dims[0], g.dims[0] * g.dims[1]};
   parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < g.dims[1]; ++j)
-        for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+      for (std::int64_t j = 0; j < g.dims[1]; ++j) {
+        const std::uint8_t* row = bone.data.data() + g.linear(0, j, k);
+        // The candidates of the row, found eight bytes at a time (next_byte).
+        for (std::int64_t i = next_byte(row, 0, g.dims[0], true); i < g.dims[0];
+             i = next_byte(row, i + 1, g.dims[0], true)) {
           const std::size_t n = g.linear(i, j, k);
-          if (!bone.data[n]) continue;
           const std::int64_t at[3] = {i, j, k};
           bool near_outside = false;
           for (int a = 0; a < 3 && !near_outside; ++a) {
@@ -65,9 +67,11 @@ void clear_skin(const Mask& body, double clearance_mm, Mask& bone) {
             for (std::int64_t q = lo; q <= hi && !near_outside; ++q)
               near_outside = !body.data[static_cast<std::size_t>(base + q * stride[a])];
           }
-          // Each voxel reads only the body mask: clearing one changes nothing another sees.
+          // Each voxel reads only the body mask: clearing one changes nothing another sees (nor
+          // the row's scan, which has passed it).
           if (near_outside) bone.data[n] = 0;
         }
+      }
   });
 }
 
