@@ -201,17 +201,24 @@ void enclosure_pass(const PatientAxes& axes, const std::vector<Line>& lines,
   // Within the radius along `needed` lines; or, a plate between cortices farther apart, within
   // the plate radius along as many lines and along the body axis (the spinal canal, a tube open
   // along the axis, is not bracketed along it; nor is a foramen's channel across the slices).
-  for (std::int64_t k = 0; k < box.dims[2]; ++k)
-    for (std::int64_t j = 0; j < box.dims[1]; ++j)
-      for (std::int64_t i = 0; i < box.dims[0]; ++i) {
-        const std::size_t q = box.at(i, j, k);
-        const unsigned v0 = votes[0][q], v1 = votes[1][q];
-        const bool near = static_cast<int>((v0 & 15u) + (v1 & 15u)) >= needed;
-        const unsigned f0 = v0 >> 4, f1 = v1 >> 4;  // line counts in bits 0-2, the axis in bit 3
-        const bool plate =
-            plates && static_cast<int>((f0 & 7u) + (f1 & 7u)) >= needed && ((f0 | f1) & 8u) != 0;
-        if (near || plate) bone.data[g.linear(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k)] = 1;
+  // Row by row, in parallel over the box's slices (each writes only its own rows of the bone);
+  // every byte of the row is written, 1 or its own value, so the loop vectorises.
+  parallel_for_chunks(box.dims[2], 4, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < box.dims[1]; ++j) {
+        const Votes* w0 = votes[0].data() + box.at(0, j, k);
+        const Votes* w1 = votes[1].data() + box.at(0, j, k);
+        std::uint8_t* out = bone.data.data() + g.linear(box.lo[0], box.lo[1] + j, box.lo[2] + k);
+        for (std::int64_t i = 0; i < box.dims[0]; ++i) {
+          const unsigned v0 = w0[i], v1 = w1[i];
+          const bool near = static_cast<int>((v0 & 15u) + (v1 & 15u)) >= needed;
+          const unsigned f0 = v0 >> 4, f1 = v1 >> 4;  // line counts in bits 0-2, the axis in bit 3
+          const bool plate =
+              plates && static_cast<int>((f0 & 7u) + (f1 & 7u)) >= needed && ((f0 | f1) & 8u) != 0;
+          out[i] = near || plate ? std::uint8_t{1} : out[i];
+        }
       }
+  });
 }
 
 }  // namespace

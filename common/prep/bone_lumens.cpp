@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "prep/bone_islands.hpp"
@@ -23,19 +24,20 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   const auto bright = [&](std::int64_t m) { return bone.data[m] && ct.data[m] >= cortex; };
   const auto between = [&](std::size_t n) { return ct.data[n] >= seed && ct.data[n] < cortex; };
   // Pieces: the bone's voxels of seed level below the cortex level, apart from the cortex by one
-  // voxel (the rim: the voxels of that range beside the cortex).
+  // voxel (the rim: the voxels of that range beside the cortex, i.e. the rest of that range; its
+  // own mask is made only once a candidate is found, below).
   Mask piece(g, 0, "bone lumen pieces");
-  Mask rim(g, 0, "bone lumen rim");
   for_each_nonzero(bone, [&](std::size_t n) {
-    if (!between(n)) return;
-    (any_face_neighbour(g, n, bright) ? rim : piece).data[n] = 1;
+    if (between(n) && !any_face_neighbour(g, n, bright)) piece.data[n] = 1;
   });
   const RunTable runs = extract_runs(piece, false);
   if (runs.runs.empty()) return 0;
   const RunLabels labels = label_runs(g, runs);
   const std::size_t pieces = labels.voxels.size();
   // Per piece: its surface voxels, those of them beside the rim, and its extent.
-  const auto on_rim = [&](std::int64_t m) { return rim.data[m] != 0; };
+  const auto on_rim = [&](std::int64_t m) {
+    return bone.data[m] && between(static_cast<std::size_t>(m)) && !piece.data[m];
+  };
   const auto off_piece = [&](std::int64_t m) { return !piece.data[m]; };
   const auto on_surface = [&](std::size_t n) { return any_face_neighbour(g, n, off_piece); };
   const std::vector<std::int64_t> surface = count_per_component(g, runs, labels, on_surface);
@@ -72,6 +74,10 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
     any = any || candidate[c];
   }
   if (!any) return 0;
+  Mask rim(g, 0, "bone lumen rim");
+  for_each_nonzero(bone, [&](std::size_t n) {
+    if (between(n) && !piece.data[n]) rim.data[n] = 1;
+  });
   Mask candidates(g, 0, "bone lumen candidates");
   rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return candidate[c]; }, candidates);
@@ -83,14 +89,17 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const DistanceParams band{radius + 2.0 * largest, 0};
-  const DistanceMap depth = signed_distance(candidates, band);
+  DistanceMap depth = signed_distance(candidates, band);
   Mask core(g, 0, "bone lumen cores");
   for_each_nonzero(candidates, [&](std::size_t n) {
     if (depth.data[n] + 0.5 * h >= radius) core.data[n] = 1;
   });
   if (count_nonzero(core) == 0) return 0;
   const DistanceParams wider{radius + 3.0 * largest, 0};
-  const DistanceMap reach = signed_distance(core, wider);
+  // The depth is done with: its grid-size float map takes the reach (the same values as a fresh
+  // map, signed_distance's contract; a second fresh map costs its page faults, ~0.1 s at 512).
+  DistanceMap reach = std::move(depth);
+  signed_distance(core, wider, reach);
   Mask lumen(g, 0, "bone lumens");
   for_each_nonzero(candidates, [&](std::size_t n) {
     if (0.5 * h - reach.data[n] <= radius + largest) lumen.data[n] = 1;
@@ -208,22 +217,30 @@ std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams&
         if (at[axis] < 0 || at[axis] >= g.dims[axis]) return false;
       return true;
     };
-    for (std::int64_t k = 1; k + 1 < dims[2]; ++k)
-      for (std::int64_t j = 1; j + 1 < dims[1]; ++j)
-        for (std::int64_t i = 1; i + 1 < dims[0]; ++i) {
-          const std::size_t m = box.linear(i, j, k);
-          if (!island.data[m]) continue;
-          const double hu = ct.data[g.linear(first[0] + i, first[1] + j, first[2] + k)];
-          if (depth.data[m] + 0.5 * h >= radius) {
-            core_sum += hu;
-            ++core_count;
+    // The core first: an island without one (a rib) needs no surface (the sums, each in the
+    // same voxel order as ever, are the same).
+    const auto each_voxel = [&](auto visit) {
+      for (std::int64_t k = 1; k + 1 < dims[2]; ++k)
+        for (std::int64_t j = 1; j + 1 < dims[1]; ++j)
+          for (std::int64_t i = 1; i + 1 < dims[0]; ++i) {
+            const std::size_t m = box.linear(i, j, k);
+            if (island.data[m])
+              visit(m, static_cast<double>(
+                           ct.data[g.linear(first[0] + i, first[1] + j, first[2] + k)]));
           }
-          if (any_face_neighbour(box, m, outside)) {
-            surface_sum += hu;
-            ++surface_count;
-          }
-        }
-    if (core_count == 0 || surface_count == 0) continue;
+    };
+    each_voxel([&](std::size_t m, double hu) {
+      if (depth.data[m] + 0.5 * h < radius) return;
+      core_sum += hu;
+      ++core_count;
+    });
+    if (core_count == 0) continue;
+    each_voxel([&](std::size_t m, double hu) {
+      if (!any_face_neighbour(box, m, outside)) return;
+      surface_sum += hu;
+      ++surface_count;
+    });
+    if (surface_count == 0) continue;
     const double core_hu = core_sum / static_cast<double>(core_count);
     lumen[c] = core_hu < cortex && core_hu >= surface_sum / static_cast<double>(surface_count);
     any = any || lumen[c];

@@ -52,10 +52,12 @@ void clear_skin(const Mask& body, double clearance_mm, Mask& bone) {
   const std::int64_t stride[3] = {1, g.dims[0], g.dims[0] * g.dims[1]};
   parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < g.dims[1]; ++j)
-        for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+      for (std::int64_t j = 0; j < g.dims[1]; ++j) {
+        const std::uint8_t* row = bone.data.data() + g.linear(0, j, k);
+        // The candidates of the row, found eight bytes at a time (next_byte).
+        for (std::int64_t i = next_byte(row, 0, g.dims[0], true); i < g.dims[0];
+             i = next_byte(row, i + 1, g.dims[0], true)) {
           const std::size_t n = g.linear(i, j, k);
-          if (!bone.data[n]) continue;
           const std::int64_t at[3] = {i, j, k};
           bool near_outside = false;
           for (int a = 0; a < 3 && !near_outside; ++a) {
@@ -65,9 +67,11 @@ void clear_skin(const Mask& body, double clearance_mm, Mask& bone) {
             for (std::int64_t q = lo; q <= hi && !near_outside; ++q)
               near_outside = !body.data[static_cast<std::size_t>(base + q * stride[a])];
           }
-          // Each voxel reads only the body mask: clearing one changes nothing another sees.
+          // Each voxel reads only the body mask: clearing one changes nothing another sees (nor
+          // the row's scan, which has passed it).
           if (near_outside) bone.data[n] = 0;
         }
+      }
   });
 }
 
@@ -120,11 +124,10 @@ void remove_leaks(double fraction, Mask& bone) {
                 runs.runs[r].end - runs.runs[r].begin, std::uint8_t{0});
   });
   const auto dropped = [&](std::int64_t m) { return piece.data[m] && !bone.data[m]; };
-  Mask wall(g, 0, "bone leak contact");
-  for_each_nonzero(bone, [&](std::size_t n) {
-    if (bone.data[n] == 1 && !piece.data[n] && any_face_neighbour(g, n, dropped)) wall.data[n] = 1;
+  const std::vector<std::size_t> wall = nonzero_where(bone, [&](std::size_t n) {
+    return bone.data[n] == 1 && !piece.data[n] && any_face_neighbour(g, n, dropped);
   });
-  for_each_nonzero(wall, [&](std::size_t n) { bone.data[n] = 0; });
+  for (const std::size_t n : wall) bone.data[n] = 0;
 }
 
 // Cavities: regions outside the bone (6-connected) that do not reach the volume's border and hold
@@ -161,7 +164,6 @@ void fill_enclosed_cavities(double max_ml, Mask& bone) {
 void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
   if (fraction <= 0.0) return;
   const Grid& g = bone.grid;
-  Mask trim(g, 0, "bone surface");
   Mask surface(g, 0, "bone surface voxels");
   for_each_nonzero(bone, [&](std::size_t n) {
     if (any_face_neighbour(g, n, [&](std::int64_t m) { return !bone.data[m]; }))
@@ -170,8 +172,8 @@ void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
   const auto interior = [&](std::int64_t m) { return bone.data[m] && !surface.data[m]; };
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
-  for_each_nonzero(bone, [&](std::size_t n) {
-    if (!any_face_neighbour(g, n, interior)) return;  // thin: no voxel of full HU beside it
+  const std::vector<std::size_t> trim = nonzero_where(bone, [&](std::size_t n) {
+    if (!any_face_neighbour(g, n, interior)) return false;  // thin: no voxel of full HU beside it
     const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
     const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
     const std::int64_t j = jk % ny, k = jk / ny;
@@ -188,11 +190,11 @@ void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
         ++outside;
       }
     }
-    if (outside == 0 || bright < -1e8) return;
+    if (outside == 0 || bright < -1e8) return false;
     const double out_hu = outside_sum / outside;
-    if (ct.data[n] < out_hu + fraction * (bright - out_hu)) trim.data[n] = 1;
+    return ct.data[n] < out_hu + fraction * (bright - out_hu);
   });
-  for_each_nonzero(trim, [&](std::size_t n) { bone.data[n] = 0; });
+  for (const std::size_t n : trim) bone.data[n] = 0;
 }
 
 // Notches: a body voxel outside the bone with bone on at least `faces` (4 or more) of its six faces
@@ -223,6 +225,19 @@ void fill_notches(const Mask& body, int faces, Mask& bone) {
     const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
     return bone_faces(i, jk % ny, jk / ny, n) >= faces;
   };
+  // Each row's span of bone, [span_lo, span_hi) (empty: span_lo >= span_hi). A voxel outside the
+  // spans of its four neighbouring rows and its own row's span grown by one has no bone face,
+  // count 0 < faces: the scan below leaves it out and finds the same notches in the same order.
+  const std::int64_t rows = ny * nz;
+  std::vector<std::int64_t> span_lo(static_cast<std::size_t>(rows)),
+      span_hi(static_cast<std::size_t>(rows));
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r) {
+      const std::uint8_t* row = bone.data.data() + r * nx;
+      span_lo[r] = next_byte(row, 0, nx, true);
+      span_hi[r] = span_lo[r] < nx ? last_nonzero_byte(row, nx) + 1 : 0;
+    }
+  });
   // The notches of the mask as it is, slice by slice (each row's face counts summed from the six
   // neighbouring rows, a loop that vectorises); then each filled voxel's neighbours again.
   std::vector<std::vector<std::size_t>> found(static_cast<std::size_t>(nz));
@@ -232,6 +247,19 @@ void fill_notches(const Mask& body, int faces, Mask& bone) {
     std::uint8_t* count = counts.data();
     for (std::int64_t k = k0; k < k1; ++k)
       for (std::int64_t j = 0; j < ny; ++j) {
+        const std::int64_t r = j + ny * k;
+        std::int64_t lo = nx, hi = 0;
+        const auto widen = [&](bool exists, std::int64_t o, std::int64_t by) {
+          if (!exists || span_lo[o] >= span_hi[o]) return;
+          lo = std::min(lo, std::max<std::int64_t>(0, span_lo[o] - by));
+          hi = std::max(hi, std::min(nx, span_hi[o] + by));
+        };
+        widen(true, r, 1);
+        widen(j > 0, r - 1, 0);
+        widen(j + 1 < ny, r + 1, 0);
+        widen(k > 0, r - ny, 0);
+        widen(k + 1 < nz, r + ny, 0);
+        if (lo >= hi) continue;
         const std::size_t first = g.linear(0, j, k);
         const std::uint8_t* row = bone.data.data() + first;
         const std::uint8_t* in_body = body.data.data() + first;
@@ -239,11 +267,11 @@ void fill_notches(const Mask& body, int faces, Mask& bone) {
         const std::uint8_t* y1 = j + 1 < ny ? row + nx : none.data();
         const std::uint8_t* z0 = k > 0 ? row - nx * ny : none.data();
         const std::uint8_t* z1 = k + 1 < nz ? row + nx * ny : none.data();
-        for (std::int64_t i = 0; i < nx; ++i)
+        for (std::int64_t i = lo; i < hi; ++i)
           count[i] = static_cast<std::uint8_t>(y0[i] + y1[i] + z0[i] + z1[i]);
-        for (std::int64_t i = 1; i < nx; ++i) count[i] += row[i - 1];
-        for (std::int64_t i = 0; i + 1 < nx; ++i) count[i] += row[i + 1];
-        for (std::int64_t i = 0; i < nx; ++i)
+        for (std::int64_t i = std::max<std::int64_t>(lo, 1); i < hi; ++i) count[i] += row[i - 1];
+        for (std::int64_t i = lo; i < std::min(hi, nx - 1); ++i) count[i] += row[i + 1];
+        for (std::int64_t i = lo; i < hi; ++i)
           if (count[i] >= faces && !row[i] && in_body[i])
             found[static_cast<std::size_t>(k)].push_back(first + static_cast<std::size_t>(i));
       }

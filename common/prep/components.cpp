@@ -1,15 +1,18 @@
 // Run extraction and 3D labelling of masks (see components.hpp): a union-find over runs along i.
 #include "prep/components.hpp"
 
+#include <algorithm>
+#include <vector>
+
 namespace palp::segmentation {
 namespace {
 
-// Runs of nonzero (or zero) bytes of one row; returns how many, writing them to `out` if given.
-std::int64_t scan_row(const std::uint8_t* row, std::int64_t n, bool zeros, Run* out) {
+// Appends the runs of nonzero (or zero) bytes of one row to `out`; returns how many.
+std::int64_t scan_row(const std::uint8_t* row, std::int64_t n, bool zeros, std::vector<Run>& out) {
   std::int64_t count = 0;
   for (std::int64_t i = next_byte(row, 0, n, !zeros); i < n; i = next_byte(row, i, n, !zeros)) {
     const std::int64_t end = next_byte(row, i, n, zeros);
-    if (out) out[count] = {i, end};
+    out.push_back({i, end});
     ++count;
     i = end;
   }
@@ -36,15 +39,19 @@ RunTable extract_runs(const Mask& mask, bool zeros) {
   const std::uint8_t* data = mask.data.data();
   RunTable t;
   t.row_start.assign(static_cast<std::size_t>(ny * nz + 1), 0);
+  // One scan of the mask: each slice's runs go to the slice's own list (a slice is visited by one
+  // thread), which are then joined in slice order, the table a count pass and a fill pass made.
+  std::vector<std::vector<Run>> per_slice(static_cast<std::size_t>(nz));
   parallel_for_chunks(nz, 4, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r)
-      t.row_start[r + 1] = scan_row(data + r * nx, nx, zeros, nullptr);
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t r = k * ny; r < (k + 1) * ny; ++r)
+        t.row_start[r + 1] = scan_row(data + r * nx, nx, zeros, per_slice[k]);
   });
   std::partial_sum(t.row_start.begin(), t.row_start.end(), t.row_start.begin());
   t.runs.resize(static_cast<std::size_t>(t.row_start.back()));
   parallel_for_chunks(nz, 4, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r)
-      scan_row(data + r * nx, nx, zeros, t.runs.data() + t.row_start[r]);
+    for (std::int64_t k = k0; k < k1; ++k)
+      std::copy(per_slice[k].begin(), per_slice[k].end(), t.runs.begin() + t.row_start[k * ny]);
   });
   return t;
 }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -65,6 +66,40 @@ inline std::int64_t next_byte(const std::uint8_t* row, std::int64_t i, std::int6
   }
   while (i < n && (row[i] != 0) != nonzero) ++i;
   return i;
+}
+
+// The last nonzero byte of row[0, n), or -1 if none; read backwards eight bytes at a time while
+// they are all zero.
+inline std::int64_t last_nonzero_byte(const std::uint8_t* row, std::int64_t n) {
+  std::uint64_t w = 0;
+  for (; n >= 8; n -= 8) {
+    std::memcpy(&w, row + n - 8, 8);
+    if (w != 0) break;
+  }
+  while (n > 0 && row[n - 1] == 0) --n;
+  return n - 1;
+}
+
+// Transposes an 8x8 block of bytes: dst[c * dst_stride + r] = src[r * src_stride + c] for r, c in
+// [0, 8). Each row is one 64-bit word (byte c at bit 8c: little-endian), and three rounds swap
+// the off-diagonal 1x1, 2x2 and 4x4 sub-blocks between pairs of rows one, two and four apart,
+// each swap one shift, xor and mask: about 8x fewer operations than moving byte by byte.
+inline void transpose_bytes_8x8(const std::uint8_t* src, std::int64_t src_stride, std::uint8_t* dst,
+                                std::int64_t dst_stride) {
+  static_assert(std::endian::native == std::endian::little, "byte c of a row must be bits 8c..");
+  std::uint64_t w[8];
+  for (int r = 0; r < 8; ++r) std::memcpy(&w[r], src + r * src_stride, 8);
+  const auto swap = [&](int a, int b, int bits, std::uint64_t mask) {
+    // The bytes of w[a] at the upper half of each 2*bits block trade places with those of w[b]
+    // at the lower half.
+    const std::uint64_t t = ((w[a] >> bits) ^ w[b]) & mask;
+    w[b] ^= t;
+    w[a] ^= t << bits;
+  };
+  for (int a = 0; a < 8; a += 2) swap(a, a + 1, 8, 0x00FF00FF00FF00FFull);
+  for (const int a : {0, 1, 4, 5}) swap(a, a + 2, 16, 0x0000FFFF0000FFFFull);
+  for (int a = 0; a < 4; ++a) swap(a, a + 4, 32, 0x00000000FFFFFFFFull);
+  for (int c = 0; c < 8; ++c) std::memcpy(dst + c * dst_stride, &w[c], 8);
 }
 
 // 3D connected components (6-connected) of a mask's nonzero (or zero) voxels, as runs along i.
@@ -171,6 +206,22 @@ void for_each_nonzero(const Mask& mask, Visit visit) {
         visit(static_cast<std::size_t>(r * nx + i));
     }
   });
+}
+
+// The linear indices of the nonzero voxels of `mask` that satisfy keep(linear index), in
+// increasing order: each slice's list is filled by the one thread that visits that slice
+// (for_each_nonzero shares slices out whole), then the lists are joined. For a stage whose few
+// changes must wait until every voxel is judged, instead of a fresh grid-size mask of them.
+template <class Keep>
+std::vector<std::size_t> nonzero_where(const Mask& mask, Keep keep) {
+  const auto slice = static_cast<std::size_t>(mask.grid.dims[0] * mask.grid.dims[1]);
+  std::vector<std::vector<std::size_t>> per_slice(static_cast<std::size_t>(mask.grid.dims[2]));
+  for_each_nonzero(mask, [&](std::size_t n) {
+    if (keep(n)) per_slice[n / slice].push_back(n);
+  });
+  std::vector<std::size_t> all;
+  for (const auto& list : per_slice) all.insert(all.end(), list.begin(), list.end());
+  return all;
 }
 
 }  // namespace palp::segmentation

@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -36,6 +38,7 @@ struct TableScratch {
   std::vector<std::int64_t> u_min, u_max, voxels;
   std::vector<std::uint8_t> valid;  // per candidate: part of a band
   std::vector<ColumnRun> band;      // anterior-most band run of each column (v0 = -1: none)
+  std::vector<std::uint8_t> none;   // a row of zeros (before the first row and after the last)
 };
 
 struct TableLimits {
@@ -61,14 +64,36 @@ void read_columns(const Plane& p, const std::uint8_t* mask, const TableLimits& l
       s.candidates.push_back({u, v0, v1});
     }
   };
-  for (std::int64_t v = 0; v <= p.nv; ++v) {
-    for (std::int64_t u = 0; u < p.nu; ++u) {
-      const bool on = v < p.nv && mask[p.at(u, v)] != 0;
-      if (on && s.open[u] < 0) s.open[u] = v;
-      if (!on && s.open[u] >= 0) {
-        close(u, s.open[u], v);
-        s.open[u] = -1;
+  const auto visit = [&](std::int64_t u, std::int64_t v) {
+    const bool on = v < p.nv && mask[p.at(u, v)] != 0;
+    if (on && s.open[u] < 0) s.open[u] = v;
+    if (!on && s.open[u] >= 0) {
+      close(u, s.open[u], v);
+      s.open[u] = -1;
+    }
+  };
+  if (p.su != 1) {
+    for (std::int64_t v = 0; v <= p.nv; ++v)
+      for (std::int64_t u = 0; u < p.nu; ++u) visit(u, v);
+  } else {
+    // Rows along memory: a column's run opens or closes only where its byte differs from the row
+    // behind (open[u] >= 0 exactly when that byte is nonzero), so only the bytes that differ are
+    // visited, found eight at a time; the others would change nothing. Same calls, same order.
+    s.none.assign(static_cast<std::size_t>(p.nu), 0);
+    for (std::int64_t v = 0; v <= p.nv; ++v) {
+      const std::uint8_t* row = v < p.nv ? mask + p.at(0, v) : s.none.data();
+      const std::uint8_t* behind = v > 0 ? mask + p.at(0, v - 1) : s.none.data();
+      std::int64_t u = 0;
+      for (; u + 8 <= p.nu; u += 8) {
+        std::uint64_t a = 0, b = 0;
+        std::memcpy(&a, row + u, 8);
+        std::memcpy(&b, behind + u, 8);
+        if (a == b) continue;
+        for (std::int64_t i = u; i < u + 8; ++i)
+          if (row[i] != behind[i]) visit(i, v);
       }
+      for (; u < p.nu; ++u)
+        if (row[u] != behind[u]) visit(u, v);
     }
   }
   std::sort(s.candidates.begin(), s.candidates.end(), [](const ColumnRun& a, const ColumnRun& b) {

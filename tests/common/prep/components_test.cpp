@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #include "prep/components.hpp"
 
@@ -25,6 +26,52 @@ TEST(CountNonzero, CountsEveryNonzeroByteWhateverTheSize) {
     std::fill(mask.data.begin(), mask.data.end(), std::uint8_t{255});
     EXPECT_EQ(count_nonzero(mask), mask.data.size()) << "nx " << nx;
   }
+}
+
+// last_nonzero_byte reads whole words from the end: every length around a word, the nonzero byte
+// at every place (and none), with zeros and nonzero bytes beyond n that must not count.
+TEST(LastNonzeroByte, FindsTheLastNonzeroByteBeforeN) {
+  for (std::int64_t n = 0; n <= 20; ++n) {
+    std::vector<std::uint8_t> row(static_cast<std::size_t>(n) + 8, 0);
+    std::fill(row.begin() + n, row.end(), std::uint8_t{1});  // beyond n
+    EXPECT_EQ(last_nonzero_byte(row.data(), n), -1) << "n " << n;
+    for (std::int64_t at = 0; at < n; ++at) {
+      row[static_cast<std::size_t>(at)] = static_cast<std::uint8_t>(at + 1);
+      EXPECT_EQ(last_nonzero_byte(row.data(), n), at) << "n " << n << " at " << at;
+      if (at > 0) row[0] = 7;  // an earlier nonzero byte changes nothing
+      EXPECT_EQ(last_nonzero_byte(row.data(), n), at) << "n " << n << " at " << at;
+      row[0] = 0;
+      row[static_cast<std::size_t>(at)] = 0;
+    }
+  }
+}
+
+// transpose_bytes_8x8 against the definition, with strides wider than the block (and bytes
+// around it that must stay as they are).
+TEST(TransposeBytes8x8, MovesEveryByteToItsTransposedPlace) {
+  constexpr std::int64_t kSrc = 11, kDst = 13;
+  std::vector<std::uint8_t> src(8 * kSrc), dst(8 * kDst, 0xEE);
+  for (std::size_t n = 0; n < src.size(); ++n) src[n] = static_cast<std::uint8_t>(n * 37 + 5);
+  transpose_bytes_8x8(src.data(), kSrc, dst.data(), kDst);
+  for (std::int64_t c = 0; c < 8; ++c)  // row c of dst: column c of src, then untouched bytes
+    for (std::int64_t r = 0; r < kDst; ++r)
+      EXPECT_EQ(dst[static_cast<std::size_t>(c * kDst + r)],
+                r < 8 ? src[static_cast<std::size_t>(r * kSrc + c)] : std::uint8_t{0xEE})
+          << r << ", " << c;
+}
+
+// nonzero_where: the nonzero voxels the predicate keeps, every slice's, in linear order.
+TEST(NonzeroWhere, ListsTheKeptNonzeroVoxelsInOrder) {
+  Grid grid;
+  grid.dims = {19, 5, 7};
+  Mask mask(grid, 0, "test");
+  std::vector<std::size_t> expected;
+  for (std::size_t n = 0; n < mask.data.size(); ++n) {
+    mask.data[n] = static_cast<std::uint8_t>(n % 3 == 0 ? 0 : n % 7 + 1);
+    if (mask.data[n] != 0 && n % 2 == 0) expected.push_back(n);
+  }
+  EXPECT_EQ(nonzero_where(mask, [](std::size_t n) { return n % 2 == 0; }), expected);
+  EXPECT_TRUE(nonzero_where(Mask(grid, 0, "empty"), [](std::size_t) { return true; }).empty());
 }
 
 }  // namespace
