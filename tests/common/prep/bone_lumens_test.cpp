@@ -4,8 +4,8 @@
 // its default grid and on a coarse one, is not bone while the bone stays whole; a dim rib, a bone
 // with a dim cortex around marrow and a thick bone of seed-level HU enclosed by cortex stay.
 // With the rule off (bone_lumen_radius_mm 0, the pipeline before it) each vessel is bone. A
-// filled lumen apart from the skeleton (remove_lumen_islands) goes whole; a thick bone island
-// with its cortex stays.
+// filled lumen apart from the skeleton (remove_lumen_islands) goes whole, in a small scene and as
+// the torso phantom's aorta moved away from the spine; a thick bone island with its cortex stays.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -274,6 +274,55 @@ TEST(BoneLumens, TheTorsoPhantomsArterialAortaIsNotBone) {
 
 TEST(BoneLumens, TheTorsoPhantomsArterialAortaIsNotBoneOnACoarseGrid) {
   check_phantom({192, 128, 48}, {2.5, 2.5, 3.0}, 2, 5, 1);
+}
+
+// The torso phantom with its aorta moved 35 mm forward, away from the spine (as an aorta lies
+// in front of a scoliotic or displaced spine, or as an iliac artery or a contrast-filled bowel
+// loop lies apart from bone), and raised to `hu` (arterial phase): the old aorta's voxels back to
+// soft tissue, a cylinder of 12 mm radius along the body axis drawn at its new place. No voxel of
+// it may be bone, and the rest of the mask is what it is without the rule (lumen radius 0).
+void check_aorta_apart(Index3 dims, Vec3 spacing) {
+  for (const std::int16_t hu : {350, 500}) {
+    PhantomOptions o;
+    o.dims = dims;
+    o.spacing = spacing;
+    PhantomTruth truth;
+    CtVolume ct = make_phantom("torso", o, &truth);
+    const Grid& g = ct.grid;
+    // The anatomy frame as raised_aorta finds it.
+    const double cx = 0.5 * static_cast<double>(dims[0]) * spacing[0];
+    double cy = 0.5 * static_cast<double>(dims[1]) * spacing[1];
+    const double pad = cy + 85.0;
+    cy += (std::round(pad / spacing[1] - 0.5) + 0.5) * spacing[1] - pad;
+    Mask vessel(g, 0);
+    for (std::int64_t k = 0; k < dims[2]; ++k)
+      for (std::int64_t j = 0; j < dims[1]; ++j)
+        for (std::int64_t i = 0; i < dims[0]; ++i) {
+          const std::size_t n = g.linear(i, j, k);
+          std::int16_t& v = ct.data[n];
+          if (truth.body.data[n] && !truth.bone.data[n] && v >= 235 && v <= 265) v = 40;
+          const double d = std::hypot(static_cast<double>(i) * spacing[0] - cx - 30.0,
+                                      static_cast<double>(j) * spacing[1] - cy + 35.5);
+          if (d <= 12.0) v = hu, vessel.data[n] = 1;
+        }
+    const Mask before = bone_of(ct, rule_off());
+    EXPECT_GT(count_in(before, {0, 0, 0}, dims), 0);
+    std::int64_t vessel_bone_before = 0, vessel_bone = 0, elsewhere_differs = 0;
+    const Mask bone = bone_of(ct);
+    for (std::size_t n = 0; n < bone.data.size(); ++n) {
+      vessel_bone_before += vessel.data[n] && before.data[n];
+      vessel_bone += vessel.data[n] && bone.data[n];
+      elsewhere_differs += !vessel.data[n] && bone.data[n] != before.data[n];
+    }
+    EXPECT_GT(vessel_bone_before, count_all(vessel) / 2) << hu << " HU: no test";
+    EXPECT_EQ(vessel_bone, 0) << hu << " HU";
+    EXPECT_EQ(elsewhere_differs, 0) << hu << " HU";
+  }
+}
+
+TEST(BoneLumens, TheTorsoPhantomsAortaAwayFromTheSpineIsNotBone) {
+  check_aorta_apart({192, 128, 48}, {2.5, 2.5, 3.0});
+  check_aorta_apart({384, 256, 96}, {1.25, 1.25, 2.0});
 }
 
 }  // namespace
