@@ -121,10 +121,6 @@ std::vector<IslandShape> island_shapes(const Grid& g, const RunTable& runs,
       IslandShape& shape = shapes[c];
       const Run run = runs.runs[r];
       if (border_row || run.begin == 0 || run.end == nx) shape.border = true;
-      shape.lo = {std::min(shape.lo[0], run.begin), std::min(shape.lo[1], j),
-                  std::min(shape.lo[2], k)};
-      shape.hi = {std::max(shape.hi[0], run.end - 1), std::max(shape.hi[1], j),
-                  std::max(shape.hi[2], k)};
       const double len = static_cast<double>(run.end - run.begin);
       const double a = static_cast<double>(run.begin), b = static_cast<double>(run.end - 1);
       const double sx = (a + b) * len / 2.0 * g.spacing[0];
@@ -163,6 +159,7 @@ void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
   const std::size_t count = labels.voxels.size();
   if (count < 2) return;
   const std::vector<IslandShape> shapes = island_shapes(g, runs, labels);
+  const std::vector<ComponentBox> boxes = component_boxes(g, runs, labels);
   const auto largest = static_cast<std::int64_t>(
       std::max_element(labels.voxels.begin(), labels.voxels.end()) - labels.voxels.begin());
   std::vector<std::uint8_t> keep(count, 1);
@@ -174,7 +171,8 @@ void remove_compact_islands(const SegmentationParams& params, Mask& bone) {
     const double length = 2.0 * std::sqrt(3.0) * s.sd[0];
     const bool compact = s.sd[0] < kBoneIslandElongation * s.sd[2];
     if (length >= max_length || !compact) continue;
-    if (near_other_bone(bone, runs, labels, static_cast<std::int64_t>(c), s.lo, s.hi, reach))
+    if (near_other_bone(bone, runs, labels, static_cast<std::int64_t>(c), boxes[c].lo, boxes[c].hi,
+                        reach))
       continue;
     keep[c] = 0;
   }

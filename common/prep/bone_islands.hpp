@@ -18,7 +18,6 @@ struct IslandShape {
   // sd[0] = L / sqrt(12).
   std::array<double, 3> sd{};
   bool border = false;  // a voxel on the scan's first or last index along some axis
-  std::array<std::int64_t, 3> lo{INT64_MAX, INT64_MAX, INT64_MAX}, hi{-1, -1, -1};  // bounding box
 };
 std::vector<IslandShape> island_shapes(const Grid& g, const RunTable& runs,
                                        const RunLabels& labels);

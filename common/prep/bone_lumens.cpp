@@ -14,6 +14,18 @@
 #include "prep/segmentation_shared.hpp"
 
 namespace palp::segmentation {
+namespace {
+
+// Whether a component's box is at least twice `radius` across along every axis (a voxel counted
+// whole at each end): the least a core of that radius needs.
+bool wide_enough_for_core(const ComponentBox& box, const Grid& g, double radius) {
+  for (int axis = 0; axis < 3; ++axis)
+    if (static_cast<double>(box.hi[axis] - box.lo[axis] + 2) * g.spacing[axis] < 2.0 * radius)
+      return false;
+  return true;
+}
+
+}  // namespace
 
 std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone) {
   if (params.bone_lumen_radius_mm <= 0.0) return 0;
@@ -44,18 +56,7 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   const std::vector<std::int64_t> contact = count_per_component(
       g, runs, labels,
       [&](std::size_t n) { return on_surface(n) && any_face_neighbour(g, n, on_rim); });
-  std::vector<Index3> lo(pieces, Index3{g.dims[0], g.dims[1], g.dims[2]}),
-      hi(pieces, Index3{-1, -1, -1});
-  for (std::int64_t row = 0; row < g.dims[1] * g.dims[2]; ++row)
-    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
-      const std::int64_t c = labels.of_run[r];
-      const Index3 a{runs.runs[r].begin, row % g.dims[1], row / g.dims[1]};
-      const Index3 b{runs.runs[r].end - 1, a[1], a[2]};
-      for (int axis = 0; axis < 3; ++axis) {
-        lo[c][axis] = std::min(lo[c][axis], a[axis]);
-        hi[c][axis] = std::max(hi[c][axis], b[axis]);
-      }
-    }
+  const std::vector<ComponentBox> boxes = component_boxes(g, runs, labels);
   // Candidates: pieces resting on the rim along a minor share of their surface (marrow of seed
   // level is enclosed by its cortex), wide enough along every axis to hold a core (below). A
   // piece that touches no cortex at all is a region without any cortical voxel, which this
@@ -64,11 +65,7 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   std::vector<std::uint8_t> candidate(pieces, 0);
   bool any = false;
   for (std::size_t c = 0; c < pieces; ++c) {
-    bool wide = true;
-    for (int axis = 0; axis < 3; ++axis)
-      wide = wide &&
-             static_cast<double>(hi[c][axis] - lo[c][axis] + 2) * g.spacing[axis] >= 2.0 * radius;
-    candidate[c] = wide && contact[c] > 0 &&
+    candidate[c] = wide_enough_for_core(boxes[c], g, radius) && contact[c] > 0 &&
                    static_cast<double>(contact[c]) <
                        params.bone_lumen_max_contact * static_cast<double>(surface[c]);
     any = any || candidate[c];
@@ -141,10 +138,6 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   return removed;
 }
 
-}  // namespace palp::segmentation
-
-namespace palp::segmentation {
-
 std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams& params,
                                    Mask& bone) {
   const double radius = params.bone_lumen_radius_mm;
@@ -158,35 +151,20 @@ std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams&
   if (islands < 2) return 0;
   const auto skeleton = static_cast<std::size_t>(
       std::max_element(labels.voxels.begin(), labels.voxels.end()) - labels.voxels.begin());
-  // Each island's box.
-  std::vector<Index3> lo(islands, Index3{g.dims[0], g.dims[1], g.dims[2]}),
-      hi(islands, Index3{-1, -1, -1});
-  for (std::int64_t row = 0; row < g.dims[1] * g.dims[2]; ++row)
-    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
-      const auto c = static_cast<std::size_t>(labels.of_run[r]);
-      const Index3 a{runs.runs[r].begin, row % g.dims[1], row / g.dims[1]};
-      const Index3 b{runs.runs[r].end - 1, a[1], a[2]};
-      for (int axis = 0; axis < 3; ++axis) {
-        lo[c][axis] = std::min(lo[c][axis], a[axis]);
-        hi[c][axis] = std::max(hi[c][axis], b[axis]);
-      }
-    }
+  const std::vector<ComponentBox> boxes = component_boxes(g, runs, labels);
   const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   std::vector<std::uint8_t> lumen(islands, 0);
   bool any = false;
   for (std::size_t c = 0; c < islands; ++c) {
-    if (c == skeleton) continue;
-    bool wide = true;  // a core needs twice the radius along every axis
-    for (int axis = 0; axis < 3; ++axis)
-      wide = wide &&
-             static_cast<double>(hi[c][axis] - lo[c][axis] + 2) * g.spacing[axis] >= 2.0 * radius;
-    if (!wide) continue;
+    if (c == skeleton || !wide_enough_for_core(boxes[c], g, radius)) continue;
+    const Index3& lo = boxes[c].lo;
+    const Index3& hi = boxes[c].hi;
     // The island alone, in its box with one voxel of outside around it.
     Index3 first, dims;
     for (int axis = 0; axis < 3; ++axis) {
-      first[axis] = lo[c][axis] - 1;
-      dims[axis] = hi[c][axis] - lo[c][axis] + 3;
+      first[axis] = lo[axis] - 1;
+      dims[axis] = hi[axis] - lo[axis] + 3;
     }
     Grid box;
     box.dims = dims;
@@ -195,8 +173,8 @@ std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams&
     const auto in_box = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
       return box.linear(i - first[0], j - first[1], k - first[2]);
     };
-    for (std::int64_t k = lo[c][2]; k <= hi[c][2]; ++k)
-      for (std::int64_t j = lo[c][1]; j <= hi[c][1]; ++j) {
+    for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
         const std::int64_t row = j + g.dims[1] * k;
         for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
           if (static_cast<std::size_t>(labels.of_run[r]) != c) continue;
@@ -251,24 +229,20 @@ std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams&
   // candidate that near the skeleton stays. (Not near any other island: loops of bowel lie beside
   // each other and beside pieces of themselves too thin to hold a core.)
   Mask skeleton_only(g, 0, "bone lumen islands' skeleton");
-  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t start) {
-    if (static_cast<std::size_t>(labels.of_run[r]) != skeleton) return;
-    std::fill_n(skeleton_only.data.begin() + static_cast<std::ptrdiff_t>(start),
-                runs.runs[r].end - runs.runs[r].begin, std::uint8_t{1});
-  });
+  rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return static_cast<std::size_t>(c) == skeleton; },
+      skeleton_only);
   const double reach = kBoneJointGapMm + g.max_spacing();
   for (std::size_t c = 0; c < islands; ++c)
     if (lumen[c] && near_other_bone(skeleton_only, runs, labels, static_cast<std::int64_t>(c),
-                                    lo[c], hi[c], reach))
+                                    boxes[c].lo, boxes[c].hi, reach))
       lumen[c] = 0;
   std::uint64_t removed = 0;
   for (std::size_t c = 0; c < islands; ++c)
     if (lumen[c]) removed += static_cast<std::uint64_t>(labels.voxels[c]);
-  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t start) {
-    if (!lumen[static_cast<std::size_t>(labels.of_run[r])]) return;
-    std::fill_n(bone.data.begin() + static_cast<std::ptrdiff_t>(start),
-                runs.runs[r].end - runs.runs[r].begin, std::uint8_t{0});
-  });
+  // The bone is 0/1 here: every run keeps 1 but a lumen's.
+  rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return !lumen[static_cast<std::size_t>(c)]; }, bone);
   return removed;
 }
 

@@ -86,6 +86,22 @@ RunLabels label_runs(const Grid& g, const RunTable& t) {
   return labels;
 }
 
+std::vector<ComponentBox> component_boxes(const Grid& g, const RunTable& t, const RunLabels& l) {
+  std::vector<ComponentBox> boxes(l.voxels.size(),
+                                  ComponentBox{{g.dims[0], g.dims[1], g.dims[2]}, {-1, -1, -1}});
+  for (std::int64_t row = 0; row < g.dims[1] * g.dims[2]; ++row)
+    for (std::int64_t r = t.row_start[row]; r < t.row_start[row + 1]; ++r) {
+      ComponentBox& b = boxes[static_cast<std::size_t>(l.of_run[r])];
+      const Index3 first{t.runs[r].begin, row % g.dims[1], row / g.dims[1]};
+      const Index3 last{t.runs[r].end - 1, first[1], first[2]};
+      for (int axis = 0; axis < 3; ++axis) {
+        b.lo[axis] = std::min(b.lo[axis], first[axis]);
+        b.hi[axis] = std::max(b.hi[axis], last[axis]);
+      }
+    }
+  return boxes;
+}
+
 double voxel_ml(const Grid& g) {
   return g.spacing[0] * g.spacing[1] * g.spacing[2] / 1000.0;
 }

@@ -121,6 +121,12 @@ struct RunLabels {
 // Labels the runs' 6-connected components, numbered in order of their first run.
 RunLabels label_runs(const Grid& g, const RunTable& t);
 
+// The bounding box of each component, voxel indices [lo, hi] (inclusive).
+struct ComponentBox {
+  Index3 lo, hi;
+};
+std::vector<ComponentBox> component_boxes(const Grid& g, const RunTable& t, const RunLabels& l);
+
 // Calls visit(run index, row index j + ny*k, linear index of its first voxel) for every run, in
 // parallel over slices.
 template <class Visit>

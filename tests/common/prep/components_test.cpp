@@ -74,5 +74,24 @@ TEST(NonzeroWhere, ListsTheKeptNonzeroVoxelsInOrder) {
   EXPECT_TRUE(nonzero_where(Mask(grid, 0, "empty"), [](std::size_t) { return true; }).empty());
 }
 
+// Two components, one an L across rows and slices: each box is exactly its voxels' extent.
+TEST(ComponentBoxes, AreEachComponentsExtent) {
+  Grid grid;
+  grid.dims = {8, 6, 5};
+  Mask mask(grid, 0, "test");
+  mask.at(1, 1, 1) = mask.at(2, 1, 1) = mask.at(3, 1, 1) = 1;  // the L: a run...
+  mask.at(3, 2, 1) = mask.at(3, 3, 1) = mask.at(3, 3, 2) = 1;  // ...turning along j, then k
+  mask.at(6, 5, 4) = mask.at(7, 5, 4) = 1;                     // apart, at the far corner
+  const RunTable runs = extract_runs(mask, false);
+  const RunLabels labels = label_runs(grid, runs);
+  ASSERT_EQ(labels.voxels.size(), 2u);
+  const std::vector<ComponentBox> boxes = component_boxes(grid, runs, labels);
+  ASSERT_EQ(boxes.size(), 2u);
+  EXPECT_EQ(boxes[0].lo, (Index3{1, 1, 1}));
+  EXPECT_EQ(boxes[0].hi, (Index3{3, 3, 2}));
+  EXPECT_EQ(boxes[1].lo, (Index3{6, 5, 4}));
+  EXPECT_EQ(boxes[1].hi, (Index3{7, 5, 4}));
+}
+
 }  // namespace
 }  // namespace palp::segmentation
