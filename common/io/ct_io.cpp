@@ -286,6 +286,10 @@ void write_volume(const std::string& path, const Volume<T>& volume, ScalarType t
 
 }  // namespace
 
+bool is_nifti_name(const std::string& path) {
+  return format_of(path) == FileFormat::nifti;
+}
+
 std::string ct_voxel_file(const std::string& path) {
   return read_header(path).voxels.path;
 }

@@ -21,6 +21,9 @@ CtVolume read_ct(const std::string& input);
 // header names (.mhd, .nhdr). Reads only the header; throws as read_ct does for a bad one.
 std::string ct_voxel_file(const std::string& path);
 
+// Whether read_ct reads `path` as NIfTI (its name ends in .nii or .nii.gz, any case).
+bool is_nifti_name(const std::string& path);
+
 // Writes a volume as NIfTI-1 (.nii or .nii.gz, chosen by the extension), with the grid's world
 // placement written back as qform and sform (RAS, as NIfTI requires).
 void write_nifti(const std::string& path, const CtVolume& volume);

@@ -28,6 +28,7 @@
 #include "base/parallel.hpp"
 #include "base/patient_frame.hpp"
 #include "io/ct_io.hpp"
+#include "io/gzip.hpp"
 #include "prep/background_writes.hpp"
 #include "prep/components.hpp"
 #include "prep/ct_check.hpp"
@@ -74,6 +75,28 @@ void write_atomically(const fs::path& path, const V& volume, const Extra&... ext
   std::error_code ec;
   fs::rename(partial, path, ec);
   if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
+}
+
+// The same for a copy of the file `from` (a new file, so the umask's permissions, not the
+// input's: a read-only input gives a scene that can be prepped again over).
+void copy_atomically(const fs::path& from, const fs::path& path) {
+  const fs::path partial = path.string() + ".partial.nii.gz";
+  {
+    std::ifstream in(from, std::ios::binary);
+    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+    if (!in || !out || !(out << in.rdbuf()) || !out.flush())
+      throw Error(path.string() + ": cannot be written from " + from.string());
+  }
+  std::error_code ec;
+  fs::rename(partial, path, ec);
+  if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
+}
+
+// Whether the scene's copy of the CT can be the input file itself: a gzip'd NIfTI that prep uses
+// as read (not reoriented). Read again it gives the same voxels and grid, and its voxels are not
+// deflated a second time (at 512x512x400, 0.6 s of CPU).
+bool input_serves_as_ct_copy(const std::string& input, bool reoriented) {
+  return !reoriented && is_nifti_name(input) && file_is_gzip(input);
 }
 
 // CPU seconds of the whole process so far (all threads).
@@ -222,7 +245,13 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     result.reoriented = true;
   }
   result.grid = ct.grid;
-  write_in_background("bg write CT", kCtFile, ct_owner);
+  if (input_serves_as_ct_copy(input, result.reoriented)) {
+    writes.add("bg write CT", [from = fs::path(input), path = dir / kCtFile] {
+      copy_atomically(from, path);
+    });
+  } else {
+    write_in_background("bg write CT", kCtFile, ct_owner);
+  }
   stage("body mask", [&] { *body_owner = segment_body(ct, params.segmentation, &result.stats); });
   write_in_background("bg write body", kBodyFile, body_owner);
   if (!params.not_hu_ok) {

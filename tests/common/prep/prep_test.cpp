@@ -13,6 +13,8 @@
 
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
+#include "io/gzip.hpp"
+#include "io/nifti.hpp"
 #include "io/phantom.hpp"
 #include "prep/distance_transform.hpp"
 #include "prep/iso_projection.hpp"
@@ -414,6 +416,52 @@ TEST_F(PrepTest, ObliqueInputIsResampledAndSaysSo) {
   const auto json = nlohmann::json::parse(in);
   EXPECT_TRUE(json.at("patient").at("reoriented").get<bool>());
   EXPECT_EQ(json.at("patient").at("orientation").get<std::string>(), "LPS");
+  // the scene's CT is the resampled one, not a copy of the input
+  EXPECT_EQ(read_ct((dir_ / "out" / kCtFile).string()).grid.dims, r.grid.dims);
+}
+
+std::string file_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A gzip'd NIfTI used as read is copied as it is (its voxels are not deflated again); any other
+// input is written. Either way the scene's CT reads back as the CT prep segmented.
+TEST_F(PrepTest, TheScenesCtIsACopyOfAGzippedNiftiInputAndWrittenOtherwise) {
+  CtVolume ct;
+  write_small_ct(dir_, &ct);
+  // stored as float32 HU: prep reads it as int16, so a written copy would differ from it
+  std::vector<float> hu(ct.data.begin(), ct.data.end());
+  const std::string gzipped = (dir_ / "float.nii.gz").string();
+  write_nifti_file(gzipped, ct.grid, ScalarType::f32,
+                   ByteSpan(reinterpret_cast<const std::uint8_t*>(hu.data()), hu.size() * 4),
+                   -1000.0, 1000.0);
+  fs::permissions(gzipped, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  PrepParams params;
+  params.surface.method = SurfaceMethod::mask;
+  params.map_spacing_mm = 0.0;
+  run_prep(gzipped, (dir_ / "from_gz").string(), params);
+  const fs::path copied = dir_ / "from_gz" / kCtFile;
+  EXPECT_EQ(file_bytes(copied), file_bytes(gzipped));
+  // a new file, not the read-only input's permissions
+  EXPECT_NE(fs::status(copied).permissions() & fs::perms::owner_write, fs::perms::none);
+  const std::string plain = (dir_ / "plain.nii").string();
+  write_nifti(plain, ct);
+  ASSERT_FALSE(file_is_gzip(plain));
+  run_prep(plain, (dir_ / "from_nii").string(), params);
+  const fs::path written = dir_ / "from_nii" / kCtFile;
+  EXPECT_TRUE(file_is_gzip(written.string()));
+  for (const fs::path& scene_ct : {copied, written}) {
+    const CtVolume back = read_ct(scene_ct.string());
+    EXPECT_EQ(back.grid.dims, ct.grid.dims) << scene_ct;
+    EXPECT_EQ(back.grid.world.origin, ct.grid.world.origin) << scene_ct;
+    EXPECT_EQ(back.grid.world.direction, ct.grid.world.direction) << scene_ct;
+    EXPECT_EQ(back.data, ct.data) << scene_ct;
+  }
+  // no temporary left beside them
+  for (const fs::path& out : {dir_ / "from_gz", dir_ / "from_nii"})
+    for (const auto& entry : fs::directory_iterator(out))
+      EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
 }
 
 }  // namespace
