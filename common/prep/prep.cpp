@@ -246,9 +246,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   }
   result.grid = ct.grid;
   if (input_serves_as_ct_copy(input, result.reoriented)) {
-    writes.add("bg write CT", [from = fs::path(input), path = dir / kCtFile] {
-      copy_atomically(from, path);
-    });
+    writes.add("bg write CT",
+               [from = fs::path(input), path = dir / kCtFile] { copy_atomically(from, path); });
   } else {
     write_in_background("bg write CT", kCtFile, ct_owner);
   }
