@@ -41,11 +41,14 @@ struct Result {
   Mask bone;
 };
 
-// The body and bone masks as prep makes them (levels moved with the scan's soft-tissue peak).
-Result segment_as_prep(const CtVolume& ct, const Mask& truth_bone, const Mask& organs) {
+// The body and bone masks as prep makes them (levels moved with the scan's soft-tissue peak), or
+// with the levels moved by `forced_offset_hu` instead when it is given.
+Result segment_as_prep(const CtVolume& ct, const Mask& truth_bone, const Mask& organs,
+                       const double* forced_offset_hu = nullptr) {
   Result r;
   const Mask body = segment_body(ct, SegmentationParams{});
   r.levels = estimate_hu_levels(ct, body);
+  if (forced_offset_hu) r.levels.offset_hu = *forced_offset_hu;
   SegmentationParams params;
   params.bone_seed_hu += r.levels.offset_hu;
   params.bone_grow_hu += r.levels.offset_hu;
@@ -422,6 +425,23 @@ TEST_F(BoneRobustness, ProneWithTheTableInFront) {
   const Mask bone_back = testing::turned_about_body_axis(r.bone);
   EXPECT_EQ(testing::count(bone_back), testing::count(baseline_->bone));
   EXPECT_EQ(testing::count_both(bone_back, baseline_->bone), testing::count(baseline_->bone));
+}
+
+// How much the result owes to the levels (docs/prep.md, "Bone levels from the scan"): the
+// unchanged CT and its +50 HU organs row with the levels moved by fixed offsets instead of the
+// scan's. Measures only; PALP_BONE_LEVEL_SWEEP=1 runs it.
+TEST_F(BoneRobustness, LevelOffsetSweep) {
+  if (std::getenv("PALP_BONE_LEVEL_SWEEP") == nullptr)
+    GTEST_SKIP() << "set PALP_BONE_LEVEL_SWEEP=1";
+  const LabelledCt contrast = enhanced(*shared_, 50.0);
+  for (const double offset : {0.0, -5.0, -14.0, -24.0, -34.0, -44.0, -54.0}) {
+    const Result plain =
+        segment_as_prep(shared_->ct, shared_->truth_bone, shared_->organs, &offset);
+    print_row("as it is, levels moved by a fixed offset", plain, nullptr);
+    const Result raised =
+        segment_as_prep(contrast.ct, contrast.truth_bone, contrast.organs, &offset);
+    print_row("organs and labelled muscles +50 HU, the same offset", raised, nullptr);
+  }
 }
 
 // Positive oral contrast (docs/prep.md): a contrast-filled bowel holds seeds, and its loops lie
