@@ -17,7 +17,7 @@ inline constexpr double kMaxBandMm = 1e6;
 
 struct DistanceParams {
   double band_mm = 60.0;  // |D| is clamped here; work is cropped to the mask's box + band
-  unsigned threads = 0;   // 0 = hardware concurrency
+  unsigned threads = 0;   // 0 = default_thread_count()
 };
 
 // Signed distance map of `mask` on its own grid, voxel for voxel.

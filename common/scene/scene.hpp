@@ -28,7 +28,7 @@ struct SceneOptions {
   // The maps in memory on the CT's grid refined to at most this spacing (mm) where it is coarser
   // (scene_maps.hpp); 0 = as prepped. The commands give palp's model kPalpMapSpacingMm.
   double map_spacing_mm = 0.0;
-  unsigned threads = 0;  // of the refinement; 0 = all cores
+  unsigned threads = 0;  // of the refinement; 0 = default_thread_count()
 };
 
 // The in-memory map spacing of the palp model (mm): a 3 mm CT's maps at 1.5 mm, so the skin's

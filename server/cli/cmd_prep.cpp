@@ -46,7 +46,7 @@ Options:
   --map-spacing MM        on a CT coarser than MM along an axis, d_surf and d_bone lie on its grid
                           refined by a whole factor per axis to at most MM, nodes aligned
                           (default %g: the CT's own grid, as the spec's outputs; e.g. 2)
-  --threads N             worker threads (default: all cores, here %u)
+  --threads N             worker threads (default: the CPUs palp may run on, here %u)
   --body-threshold HU     voxels above this are not air (default %g)
   --min-body-part ML      drop separate parts smaller than this, except the patient (default %g)
   --max-table-thickness MM  thicker horizontal bands below the patient are kept (default %g)

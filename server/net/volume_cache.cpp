@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 
+#include "base/parallel.hpp"
 #include "net/protocol.hpp"
 
 namespace palp::net {
@@ -29,7 +30,7 @@ VolumeCache::VolumeCache(const SceneDescription& scene, std::size_t chunk_bytes,
     : scene_(scene),
       chunk_bytes_(chunk_bytes),
       notify_(std::move(notify)),
-      threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())),
+      threads_(threads ? threads : default_thread_count()),
       max_plans_(std::max<std::size_t>(1, max_plans)),
       body_box_(scene.body ? net::body_box(*scene.body, kCropMarginMm) : VoxelBox{}) {
   if (warm && scene.fields) {
