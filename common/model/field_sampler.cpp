@@ -19,7 +19,7 @@ void gradient_field(const Grid& g, const std::vector<float>& d, float* out, std:
   const std::size_t step[3] = {1, static_cast<std::size_t>(n[0]),
                                static_cast<std::size_t>(n[0] * n[1])};
   // Slices in parallel: every voxel's gradient depends only on the map (a refined CT's maps hold
-  // 10^7 voxels, prep/map_refine.hpp).
+  // 10^7 voxels, prep/maps/map_refine.hpp).
   parallel_for_chunks(n[2], 1, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
       for (std::int64_t j = 0; j < n[1]; ++j)

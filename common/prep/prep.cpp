@@ -30,14 +30,14 @@
 #include "io/ct_io.hpp"
 #include "io/gzip.hpp"
 #include "prep/background_writes.hpp"
-#include "prep/components.hpp"
 #include "prep/ct_check.hpp"
-#include "prep/iso_projection.hpp"
-#include "prep/map_refine.hpp"
+#include "prep/maps/iso_projection.hpp"
+#include "prep/maps/map_refine.hpp"
+#include "prep/maps/subvoxel_distance.hpp"
 #include "prep/output_guard.hpp"
 #include "prep/prep_cache.hpp"
 #include "prep/reorient.hpp"
-#include "prep/subvoxel_distance.hpp"
+#include "prep/segment/components.hpp"
 
 namespace palp {
 namespace {
@@ -273,7 +273,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   IsoProjectionStats projected;
   std::size_t skin_count[2] = {0, 0};  // the skin's points, and how many the HU placed
   float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
-  // The maps' grid: the CT's, or its aligned refinement (--map-spacing; prep/map_refine.hpp).
+  // The maps' grid: the CT's, or its aligned refinement (--map-spacing; prep/maps/map_refine.hpp).
   const Refinement refine = map_refinement(result.grid, params.map_spacing_mm);
   result.map_grid = refined_grid(result.grid, refine);
   // The map of `mask` into `map` on the CT's grid, upsampled to the maps' grid when refined, then
@@ -311,7 +311,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     write_atomically(dir / kSurfaceDistanceFile, map, surf_range[0], surf_range[1]);
   });
 
-  // The bone levels, shifted with the scan's soft-tissue peak unless given (prep/hu_levels.hpp).
+  // The bone levels, shifted with the scan's soft-tissue peak unless given
+  // (prep/segment/hu_levels.hpp).
   SegmentationParams segmentation = params.segmentation;
   SurfaceParams surface = params.surface;
   stage("HU levels", [&] {
@@ -359,7 +360,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   json["cache_key"] = result.cache_key;
   json["grid"] = grid_json(result.grid);
   json["map_grid"] = grid_json(result.map_grid);  // d_surf, d_bone: the grid refined by
-  json["map_refinement"] = refine;                // these factors (prep/map_refine.hpp)
+  json["map_refinement"] = refine;                // these factors (prep/maps/map_refine.hpp)
   json["patient"] = {{"input_orientation", result.orientation},
                      {"input_obliquity_deg", result.obliquity_deg},
                      {"reoriented", result.reoriented},

@@ -11,16 +11,16 @@
 #include <vector>
 
 #include "base/volume.hpp"
-#include "prep/distance_transform.hpp"
-#include "prep/hu_levels.hpp"
-#include "prep/map_refine.hpp"
-#include "prep/segmentation.hpp"
+#include "prep/maps/distance_transform.hpp"
+#include "prep/maps/map_refine.hpp"
+#include "prep/segment/hu_levels.hpp"
+#include "prep/segment/segmentation.hpp"
 
 namespace palp {
 
 // Which surface the distance maps measure to (spec "Masks and distance maps"): the binary masks'
 // voxel faces (`mask`), or the HU iso-surfaces inside the segmented components (`subvoxel`,
-// prep/subvoxel_distance.hpp).
+// prep/maps/subvoxel_distance.hpp).
 enum class SurfaceMethod { subvoxel, mask };
 
 struct SurfaceParams {
@@ -29,7 +29,7 @@ struct SurfaceParams {
   double bone_hu = 200.0;   // iso level of d_bone's surface
   double band_mm = 0.0;     // sub-voxel band; 0 = twice the grid's coarsest spacing
   // d_surf's nodes within this distance move to the trilinear HU's own iso-surface
-  // (prep/iso_projection.hpp); < 0 = three coarsest spacings, 0 = off
+  // (prep/maps/iso_projection.hpp); < 0 = three coarsest spacings, 0 = off
   double skin_projection_mm = -1.0;
 };
 
@@ -42,10 +42,10 @@ struct PrepParams {
   DistanceParams distance;
   SurfaceParams surface;
   // The bone levels (segmentation's bone_seed_hu, bone_grow_hu and the surface's bone_hu) follow
-  // the scan's soft-tissue peak (prep/hu_levels.hpp); false: used as given.
+  // the scan's soft-tissue peak (prep/segment/hu_levels.hpp); false: used as given.
   bool adapt_bone_levels = true;
   // On a CT coarser than this (mm, any axis), the maps lie on its grid refined to at most this
-  // spacing, nodes aligned (prep/map_refine.hpp); 0 = the CT's own grid.
+  // spacing, nodes aligned (prep/maps/map_refine.hpp); 0 = the CT's own grid.
   double map_spacing_mm = kDefaultMapSpacingMm;
   bool use_cache = true;
   // Prep a volume that does not look like a CT in HU (prep/ct_check.hpp) instead of refusing it.

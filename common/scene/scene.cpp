@@ -14,7 +14,7 @@
 
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
-#include "prep/map_refine.hpp"
+#include "prep/maps/map_refine.hpp"
 
 namespace palp {
 namespace {
@@ -93,7 +93,7 @@ Scene load_scene(const std::string& scene, const SceneOptions& options) {
   out.map_spacing_mm = options.map_spacing_mm;
   out.map_refinement = maps.refinement;
   out.map_note = maps.note;
-  // On the maps' grid, or on the CT grid the maps refine (prep/map_refine.hpp).
+  // On the maps' grid, or on the CT grid the maps refine (prep/maps/map_refine.hpp).
   if (ct && refinement_between(ct->grid, out.grid)[0] != 0 && body->grid.dims == ct->grid.dims) {
     out.ct = std::move(ct);
     out.body = std::move(body);

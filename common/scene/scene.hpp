@@ -48,7 +48,7 @@ struct Scene {
   std::shared_ptr<const FieldSampler> fields;
   // With SceneOptions::load_ct, from a prep directory that has them (null otherwise): the CT's
   // HU and the body mask on the maps' grid, or on the coarse CT grid the maps refine
-  // (prep/map_refine.hpp).
+  // (prep/maps/map_refine.hpp).
   std::shared_ptr<const CtVolume> ct;
   std::shared_ptr<const Mask> body;
 };

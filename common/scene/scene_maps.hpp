@@ -2,9 +2,9 @@
 // memory on a coarse CT (the palp model's default, issue 14's skin at 6 mm on a 3 mm CT).
 //
 // Data flow: d_surf.nii.gz, d_bone.nii.gz (the CT's grid, spec "Files") -> both upsampled
-// trilinearly onto the CT's grid refined to at most `map_spacing_mm` (prep/map_refine.hpp: the
+// trilinearly onto the CT's grid refined to at most `map_spacing_mm` (prep/maps/map_refine.hpp: the
 // same functions as before) -> d_surf's skin band projected onto the trilinear HU's iso-surface
-// at the fine nodes (prep/iso_projection.hpp, with prep.json's skin level and reach; needs
+// at the fine nodes (prep/maps/iso_projection.hpp, with prep.json's skin level and reach; needs
 // ct.nii.gz and body.nii.gz). The files stay what the spec fixes; only what the tick reads is
 // finer, so between the CT's nodes the skin's distance is the exact one, not a trilinear blend of
 // 3 mm nodes (docs/force_model.md "Finer maps in memory").
@@ -13,8 +13,8 @@
 #include <string>
 
 #include "base/volume.hpp"
-#include "prep/iso_projection.hpp"
-#include "prep/map_refine.hpp"
+#include "prep/maps/iso_projection.hpp"
+#include "prep/maps/map_refine.hpp"
 
 namespace palp {
 

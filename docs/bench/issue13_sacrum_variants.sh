@@ -1,6 +1,7 @@
 #!/bin/bash
 # The sacrum variants of docs/prep.md ("The sacrum's marrow: variants measured, none adopted").
-# Scratch code, not the method: run from the root of a scratch checkout with
+# Scratch code, not the method: run from the root of a scratch checkout of commit 51aaf12 (the
+# patch's paths are common/prep's before its files moved into bone/, segment/ and maps/) with
 # docs/bench/issue13_sacrum_variants.patch applied and built
 #   git apply docs/bench/issue13_sacrum_variants.patch
 #   cmake --build build --target bone_segmentation_test bone_mask_timing

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "net/protocol.hpp"
-#include "prep/map_refine.hpp"
+#include "prep/maps/map_refine.hpp"
 #include "safety/virtual_coupling.hpp"
 #include "wire/messages.hpp"
 #include "wire/volume_codec.hpp"
@@ -180,7 +180,8 @@ std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan&
   std::vector<std::uint8_t> body(plan.hu ? n : 0);
   const Vec3 sp = grid.spacing;
   const std::int64_t st = plan.step;
-  // HU and body from the CT's nearest node when the maps refine its grid (prep/map_refine.hpp).
+  // HU and body from the CT's nearest node when the maps refine its grid
+  // (prep/maps/map_refine.hpp).
   const Refinement r = plan.hu ? refinement_between(scene.ct->grid, grid) : Refinement{1, 1, 1};
   const Index3 ct_dims = plan.hu ? scene.ct->grid.dims : grid.dims;
   std::size_t v = 0;

@@ -49,7 +49,7 @@ inline constexpr std::size_t kMaxChunkRawBytes = 12u << 20;
 // request.crop, hu and a non-empty `crop` box, only that box goes out: its corner aligned down
 // to the step (so its voxels are those of the uncropped volume), the step chosen so the box
 // fits max_dim. `crop` is in the CT's voxels (body_box), which the maps' grid may refine
-// (prep/map_refine.hpp): the HU and body then go out from the CT's nearest node.
+// (prep/maps/map_refine.hpp): the HU and body then go out from the CT's nearest node.
 VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& request,
                        std::size_t chunk_bytes, const VoxelBox* crop = nullptr);
 // The bounding box of the body mask's set voxels grown by `margin_mm` (clamped to the grid);

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 
 namespace {
 

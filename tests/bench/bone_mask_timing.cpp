@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "io/phantom.hpp"
-#include "prep/hu_levels.hpp"
-#include "prep/segmentation.hpp"
+#include "prep/segment/hu_levels.hpp"
+#include "prep/segment/segmentation.hpp"
 
 int main(int argc, char** argv) {
   using namespace palp;

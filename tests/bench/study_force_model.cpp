@@ -70,8 +70,8 @@
 #include "model/field_sampler.hpp"
 #include "model/force_model.hpp"
 #include "model/tool.hpp"
-#include "prep/iso_projection.hpp"
-#include "prep/map_refine.hpp"
+#include "prep/maps/iso_projection.hpp"
+#include "prep/maps/map_refine.hpp"
 #include "scene/scene.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
@@ -479,7 +479,7 @@ double gradient_corrected_surf(const FieldSampler& fields, const Grid& g, const 
 void smoothness(const std::string& ct_path, Csv& csv) {
   const std::vector<Variant> vars = variants_for(ct_path);
   Hu hu{read_ct(ct_path)};
-  // The maps lie on the CT's grid or on its aligned refinement (prep/map_refine.hpp).
+  // The maps lie on the CT's grid or on its aligned refinement (prep/maps/map_refine.hpp).
   const Grid& map_grid = vars[0].fields->grid();
   if (refinement_between(hu.ct.grid, map_grid)[0] == 0) {
     std::printf("smooth: the CT was resampled by prep (grids differ): skipped\n");

@@ -14,7 +14,7 @@
 #include "base/vec.hpp"
 #include "base/volume.hpp"
 #include "bench/study_util.hpp"
-#include "prep/iso_projection.hpp"
+#include "prep/maps/iso_projection.hpp"
 
 namespace palp::study {
 
@@ -66,7 +66,7 @@ struct Hu {
                   at(x + Vec3d{0, 0, h}) - at(x - Vec3d{0, 0, h})};
     return normalized(-1.0 * g);
   }
-  // The distance from p to the -500 HU iso-surface (prep/iso_projection.hpp), from a surface
+  // The distance from p to the -500 HU iso-surface (prep/maps/iso_projection.hpp), from a surface
   // point near its nearest one; signed as the maps are (positive inside, where HU >= -500).
   double distance(const Vec3d& p, const Vec3d& near) const {
     const double q[3] = {p.x, p.y, p.z};

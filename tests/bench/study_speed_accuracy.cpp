@@ -32,7 +32,7 @@
 #include "model/field_sampler.hpp"
 #include "model/force_model.hpp"
 #include "model/tool.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 
 namespace palp::study {
 namespace {

@@ -18,7 +18,7 @@
 
 #include "base/vec.hpp"
 #include "base/volume.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 
 namespace palp::study {
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Charts distance error against voxel size for both surface methods (docs/prep.md), and
-d_surf after its projection onto the trilinear HU iso-surface (prep/iso_projection.hpp).
+d_surf after its projection onto the trilinear HU iso-surface (prep/maps/iso_projection.hpp).
 
 Reads the rows that build/tests/subvoxel_distance_test prints on stdin and writes an SVG (no
 plotting library: the VM has none). Usage:

@@ -1,7 +1,7 @@
 // Where a bone mask disagrees with expert labels: the false negatives and false positives split by
 // HU, by how far they lie from the other mask (a one-voxel rim vs detached), by region of the body
 // and by connected piece, and the mean surface distance split by how far each surface voxel lies
-// from the other surface. A diagnostic for tests/common/prep/bone_segmentation_test.cpp
+// from the other surface. A diagnostic for tests/common/prep/bone/bone_segmentation_test.cpp
 // (PALP_BONE_DIAG=1); it prints, it asserts nothing.
 #pragma once
 
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "base/volume.hpp"
-#include "prep/segmentation.hpp"
+#include "prep/segment/segmentation.hpp"
 #include "support/mask_metrics.hpp"
 
 namespace palp::testing {

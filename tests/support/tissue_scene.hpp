@@ -5,7 +5,7 @@
 #include <cstdint>
 
 #include "base/volume.hpp"
-#include "prep/segmentation.hpp"
+#include "prep/segment/segmentation.hpp"
 
 namespace palp::testing {
 

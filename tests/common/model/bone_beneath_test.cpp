@@ -10,7 +10,7 @@
 
 #include "base/errors.hpp"
 #include "model/field_sampler.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 
 namespace palp {
 namespace {

@@ -19,7 +19,7 @@
 #include <string>
 
 #include "base/errors.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 
 namespace palp {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "base/errors.hpp"
 #include "model/force_model.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 
 namespace palp {
 namespace {

@@ -16,11 +16,11 @@
 #include "io/gzip.hpp"
 #include "io/nifti.hpp"
 #include "io/phantom.hpp"
-#include "prep/distance_transform.hpp"
-#include "prep/iso_projection.hpp"
-#include "prep/map_refine.hpp"
-#include "prep/segmentation.hpp"
-#include "prep/subvoxel_distance.hpp"
+#include "prep/maps/distance_transform.hpp"
+#include "prep/maps/iso_projection.hpp"
+#include "prep/maps/map_refine.hpp"
+#include "prep/maps/subvoxel_distance.hpp"
+#include "prep/segment/segmentation.hpp"
 
 namespace palp {
 namespace {
@@ -127,7 +127,7 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
     EXPECT_EQ(read_nifti_float((dir_ / "off" / kSurfaceDistanceFile).string()).data, expected.data);
   }
   // then moved onto the trilinear HU's iso-surface within three coarsest spacings inside, one
-  // outside (prep/iso_projection.hpp)
+  // outside (prep/maps/iso_projection.hpp)
   const IsoProjectionStats moved = project_onto_iso_surface(
       ct, body, -400.0, 3.0 * 2.5, 2.5, 0.25 * 2.5, params.distance.band_mm, expected);
   EXPECT_GT(moved.projected, 0u);
@@ -139,7 +139,8 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   const auto json = nlohmann::json::parse(json_file);
   EXPECT_EQ(json["surface"], "subvoxel");
   EXPECT_EQ(json["surface_iso_hu"]["skin"], -400.0);
-  // The bone level follows the scan's soft-tissue peak (prep/hu_levels.hpp), recorded beside it.
+  // The bone level follows the scan's soft-tissue peak (prep/segment/hu_levels.hpp), recorded
+  // beside it.
   const double offset = json["hu_levels"]["offset_hu"];
   EXPECT_EQ(json["surface_iso_hu"]["bone"], 200.0 + offset);
   EXPECT_EQ(json["hu_levels"]["bone_iso_hu"], 200.0 + offset);

@@ -26,9 +26,9 @@
 #include <vector>
 
 #include "io/ct_io.hpp"
-#include "prep/hu_levels.hpp"
 #include "prep/prep.hpp"
-#include "prep/segmentation.hpp"
+#include "prep/segment/hu_levels.hpp"
+#include "prep/segment/segmentation.hpp"
 #include "support/bone_error_split.hpp"
 #include "support/dicom_slice_writer.hpp"
 #include "support/io_test_util.hpp"
@@ -314,9 +314,9 @@ TEST(SharedCtDicom, LosslessJpeg2000SeriesReadsToTheNiftisHuAtTheSamePositions) 
       origin_off);
 }
 
-// The maps are rounded to 1/1024 mm (prep/subvoxel_distance.hpp, prep/iso_projection.hpp): a
-// distance that lands a hair either side of a rounding boundary in two storage orders differs by
-// one such step.
+// The maps are rounded to 1/1024 mm (prep/maps/subvoxel_distance.hpp,
+// prep/maps/iso_projection.hpp): a distance that lands a hair either side of a rounding boundary in
+// two storage orders differs by one such step.
 constexpr float kMapStep = 1.0f / 1024.0f;
 
 struct MapDifference {
@@ -348,7 +348,7 @@ MapDifference compare_maps(const std::string& nifti_map, const std::string& seri
 }
 
 // Prep of the NIfTI and of the series: the same masks and the same levels; the maps the same up
-// to their rounding step. d_surf's skin projection (prep/iso_projection.hpp) starts from the
+// to their rounding step. d_surf's skin projection (prep/maps/iso_projection.hpp) starts from the
 // sub-voxel map, so those steps move its start a little: a few nodes differ by a few steps.
 // (Before the projection ran in a canonical storage order, 7 nodes differed by up to 0.37 mm.)
 // PALP_DICOM_NO_SKIN_PROJECTION=1 preps without the projection.

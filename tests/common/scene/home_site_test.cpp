@@ -6,8 +6,8 @@
 
 #include "base/errors.hpp"
 #include "io/phantom.hpp"
-#include "prep/distance_transform.hpp"
-#include "prep/segmentation.hpp"
+#include "prep/maps/distance_transform.hpp"
+#include "prep/segment/segmentation.hpp"
 
 namespace palp {
 namespace {

@@ -11,9 +11,9 @@
 #include "io/ct_io.hpp"
 #include "io/phantom.hpp"
 #include "model/field_sampler.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 #include "prep/reorient.hpp"
-#include "prep/segmentation.hpp"
+#include "prep/segment/segmentation.hpp"
 #include "scene/trajectory_gen.hpp"
 #include "support/torso_scenes.hpp"
 

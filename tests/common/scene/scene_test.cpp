@@ -11,7 +11,7 @@
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
 #include "io/phantom.hpp"
-#include "prep/map_refine.hpp"
+#include "prep/maps/map_refine.hpp"
 #include "support/io_test_util.hpp"
 
 namespace palp {
@@ -55,8 +55,8 @@ TEST(Scene, LoadsAPrepDirectory) {
   EXPECT_LT(scene.fields->sample_surf({0.0, 0.0, 0.0}).value, 0.0);
 }
 
-// A CT coarser than an asked map spacing: the scene's grid is the maps' (refined, aligned), the CT and
-// body mask load on their own grid beside it, and the scene frame is the CT's.
+// A CT coarser than an asked map spacing: the scene's grid is the maps' (refined, aligned), the CT
+// and body mask load on their own grid beside it, and the scene frame is the CT's.
 TEST(Scene, MapsOnARefinedGridLoadWithTheirCt) {
   TempDir dir;
   PhantomOptions options;

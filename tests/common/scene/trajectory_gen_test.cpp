@@ -16,7 +16,7 @@
 #include "base/errors.hpp"
 #include "io/phantom.hpp"
 #include "model/force_model.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 #include "scene/path_geometry.hpp"
 #include "scene/scene.hpp"
 #include "support/io_test_util.hpp"

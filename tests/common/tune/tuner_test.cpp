@@ -10,7 +10,7 @@
 #include <cmath>
 
 #include "base/errors.hpp"
-#include "prep/distance_transform.hpp"
+#include "prep/maps/distance_transform.hpp"
 
 namespace palp::tune {
 namespace {

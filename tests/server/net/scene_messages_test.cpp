@@ -6,7 +6,7 @@
 
 #include <cstring>
 
-#include "prep/map_refine.hpp"
+#include "prep/maps/map_refine.hpp"
 #include "support/palpd_test_util.hpp"
 #include "wire/volume_codec.hpp"
 
@@ -63,8 +63,8 @@ TEST(SceneMessages, ShipsTheCtAtTheStepAskedDeflated) {
   EXPECT_EQ(k, 16u);
 }
 
-// Maps on the CT's grid refined by 2 (prep/map_refine.hpp): the HU and body go out from the CT's
-// nearest node, and the body's crop box (in CT voxels) is scaled onto the maps' grid.
+// Maps on the CT's grid refined by 2 (prep/maps/map_refine.hpp): the HU and body go out from the
+// CT's nearest node, and the body's crop box (in CT voxels) is scaled onto the maps' grid.
 TEST(SceneMessages, MapsOnARefinedGridShipTheCtsNearestNode) {
   const SceneDescription coarse = ct_scene();
   SceneDescription scene = coarse;

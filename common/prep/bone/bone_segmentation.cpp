@@ -1,0 +1,337 @@
+// The bone mask (segment_bone): seeded region growing, lumen and leak removal, marrow,
+// surface, notches, islands, calculi.
+//
+// Values while growing: 2 = seed, 1 = grown voxel below the seed level.
+#include "prep/segment/segmentation.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "base/parallel.hpp"
+#include "prep/bone/bone_enclosure.hpp"
+#include "prep/bone/bone_islands.hpp"
+#include "prep/bone/bone_lumens.hpp"
+#include "prep/bone/bone_marrow.hpp"
+#include "prep/bone/bone_ribs.hpp"
+#include "prep/segment/components.hpp"
+#include "prep/segment/segmentation_shared.hpp"
+
+namespace palp {
+namespace segmentation {
+namespace {
+
+Mask bone_candidates(const CtVolume& ct, const Mask& body, const SegmentationParams& params) {
+  Mask bone(ct.grid, 0, "bone mask");
+  const std::int64_t n = static_cast<std::int64_t>(ct.size());
+  const int grow = integer_floor(std::ceil(params.bone_grow_hu));
+  const int seed = integer_floor(std::ceil(params.bone_seed_hu));
+  parallel_for_chunks(n, 1 << 20, [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t i = b; i < e; ++i) {
+      const int hu = ct.data[i];
+      bone.data[i] = static_cast<std::uint8_t>(body.data[i] ? (hu >= seed) + (hu >= grow) : 0);
+    }
+  });
+  return bone;
+}
+
+// Skin clearance: candidates within `clearance_mm` of a voxel outside the body, along any axis (at
+// least one voxel), are cleared. Neighbours beyond the scan's border are not outside: the body
+// goes on there.
+void clear_skin(const Mask& body, double clearance_mm, Mask& bone) {
+  if (clearance_mm <= 0.0) return;
+  const Grid& g = bone.grid;
+  std::int64_t reach[3];
+  for (int a = 0; a < 3; ++a)
+    reach[a] = std::max<std::int64_t>(
+        1, static_cast<std::int64_t>(std::floor(clearance_mm / g.spacing[a] + 1e-9)));
+  const std::int64_t stride[3] = {1, g.dims[0], g.dims[0] * g.dims[1]};
+  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < g.dims[1]; ++j) {
+        const std::uint8_t* row = bone.data.data() + g.linear(0, j, k);
+        // The candidates of the row, found eight bytes at a time (next_byte).
+        for (std::int64_t i = next_byte(row, 0, g.dims[0], true); i < g.dims[0];
+             i = next_byte(row, i + 1, g.dims[0], true)) {
+          const std::size_t n = g.linear(i, j, k);
+          const std::int64_t at[3] = {i, j, k};
+          bool near_outside = false;
+          for (int a = 0; a < 3 && !near_outside; ++a) {
+            const std::int64_t lo = std::max<std::int64_t>(0, at[a] - reach[a]);
+            const std::int64_t hi = std::min<std::int64_t>(g.dims[a] - 1, at[a] + reach[a]);
+            const auto base = static_cast<std::int64_t>(n) - at[a] * stride[a];
+            for (std::int64_t q = lo; q <= hi && !near_outside; ++q)
+              near_outside = !body.data[static_cast<std::size_t>(base + q * stride[a])];
+          }
+          // Each voxel reads only the body mask: clearing one changes nothing another sees (nor
+          // the row's scan, which has passed it).
+          if (near_outside) bone.data[n] = 0;
+        }
+      }
+  });
+}
+
+// Region growing: the candidate regions (6-connected) that hold a seed, values kept, and those
+// that `also(runs, labels, seeded)` marks (per component), made seeds throughout.
+template <class Also>
+void keep_seeded_regions(Mask& bone, Also also) {
+  const Grid& g = bone.grid;
+  const RunTable runs = extract_runs(bone, false);
+  const RunLabels labels = label_runs(g, runs);
+  const auto seeded =
+      components_with(g, runs, labels, [&](std::size_t n) { return bone.data[n] == 2; });
+  const std::vector<std::uint8_t> kept = also(runs, labels, seeded);
+  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    const std::int64_t c = labels.of_run[r];
+    if (seeded[c]) return;
+    std::fill_n(bone.data.begin() + static_cast<std::ptrdiff_t>(first),
+                runs.runs[r].end - runs.runs[r].begin, static_cast<std::uint8_t>(kept[c] ? 2 : 0));
+  });
+}
+
+void keep_seeded_regions(Mask& bone) {
+  keep_seeded_regions(
+      bone, [](const RunTable&, const RunLabels&, const std::vector<std::uint8_t>& seeded) {
+        return std::vector<std::uint8_t>(seeded.size(), 0);
+      });
+}
+
+// Leak removal: the grown voxels below the seed level that are not next to a seed form pieces;
+// a piece that touches the seeds' rim with fewer than `fraction` of its voxels hangs on the bone by
+// a narrow contact — a contrast-filled vessel or an enhancing organ — and is dropped, and with it
+// the contact itself: the grown voxels of the rim that touch a dropped piece are the vessel's wall
+// against the bone (its HU, not bone's), which the edge trim would otherwise have to remove.
+void remove_leaks(double fraction, Mask& bone) {
+  const Grid& g = bone.grid;
+  const auto is_seed = [&](std::int64_t m) { return bone.data[m] == 2; };
+  Mask piece(g, 0, "bone leak check");
+  for_each_nonzero(bone, [&](std::size_t n) {
+    if (bone.data[n] == 1 && !any_face_neighbour(g, n, is_seed)) piece.data[n] = 1;
+  });
+  const RunTable runs = extract_runs(piece, false);
+  const RunLabels labels = label_runs(g, runs);
+  const auto is_rim = [&](std::int64_t m) { return bone.data[m] == 1 && !piece.data[m]; };
+  const std::vector<std::int64_t> contact = count_per_component(
+      g, runs, labels, [&](std::size_t n) { return any_face_neighbour(g, n, is_rim); });
+  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    const std::int64_t c = labels.of_run[r];
+    if (static_cast<double>(contact[c]) >= fraction * static_cast<double>(labels.voxels[c])) return;
+    std::fill_n(bone.data.begin() + static_cast<std::ptrdiff_t>(first),
+                runs.runs[r].end - runs.runs[r].begin, std::uint8_t{0});
+  });
+  const auto dropped = [&](std::int64_t m) { return piece.data[m] && !bone.data[m]; };
+  const std::vector<std::size_t> wall = nonzero_where(bone, [&](std::size_t n) {
+    return bone.data[n] == 1 && !piece.data[n] && any_face_neighbour(g, n, dropped);
+  });
+  for (const std::size_t n : wall) bone.data[n] = 0;
+}
+
+// Cavities: regions outside the bone (6-connected) that do not reach the volume's border and hold
+// at most max_ml are enclosed marrow and are filled.
+void fill_enclosed_cavities(double max_ml, Mask& bone) {
+  const Grid& g = bone.grid;
+  const RunTable runs = extract_runs(bone, true);
+  const RunLabels labels = label_runs(g, runs);
+  std::vector<std::uint8_t> open(labels.voxels.size(), 0);
+  const std::int64_t ny = g.dims[1], nz = g.dims[2];
+  for (std::int64_t row = 0; row < ny * nz; ++row) {
+    const std::int64_t j = row % ny, k = row / ny;
+    const bool border_row = j == 0 || j == ny - 1 || k == 0 || k == nz - 1;
+    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r)
+      if (border_row || runs.runs[r].begin == 0 || runs.runs[r].end == g.dims[0])
+        open[labels.of_run[r]] = 1;
+  }
+  const double ml = voxel_ml(g);
+  for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    const std::int64_t c = labels.of_run[r];
+    if (open[c] || static_cast<double>(labels.voxels[c]) * ml > max_ml) return;
+    std::fill_n(bone.data.begin() + static_cast<std::ptrdiff_t>(first),
+                runs.runs[r].end - runs.runs[r].begin, std::uint8_t{1});
+  });
+}
+
+// Surface refinement: a bone voxel with a face neighbour outside the bone stays bone only if its
+// HU reaches `fraction` of the way from the mean of its outside neighbours to its brightest bone
+// neighbour — a partial-volume edge (0.5 would be the half-maximum; see SegmentationParams for
+// why less). Nothing is trimmed with fraction 0. Only where the bone is thick
+// enough to hold an interior voxel (one with no face neighbour outside) next to it: in a rib or
+// cortex one or two voxels across every voxel is partial volume, no neighbour gives the bone's
+// full HU, and the rule would erode the structure instead of placing its edge.
+void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
+  if (fraction <= 0.0) return;
+  const Grid& g = bone.grid;
+  Mask surface(g, 0, "bone surface voxels");
+  for_each_nonzero(bone, [&](std::size_t n) {
+    if (any_face_neighbour(g, n, [&](std::int64_t m) { return !bone.data[m]; }))
+      surface.data[n] = 1;
+  });
+  const auto interior = [&](std::int64_t m) { return bone.data[m] && !surface.data[m]; };
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  const std::vector<std::size_t> trim = nonzero_where(bone, [&](std::size_t n) {
+    if (!any_face_neighbour(g, n, interior)) return false;  // thin: no voxel of full HU beside it
+    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
+    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
+    const std::int64_t j = jk % ny, k = jk / ny;
+    const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+    double bright = -1e9, outside_sum = 0.0;
+    int outside = 0;
+    for (int d = 0; d < 6; ++d) {
+      if (!inside[d]) continue;
+      const auto m = static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d]);
+      if (bone.data[m]) {
+        bright = std::max(bright, static_cast<double>(ct.data[m]));
+      } else {
+        outside_sum += ct.data[m];
+        ++outside;
+      }
+    }
+    if (outside == 0 || bright < -1e8) return false;
+    const double out_hu = outside_sum / outside;
+    return ct.data[n] < out_hu + fraction * (bright - out_hu);
+  });
+  for (const std::size_t n : trim) bone.data[n] = 0;
+}
+
+// Notches: a body voxel outside the bone with bone on at least `faces` (4 or more) of its six faces
+// lies in a pit, a tunnel or a gap narrower than a voxel in the bone's surface. A bone's surface is
+// smooth at the scale of a 1-3 mm voxel, so such a voxel is the bone's own partial volume (or a
+// voxel the edge trim cut out of a concave surface, judged by its one or two outside neighbours),
+// not tissue; a canal, foramen, disc or joint space the scan resolves (two voxels or more across)
+// never has four bone faces. Filled until none is left: the least such closure of the mask, the
+// same in any order.
+void fill_notches(const Mask& body, int faces, Mask& bone) {
+  if (faces <= 0) return;
+  const Grid& g = bone.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  const auto open_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return std::array<bool, 6>{i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+  };
+  const auto bone_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k, std::size_t n) {
+    const std::array<bool, 6> in = open_faces(i, j, k);
+    int c = 0;
+    for (int d = 0; d < 6; ++d)
+      c += in[d] && bone.data[static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d])];
+    return c;
+  };
+  const auto is_notch = [&](std::size_t n) {
+    if (bone.data[n] || !body.data[n]) return false;
+    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
+    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
+    return bone_faces(i, jk % ny, jk / ny, n) >= faces;
+  };
+  // Each row's span of bone, [span_lo, span_hi) (empty: span_lo >= span_hi). A voxel outside the
+  // spans of its four neighbouring rows and its own row's span grown by one has no bone face,
+  // count 0 < faces: the scan below leaves it out and finds the same notches in the same order.
+  const std::int64_t rows = ny * nz;
+  std::vector<std::int64_t> span_lo(static_cast<std::size_t>(rows)),
+      span_hi(static_cast<std::size_t>(rows));
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r) {
+      const std::uint8_t* row = bone.data.data() + r * nx;
+      span_lo[r] = next_byte(row, 0, nx, true);
+      span_hi[r] = span_lo[r] < nx ? last_nonzero_byte(row, nx) + 1 : 0;
+    }
+  });
+  // The notches of the mask as it is, slice by slice (each row's face counts summed from the six
+  // neighbouring rows, a loop that vectorises); then each filled voxel's neighbours again.
+  std::vector<std::vector<std::size_t>> found(static_cast<std::size_t>(nz));
+  const std::vector<std::uint8_t> none(static_cast<std::size_t>(nx), 0);
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    std::vector<std::uint8_t> counts(static_cast<std::size_t>(nx));
+    std::uint8_t* count = counts.data();
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j) {
+        const std::int64_t r = j + ny * k;
+        std::int64_t lo = nx, hi = 0;
+        const auto widen = [&](bool exists, std::int64_t o, std::int64_t by) {
+          if (!exists || span_lo[o] >= span_hi[o]) return;
+          lo = std::min(lo, std::max<std::int64_t>(0, span_lo[o] - by));
+          hi = std::max(hi, std::min(nx, span_hi[o] + by));
+        };
+        widen(true, r, 1);
+        widen(j > 0, r - 1, 0);
+        widen(j + 1 < ny, r + 1, 0);
+        widen(k > 0, r - ny, 0);
+        widen(k + 1 < nz, r + ny, 0);
+        if (lo >= hi) continue;
+        const std::size_t first = g.linear(0, j, k);
+        const std::uint8_t* row = bone.data.data() + first;
+        const std::uint8_t* in_body = body.data.data() + first;
+        const std::uint8_t* y0 = j > 0 ? row - nx : none.data();
+        const std::uint8_t* y1 = j + 1 < ny ? row + nx : none.data();
+        const std::uint8_t* z0 = k > 0 ? row - nx * ny : none.data();
+        const std::uint8_t* z1 = k + 1 < nz ? row + nx * ny : none.data();
+        for (std::int64_t i = lo; i < hi; ++i)
+          count[i] = static_cast<std::uint8_t>(y0[i] + y1[i] + z0[i] + z1[i]);
+        for (std::int64_t i = std::max<std::int64_t>(lo, 1); i < hi; ++i) count[i] += row[i - 1];
+        for (std::int64_t i = lo; i < std::min(hi, nx - 1); ++i) count[i] += row[i + 1];
+        for (std::int64_t i = lo; i < hi; ++i)
+          if (count[i] >= faces && !row[i] && in_body[i])
+            found[static_cast<std::size_t>(k)].push_back(first + static_cast<std::size_t>(i));
+      }
+  });
+  std::vector<std::size_t> todo;
+  for (const auto& slice : found) todo.insert(todo.end(), slice.begin(), slice.end());
+  while (!todo.empty()) {
+    const std::size_t n = todo.back();
+    todo.pop_back();
+    if (!is_notch(n)) continue;
+    bone.data[n] = 1;
+    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
+    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
+    const std::array<bool, 6> in = open_faces(i, jk % ny, jk / ny);
+    for (int d = 0; d < 6; ++d)
+      if (in[d]) todo.push_back(static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d]));
+  }
+}
+
+void remove_small_islands(double min_island_ml, Mask& bone) {
+  const Grid& g = bone.grid;
+  const RunTable runs = extract_runs(bone, false);
+  const RunLabels labels = label_runs(g, runs);
+  const double ml = voxel_ml(g);
+  rewrite_runs(
+      g, runs, labels,
+      [&](std::int64_t c) { return static_cast<double>(labels.voxels[c]) * ml >= min_island_ml; },
+      bone);
+}
+
+}  // namespace
+}  // namespace segmentation
+
+Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams& params,
+                  SegmentationStats* stats) {
+  using namespace segmentation;
+  check_params(params);
+  if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
+    throw UsageError("segment_bone: the body mask is not on the CT's grid");
+  const PatientAxes axes = patient_axes(ct.grid);
+  Mask bone = bone_candidates(ct, body, params);          // seeds and growable voxels
+  clear_skin(body, params.bone_skin_clearance_mm, bone);  // none on the skin (kernel overshoot)
+  // Region growing from the seeds; ribs blurred under the seed level kept without one.
+  keep_seeded_regions(bone, [&](const RunTable& runs, const RunLabels& labels,
+                                const std::vector<std::uint8_t>& seeded) {
+    return unseeded_ribs(ct, body, axes, runs, labels, seeded, params);
+  });
+  if (remove_lumens(ct, params, bone) > 0) keep_seeded_regions(bone);  // seed-bright lumens
+  remove_leaks(params.bone_leak_contact_fraction, bone);               // vessels resting on bone
+  for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });
+  remove_lumen_islands(ct, params, bone);                   // filled lumens apart from bone
+  fill_marrow_by_votes(axes, params, bone);                 // marrow: enclosed in 2 of 3 planes
+  fill_between_cortices(axes, params, body, bone);          // marrow: bracketed along most lines
+  fill_enclosed_cavities(params.bone_max_cavity_ml, bone);  // marrow enclosed in 3D
+  refine_surface(ct, params.bone_edge_fraction, bone);      // partial-volume edge
+  fill_notches(body, params.bone_notch_faces, bone);        // notches narrower than a voxel
+  remove_small_islands(params.min_bone_island_ml, bone);    // islands
+  remove_compact_islands(params, bone);                     // calculi, calcified nodes
+  if (stats) stats->bone_voxels = count_nonzero(bone);
+  return bone;
+}
+
+}  // namespace palp

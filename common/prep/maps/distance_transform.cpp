@@ -1,0 +1,412 @@
+// Exact signed Euclidean distance transform (see distance_transform.hpp for the convention).
+//
+// Data flow, all in place in the output array (4 bytes a voxel, no second volume):
+//   crop      mask -> box around the inside voxels + band margin; outside it D = -band
+//   pass i    mask rows            -> per voxel: offset (in voxels, along i) to the nearest voxel
+//                                     of the opposite class, packed as (a, 0)
+//   pass j    (a, 0) columns       -> per voxel: offsets (a, b) of the nearest opposite-class
+//                                     voxel within its axial slice (lower envelope of parabolas)
+//   pass k    (a, b) lines along k -> float D: min over k' of |(a sx, b sy, (k-k') sz)|, signed,
+//                                     offset by h/2, clamped to the band
+// Each pass answers two questions at once: "nearest outside" for inside voxels and "nearest
+// inside" for outside voxels. The source values of both can be rebuilt from the one packed
+// value and the mask, because a voxel's distance to its own class is zero.
+//
+// Offsets are stored as integers, so the final squared distance is evaluated exactly as a
+// brute-force search would evaluate it: (a sx)^2 + (b sy)^2 + (c sz)^2 in double.
+#include "prep/maps/distance_transform.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "base/parallel.hpp"
+
+namespace palp {
+namespace {
+
+// Packed per-voxel offsets during the passes: low 16 bits along i, high 16 bits along j.
+// kNoSite marks "no voxel of the wanted class on this line/slice" (infinite distance).
+constexpr std::uint32_t kNoSite = 0xFFFFFFFFu;
+constexpr std::uint16_t kNoOffset = 0xFFFFu;
+static_assert(kMaxVoxelsPerAxis < kNoOffset, "offsets must fit below the sentinel");
+
+inline std::uint32_t pack(std::uint32_t a, std::uint32_t b) {
+  return a | (b << 16);
+}
+inline std::uint32_t offset_a(std::uint32_t packed) {
+  return packed & 0xFFFFu;
+}
+inline std::uint32_t offset_b(std::uint32_t packed) {
+  return packed >> 16;
+}
+
+// Reads and writes packed offsets in the float output array without aliasing it as uint32.
+struct PackedView {
+  float* storage;
+  struct Ref {
+    float* at;
+    operator std::uint32_t() const { return std::bit_cast<std::uint32_t>(*at); }
+    Ref& operator=(std::uint32_t v) {
+      *at = std::bit_cast<float>(v);
+      return *this;
+    }
+  };
+  Ref operator[](std::size_t i) const { return Ref{storage + i}; }
+};
+
+struct Box {
+  Index3 lo{0, 0, 0};  // inclusive
+  Index3 hi{0, 0, 0};  // exclusive
+  std::int64_t size(int axis) const { return hi[axis] - lo[axis]; }
+};
+
+// Lower envelope of parabolas y = f[q] + (w (x - q))^2 over sites q with finite f (Felzenszwalb
+// and Huttenlocher 2012), evaluated at every x in [0, n): argmin[x] receives the winning site,
+// or -1 when no site exists. Scratch is owned by the caller so a pass allocates nothing per line.
+struct Envelope {
+  std::vector<std::int32_t> sites;
+  std::vector<double> site_value;  // f[q] + w2 q^2 of each site in the envelope
+  std::vector<double> bounds;
+
+  void reserve(std::int64_t n) {
+    sites.resize(static_cast<std::size_t>(n));
+    site_value.resize(static_cast<std::size_t>(n));
+    bounds.resize(static_cast<std::size_t>(n) + 1);
+  }
+
+  // f[q] < 0 marks "no site at q". w2 = spacing^2 along the line.
+  void solve(const double* f, std::int64_t n, double w2, std::int32_t* argmin) {
+    std::size_t count = 0;  // parabolas in the envelope
+    for (std::int64_t q = 0; q < n; ++q) {
+      if (f[q] < 0.0) continue;
+      const double dq = static_cast<double>(q);
+      const double fq = f[q] + w2 * dq * dq;
+      while (count > 0) {
+        const double s = (fq - site_value[count - 1]) /
+                         (2.0 * w2 * (dq - static_cast<double>(sites[count - 1])));
+        if (s > bounds[count - 1]) {
+          bounds[count] = s;
+          break;
+        }
+        --count;
+      }
+      if (count == 0) bounds[0] = -std::numeric_limits<double>::infinity();
+      sites[count] = static_cast<std::int32_t>(q);
+      site_value[count] = fq;
+      ++count;
+      bounds[count] = std::numeric_limits<double>::infinity();
+    }
+    if (count == 0) {
+      std::fill(argmin, argmin + n, -1);
+      return;
+    }
+    std::size_t segment = 0;
+    for (std::int64_t x = 0; x < n; ++x) {
+      while (bounds[segment + 1] < static_cast<double>(x)) ++segment;
+      argmin[x] = sites[segment];
+    }
+  }
+};
+
+// Bounding box of the nonzero voxels; empty (lo == hi) when there are none.
+Box inside_bounds(const Mask& mask, unsigned threads) {
+  const Index3 n = mask.grid.dims;
+  std::vector<std::int64_t> slice_lo_i(static_cast<std::size_t>(n[2]), n[0]);
+  std::vector<std::int64_t> slice_hi_i(static_cast<std::size_t>(n[2]), -1);
+  std::vector<std::int64_t> slice_lo_j(static_cast<std::size_t>(n[2]), n[1]);
+  std::vector<std::int64_t> slice_hi_j(static_cast<std::size_t>(n[2]), -1);
+  parallel_for_chunks(
+      n[2], 4,
+      [&](std::int64_t k0, std::int64_t k1) {
+        for (std::int64_t k = k0; k < k1; ++k) {
+          const auto kk = static_cast<std::size_t>(k);
+          for (std::int64_t j = 0; j < n[1]; ++j) {
+            const std::uint8_t* row = &mask.data[mask.grid.linear(0, j, k)];
+            const std::uint8_t* first =
+                std::find_if(row, row + n[0], [](std::uint8_t v) { return v != 0; });
+            if (first == row + n[0]) continue;
+            const std::uint8_t* last = row + n[0] - 1;
+            while (*last == 0) --last;
+            slice_lo_i[kk] = std::min<std::int64_t>(slice_lo_i[kk], first - row);
+            slice_hi_i[kk] = std::max<std::int64_t>(slice_hi_i[kk], last - row);
+            slice_lo_j[kk] = std::min(slice_lo_j[kk], j);
+            slice_hi_j[kk] = std::max(slice_hi_j[kk], j);
+          }
+        }
+      },
+      threads);
+  Box box{{n[0], n[1], n[2]}, {-1, -1, -1}};
+  for (std::int64_t k = 0; k < n[2]; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    if (slice_hi_i[kk] < 0) continue;
+    box.lo = {std::min(box.lo[0], slice_lo_i[kk]), std::min(box.lo[1], slice_lo_j[kk]),
+              std::min(box.lo[2], k)};
+    box.hi = {std::max(box.hi[0], slice_hi_i[kk] + 1), std::max(box.hi[1], slice_hi_j[kk] + 1),
+              std::max(box.hi[2], k + 1)};
+  }
+  if (box.hi[0] < 0) return Box{};
+  return box;
+}
+
+// Pass i over one row: offset along i to the nearest voxel of the opposite class.
+void pass_rows(const std::uint8_t* mask_row, PackedView out, std::size_t first, std::int64_t n) {
+  std::int64_t last[2] = {-1, -1};  // last index seen of class 0 / 1
+  for (std::int64_t i = 0; i < n; ++i) {
+    const int cls = mask_row[i] != 0;
+    last[cls] = i;
+    const std::int64_t opposite = last[1 - cls];
+    out[first + static_cast<std::size_t>(i)] =
+        opposite < 0 ? std::uint32_t{kNoOffset} : static_cast<std::uint32_t>(i - opposite);
+  }
+  last[0] = last[1] = -1;
+  for (std::int64_t i = n - 1; i >= 0; --i) {
+    const int cls = mask_row[i] != 0;
+    last[cls] = i;
+    const std::int64_t opposite = last[1 - cls];
+    if (opposite < 0) continue;
+    const std::uint32_t backward = static_cast<std::uint32_t>(opposite - i);
+    auto slot = out[first + static_cast<std::size_t>(i)];
+    if (backward < static_cast<std::uint32_t>(slot)) slot = backward;
+  }
+}
+
+// The squared in-plane distance a packed (a, b) stands for; -1 when there is no site.
+inline double squared_distance(std::uint32_t packed, double sx2, double sy2) {
+  if (packed == kNoSite || offset_a(packed) == kNoOffset) return -1.0;
+  const double a = offset_a(packed), b = offset_b(packed);
+  return a * a * sx2 + b * b * sy2;
+}
+
+// Per-thread scratch for the line passes (j and k): a block of kWidth adjacent lines gathered
+// side by side, so each strided read of the volume fetches whole cache lines.
+struct LineBlock {
+  static constexpr std::int64_t kWidth = 16;
+  std::int64_t length = 0;            // voxels per line
+  std::vector<std::uint8_t> cls;      // [position * kWidth + line]: 1 inside, 0 outside
+  std::vector<std::uint32_t> value;   // [position * kWidth + line]: packed offsets / float bits
+  std::vector<double> f;              // one line's parabola heights
+  std::vector<std::int32_t> argmin;   // one line's winning sites
+  std::vector<std::uint32_t> staged;  // one line's results, committed once both classes are done
+  Envelope envelope;
+
+  explicit LineBlock(std::int64_t n) : length(n) {
+    const auto size = static_cast<std::size_t>(n);
+    cls.resize(size * kWidth);
+    value.resize(size * kWidth);
+    f.resize(size);
+    argmin.resize(size);
+    staged.resize(size);
+    envelope.reserve(n);
+  }
+  std::size_t at(std::int64_t position, std::int64_t line) const {
+    return static_cast<std::size_t>(position * kWidth + line);
+  }
+
+  // For target class t, the sources along a line are the voxels of class 1-t (height 0) and the
+  // voxels of class t, whose height is the squared distance `height(value)` they already reach
+  // to class 1-t in the lower dimensions. Sites beyond `reach2` only yield clamped values and
+  // are dropped. Calls emit(position, site) for each voxel of class t.
+  template <class Height, class Emit>
+  void solve(std::int64_t line, int target, double w2, double reach2, Height height, Emit emit) {
+    for (std::int64_t q = 0; q < length; ++q) {
+      const std::size_t i = at(q, line);
+      const double fq = cls[i] != target ? 0.0 : height(value[i]);
+      f[static_cast<std::size_t>(q)] = fq > reach2 ? -1.0 : fq;
+    }
+    envelope.solve(f.data(), length, w2, argmin.data());
+    for (std::int64_t x = 0; x < length; ++x) {
+      if (cls[at(x, line)] == target) emit(x, argmin[static_cast<std::size_t>(x)]);
+    }
+  }
+
+  void commit_staged(std::int64_t line) {
+    for (std::int64_t x = 0; x < length; ++x)
+      value[at(x, line)] = staged[static_cast<std::size_t>(x)];
+  }
+
+  // Which classes occur on a line: bit 0 outside, bit 1 inside.
+  unsigned classes(std::int64_t line) const {
+    unsigned seen = 0;
+    for (std::int64_t q = 0; q < length; ++q) seen |= 1u << cls[at(q, line)];
+    return seen;
+  }
+};
+
+// Runs `body(block, width)` over blocks of adjacent lines along `stride`, first voxel `first`:
+// gathers mask classes and values, then scatters block.value back.
+template <class Body>
+void with_line_block(LineBlock& block, const Mask& mask, PackedView values, std::size_t first,
+                     std::size_t stride, std::int64_t width, Body body) {
+  for (std::int64_t p = 0; p < block.length; ++p) {
+    const std::size_t at = first + static_cast<std::size_t>(p) * stride;
+    for (std::int64_t w = 0; w < width; ++w) {
+      block.cls[block.at(p, w)] = mask.data[at + static_cast<std::size_t>(w)] != 0;
+      block.value[block.at(p, w)] = values[at + static_cast<std::size_t>(w)];
+    }
+  }
+  body(block, width);
+  for (std::int64_t p = 0; p < block.length; ++p) {
+    const std::size_t at = first + static_cast<std::size_t>(p) * stride;
+    for (std::int64_t w = 0; w < width; ++w) {
+      values[at + static_cast<std::size_t>(w)] = block.value[block.at(p, w)];
+    }
+  }
+}
+
+// Pass j on a block: packed (a, 0) -> packed (a, b), the nearest opposite voxel in the slice.
+// A winning site of class t carries its own row offset a; one of class 1-t is the voxel itself.
+void pass_j(LineBlock& block, std::int64_t width, double sx2, double sy2, double reach2) {
+  auto row_height = [sx2](std::uint32_t a) {
+    return a == kNoOffset ? -1.0 : static_cast<double>(a) * static_cast<double>(a) * sx2;
+  };
+  for (std::int64_t w = 0; w < width; ++w) {
+    const unsigned present = block.classes(w);
+    for (int target = 0; target < 2; ++target) {
+      if ((present & (1u << target)) == 0) continue;
+      block.solve(w, target, sy2, reach2, row_height, [&](std::int64_t x, std::int32_t q) {
+        if (q < 0) {
+          block.staged[static_cast<std::size_t>(x)] = kNoSite;
+          return;
+        }
+        const std::size_t iq = block.at(q, w);
+        const std::uint32_t a = block.cls[iq] == target ? block.value[iq] : 0u;
+        block.staged[static_cast<std::size_t>(x)] =
+            pack(a, static_cast<std::uint32_t>(std::abs(x - q)));
+      });
+    }
+    block.commit_staged(w);
+  }
+}
+
+// Pass k on a block: packed (a, b) -> float D, signed, offset by h/2 and clamped to the band.
+void pass_k(LineBlock& block, std::int64_t width, double sx2, double sy2, double sz2, double reach2,
+            double h, float band) {
+  auto plane_height = [sx2, sy2](std::uint32_t v) { return squared_distance(v, sx2, sy2); };
+  for (std::int64_t w = 0; w < width; ++w) {
+    const unsigned present = block.classes(w);
+    for (int target = 0; target < 2; ++target) {
+      if ((present & (1u << target)) == 0) continue;
+      block.solve(w, target, sz2, reach2, plane_height, [&](std::int64_t x, std::int32_t q) {
+        float distance = band;  // no site within reach: beyond the band
+        if (q >= 0) {
+          const double c = static_cast<double>(x - q);
+          const double d2 = block.f[static_cast<std::size_t>(q)] + c * c * sz2;
+          distance = std::min(band, static_cast<float>(std::sqrt(d2) - h / 2.0));
+        }
+        // target 1: an inside voxel, positive; target 0: an outside voxel, negative.
+        block.staged[static_cast<std::size_t>(x)] =
+            std::bit_cast<std::uint32_t>(target == 1 ? distance : -distance);
+      });
+    }
+    block.commit_staged(w);
+  }
+}
+
+}  // namespace
+
+DistanceMap signed_distance(const Mask& mask, const DistanceParams& params) {
+  DistanceMap out;
+  signed_distance(mask, params, out);
+  return out;
+}
+
+void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap& out) {
+  if (!(params.band_mm > 0.0 && params.band_mm <= kMaxBandMm)) {
+    throw UsageError("distance band must be in (0, " +
+                     std::to_string(static_cast<int>(kMaxBandMm)) + "] mm (--band)");
+  }
+  const Grid& grid = mask.grid;
+  validate_grid(grid, "mask");
+  if (mask.data.size() != grid.voxel_count()) throw UsageError("mask data does not match its grid");
+  const unsigned threads = params.threads == 0 ? default_thread_count() : params.threads;
+  const float band = static_cast<float>(params.band_mm);
+  const Index3 n = grid.dims;
+  const double h = grid.min_spacing();
+
+  if (out.data.size() == grid.voxel_count()) {
+    out.grid = grid;
+    parallel_for_chunks(
+        n[2], 8,
+        [&](std::int64_t k0, std::int64_t k1) {
+          std::fill(out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k0)),
+                    out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k1)), -band);
+        },
+        threads);
+  } else {
+    out = DistanceMap();  // release the old memory before taking the new
+    out = DistanceMap(grid, -band, "distance map");
+  }
+  const Box inside = inside_bounds(mask, threads);
+  if (inside.size(0) <= 0) return;  // no inside voxel: everything is outside, beyond the band
+
+  // Crop: voxels farther than the band (+ h/2 offset, + one voxel) from the inside box are
+  // outside and clamped, so the transform only runs inside this box. The nearest site of every
+  // voxel in the box lies in the box (clamping a site onto the box never lengthens the path).
+  Box box;
+  for (int a = 0; a < 3; ++a) {
+    const auto margin =
+        static_cast<std::int64_t>(std::ceil((params.band_mm + h) / grid.spacing[a])) + 1;
+    box.lo[a] = std::max<std::int64_t>(0, inside.lo[a] - margin);
+    box.hi[a] = std::min<std::int64_t>(n[a], inside.hi[a] + margin);
+  }
+  const std::int64_t bx = box.size(0), by = box.size(1), bz = box.size(2);
+  // The output array doubles as the packed-offset store until pass k turns it into floats.
+  PackedView packed{out.data.data()};
+  const double sx2 = grid.spacing[0] * grid.spacing[0];
+  const double sy2 = grid.spacing[1] * grid.spacing[1];
+  const double sz2 = grid.spacing[2] * grid.spacing[2];
+  // Squared centre-to-centre distance beyond which D is clamped (sqrt(d2) - h/2 > band): sites
+  // whose partial distance already exceeds it are dropped from the envelopes.
+  const double reach2 = (params.band_mm + h) * (params.band_mm + h);
+
+  constexpr std::int64_t kWidth = LineBlock::kWidth;
+  const std::int64_t blocks_per_row = (bx + kWidth - 1) / kWidth;
+  const std::size_t row_stride = static_cast<std::size_t>(n[0]);
+  const std::size_t slice_stride = static_cast<std::size_t>(n[0] * n[1]);
+
+  // Passes i and j, slice by slice: mask rows -> packed (a, b) per voxel of the box.
+  parallel_for_chunks(
+      bz, 1,
+      [&](std::int64_t z0, std::int64_t z1) {
+        LineBlock block(by);
+        for (std::int64_t k = box.lo[2] + z0; k < box.lo[2] + z1; ++k) {
+          for (std::int64_t j = box.lo[1]; j < box.hi[1]; ++j) {
+            const std::size_t at = grid.linear(box.lo[0], j, k);
+            pass_rows(&mask.data[at], packed, at, bx);
+          }
+          for (std::int64_t b = 0; b < blocks_per_row; ++b) {
+            const std::int64_t i0 = box.lo[0] + b * kWidth;
+            with_line_block(block, mask, packed, grid.linear(i0, box.lo[1], k), row_stride,
+                            std::min(kWidth, box.hi[0] - i0),
+                            [&](LineBlock& lines, std::int64_t width) {
+                              pass_j(lines, width, sx2, sy2, reach2);
+                            });
+          }
+        }
+      },
+      threads);
+
+  // Pass k over blocks of lines: packed (a, b) -> float D, written over the packed values.
+  parallel_for_chunks(
+      by * blocks_per_row, 8,
+      [&](std::int64_t b0, std::int64_t b1) {
+        LineBlock block(bz);
+        for (std::int64_t b = b0; b < b1; ++b) {
+          const std::int64_t j = box.lo[1] + b / blocks_per_row;
+          const std::int64_t i0 = box.lo[0] + (b % blocks_per_row) * kWidth;
+          with_line_block(block, mask, packed, grid.linear(i0, j, box.lo[2]), slice_stride,
+                          std::min(kWidth, box.hi[0] - i0),
+                          [&](LineBlock& lines, std::int64_t width) {
+                            pass_k(lines, width, sx2, sy2, sz2, reach2, h, band);
+                          });
+        }
+      },
+      threads);
+}
+
+}  // namespace palp
