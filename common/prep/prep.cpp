@@ -147,6 +147,115 @@ void value_range(const DistanceMap& map, float range[2], unsigned threads) {
 
 using segmentation::count_nonzero;
 
+// What prep.json says of the maps besides the result: the surface method's facts and the maps'
+// value ranges (also the .nii.gz headers' cal_min/cal_max).
+struct MapRecord {
+  Refinement refine{1, 1, 1};  // the maps' grid refines the CT's by these factors
+  double band_mm = 0.0;        // subvoxel: the near band
+  double projection_mm = 0.0;  // subvoxel: the skin projection's reach
+  IsoProjectionStats projected;
+  nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
+  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
+};
+
+// A cached prep directory's prep.json -> the grids and voxel counts of `result`.
+void read_cached_result(const nlohmann::json& cached, PrepResult& result) {
+  result.from_cache = true;
+  result.grid.dims = cached["grid"]["dimensions"].get<Index3>();
+  result.grid.spacing = cached["grid"]["spacing_mm"].get<Vec3>();
+  result.map_grid = result.grid;
+  if (cached.contains("map_grid")) {
+    result.map_grid.dims = cached["map_grid"]["dimensions"].get<Index3>();
+    result.map_grid.spacing = cached["map_grid"]["spacing_mm"].get<Vec3>();
+  }
+  result.stats.body_voxels = cached["voxels"]["body"].get<std::uint64_t>();
+  result.stats.bone_voxels = cached["voxels"]["bone"].get<std::uint64_t>();
+}
+
+// prep.json: the grids, parameters and levels used, counts, timings, CPU seconds, peak memory,
+// the outputs' sizes in `dir`, and the cache key.
+nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
+                         const SegmentationParams& segmentation, const SurfaceParams& surface,
+                         const MapRecord& maps, const fs::path& dir) {
+  nlohmann::json json;
+  json["palp_prep_version"] = kPrepAlgorithmVersion;
+  json["input"] = result.input;
+  json["cache_key"] = result.cache_key;
+  json["grid"] = grid_json(result.grid);
+  json["map_grid"] = grid_json(result.map_grid);  // d_surf, d_bone: the grid refined by
+  json["map_refinement"] = maps.refine;           // these factors (prep/maps/map_refine.hpp)
+  json["patient"] = {{"input_orientation", result.orientation},
+                     {"input_obliquity_deg", result.obliquity_deg},
+                     {"reoriented", result.reoriented},
+                     {"orientation", patient_frame(result.grid).orientation_code()}};
+  if (!result.hu_warning.empty()) json["not_hu_ok"] = result.hu_warning;
+  json["parameters"] = params_json(params);
+  json["surface"] = surface_method_name(params.surface.method);
+  {
+    const HuLevels& h = result.hu_levels;
+    json["hu_levels"] = {
+        {"mode", params.adapt_bone_levels ? "adapted to the scan" : "as given"},
+        {"soft_tissue_peak_hu", h.peak_found ? nlohmann::json(h.soft_peak_hu) : nlohmann::json()},
+        {"soft_tissue_share", h.peak_share},
+        {"fat_peak_hu", h.fat_found ? nlohmann::json(h.fat_peak_hu) : nlohmann::json()},
+        {"fat_share", h.fat_share},
+        {"offset_hu", params.adapt_bone_levels ? h.offset_hu : 0.0},
+        {"note", h.note},
+        {"bone_seed_hu", segmentation.bone_seed_hu},
+        {"bone_grow_hu", segmentation.bone_grow_hu},
+        {"bone_iso_hu", surface.bone_hu}};
+  }
+  if (params.surface.method == SurfaceMethod::subvoxel) {
+    json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", surface.bone_hu}};
+    json["subvoxel_band_mm_used"] = maps.band_mm;
+    json["skin_projection"] = {{"reach_mm", maps.projection_mm},
+                               {"nodes", {maps.projected.visited, maps.projected.projected}}};
+    // [points, placed by HU]: the rest straddle no level (the mask cut there: table contact,
+    // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
+    json["surface_points"] = maps.point_counts;
+  }
+  json["voxels"] = {{"total", result.grid.voxel_count()},
+                    {"body", result.stats.body_voxels},
+                    {"bone", result.stats.bone_voxels},
+                    {"removed_non_patient", result.stats.removed_non_patient_voxels},
+                    {"table", result.stats.table_voxels}};
+  json["distance_range_mm"] = {{"d_surf", {maps.surf_range[0], maps.surf_range[1]}},
+                               {"d_bone", {maps.bone_range[0], maps.bone_range[1]}}};
+  nlohmann::json timings = nlohmann::json::object();
+  for (const auto& s : result.stages) timings[s.name] = s.seconds;
+  timings["total"] = result.total_seconds;
+  json["timings_s"] = timings;
+  nlohmann::json cpu = nlohmann::json::object();
+  for (const auto& s : result.stages)
+    if (s.cpu_seconds > 0.0) cpu[s.name] = s.cpu_seconds;
+  cpu["total"] = process_cpu_seconds();
+  json["cpu_seconds"] = cpu;
+  json["peak_memory_bytes"] = result.peak_rss_bytes;
+  nlohmann::json stage_peaks = nlohmann::json::object();
+  for (const auto& s : result.stages) stage_peaks[s.name] = s.peak_rss_bytes;
+  json["peak_memory_bytes_after_stage"] = stage_peaks;
+  json["threads"] = params.distance.threads ? params.distance.threads : default_thread_count();
+  nlohmann::json sizes = nlohmann::json::object();
+  for (const char* name :
+       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
+    sizes[name] = fs::file_size(dir / name);
+  }
+  json["file_bytes"] = sizes;
+  return json;
+}
+
+// Writes `json` to `path` through a .partial file renamed over it.
+void write_json_atomically(const fs::path& path, const nlohmann::json& json) {
+  std::error_code ec;
+  {
+    std::ofstream out(path.string() + ".partial");
+    out << json.dump(2) << '\n';
+    if (!out) throw Error(path.string() + ": cannot be written");
+  }
+  fs::rename(path.string() + ".partial", path, ec);
+  if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
+}
+
 }  // namespace
 
 const char* surface_method_name(SurfaceMethod method) {
@@ -179,16 +288,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   result.cache_key = prep_cache_key(input, params);
   nlohmann::json cached;
   if (params.use_cache && cache_is_valid(dir, result.cache_key, &cached)) {
-    result.from_cache = true;
-    result.grid.dims = cached["grid"]["dimensions"].get<Index3>();
-    result.grid.spacing = cached["grid"]["spacing_mm"].get<Vec3>();
-    result.map_grid = result.grid;
-    if (cached.contains("map_grid")) {
-      result.map_grid.dims = cached["map_grid"]["dimensions"].get<Index3>();
-      result.map_grid.spacing = cached["map_grid"]["spacing_mm"].get<Vec3>();
-    }
-    result.stats.body_voxels = cached["voxels"]["body"].get<std::uint64_t>();
-    result.stats.bone_voxels = cached["voxels"]["bone"].get<std::uint64_t>();
+    read_cached_result(cached, result);
     result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     result.peak_rss_bytes = peak_rss_bytes();
     guard.commit();
@@ -269,12 +369,12 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   const double projection = skin_projection_mm(params.surface, ct.grid);
   DistanceMap map;
   SurfacePoints skin_points, bone_points;
-  nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
-  IsoProjectionStats projected;
   std::size_t skin_count[2] = {0, 0};  // the skin's points, and how many the HU placed
-  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
+  MapRecord record;                    // what prep.json says of the maps
+  record.band_mm = band;
+  record.projection_mm = projection;
   // The maps' grid: the CT's, or its aligned refinement (--map-spacing; prep/maps/map_refine.hpp).
-  const Refinement refine = map_refinement(result.grid, params.map_spacing_mm);
+  const Refinement& refine = record.refine = map_refinement(result.grid, params.map_spacing_mm);
   result.map_grid = refined_grid(result.grid, refine);
   // The map of `mask` into `map` on the CT's grid, upsampled to the maps' grid when refined, then
   // (the skin's, when `hu`) projected onto the HU iso-surface at the maps' nodes.
@@ -287,8 +387,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     }
     if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
     if (subvoxel && hu != nullptr)
-      projected = project_skin_map(*hu, mask, params.surface.skin_hu, projection,
-                                   params.distance.band_mm, map, params.distance.threads);
+      record.projected = project_skin_map(*hu, mask, params.surface.skin_hu, projection,
+                                          params.distance.band_mm, map, params.distance.threads);
   };
   // The HU are needed by d_surf past the bone's points only for its projection onto their
   // iso-surface; the job drops them after it. Nobody changes them: the writers read them.
@@ -305,10 +405,10 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     compute_map(body, skin_points, subvoxel && projection != 0.0 ? surf_ct.get() : nullptr);
     surf_ct.reset();
     skin_points = SurfacePoints{};
-    value_range(map, surf_range, params.distance.threads);
+    value_range(map, record.surf_range, params.distance.threads);
   });
   surf_job.add("write d_surf", [&] {
-    write_atomically(dir / kSurfaceDistanceFile, map, surf_range[0], surf_range[1]);
+    write_atomically(dir / kSurfaceDistanceFile, map, record.surf_range[0], record.surf_range[1]);
   });
 
   // The bone levels, shifted with the scan's soft-tissue peak unless given
@@ -338,8 +438,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   stage("wait d_surf", [&] { written = surf_job.wait(); });
   report_background(written);
   if (subvoxel) {
-    point_counts = {{"skin", {skin_count[0], skin_count[1]}},
-                    {"bone", {bone_points.points.size(), bone_points.interpolated}}};
+    record.point_counts = {{"skin", {skin_count[0], skin_count[1]}},
+                           {"bone", {bone_points.points.size(), bone_points.interpolated}}};
   }
   // The CT's copy and the masks are out by now (they usually are long before).
   stage("wait CT+masks", [&] { written = writes.wait(); });
@@ -347,85 +447,16 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
 
   stage("d_bone", [&] { compute_map(bone, bone_points, nullptr); });
   bone_points = SurfacePoints{};
-  value_range(map, bone_range, params.distance.threads);
-  stage("write d_bone",
-        [&] { write_atomically(dir / kBoneDistanceFile, map, bone_range[0], bone_range[1]); });
+  value_range(map, record.bone_range, params.distance.threads);
+  stage("write d_bone", [&] {
+    write_atomically(dir / kBoneDistanceFile, map, record.bone_range[0], record.bone_range[1]);
+  });
 
   result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.peak_rss_bytes = peak_rss_bytes();
 
-  nlohmann::json json;
-  json["palp_prep_version"] = kPrepAlgorithmVersion;
-  json["input"] = input;
-  json["cache_key"] = result.cache_key;
-  json["grid"] = grid_json(result.grid);
-  json["map_grid"] = grid_json(result.map_grid);  // d_surf, d_bone: the grid refined by
-  json["map_refinement"] = refine;                // these factors (prep/maps/map_refine.hpp)
-  json["patient"] = {{"input_orientation", result.orientation},
-                     {"input_obliquity_deg", result.obliquity_deg},
-                     {"reoriented", result.reoriented},
-                     {"orientation", patient_frame(result.grid).orientation_code()}};
-  if (!result.hu_warning.empty()) json["not_hu_ok"] = result.hu_warning;
-  json["parameters"] = params_json(params);
-  json["surface"] = surface_method_name(params.surface.method);
-  {
-    const HuLevels& h = result.hu_levels;
-    json["hu_levels"] = {
-        {"mode", params.adapt_bone_levels ? "adapted to the scan" : "as given"},
-        {"soft_tissue_peak_hu", h.peak_found ? nlohmann::json(h.soft_peak_hu) : nlohmann::json()},
-        {"soft_tissue_share", h.peak_share},
-        {"fat_peak_hu", h.fat_found ? nlohmann::json(h.fat_peak_hu) : nlohmann::json()},
-        {"fat_share", h.fat_share},
-        {"offset_hu", params.adapt_bone_levels ? h.offset_hu : 0.0},
-        {"note", h.note},
-        {"bone_seed_hu", segmentation.bone_seed_hu},
-        {"bone_grow_hu", segmentation.bone_grow_hu},
-        {"bone_iso_hu", surface.bone_hu}};
-  }
-  if (subvoxel) {
-    json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", surface.bone_hu}};
-    json["subvoxel_band_mm_used"] = band;
-    json["skin_projection"] = {{"reach_mm", projection},
-                               {"nodes", {projected.visited, projected.projected}}};
-    // [points, placed by HU]: the rest straddle no level (the mask cut there: table contact,
-    // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
-    json["surface_points"] = point_counts;
-  }
-  json["voxels"] = {{"total", result.grid.voxel_count()},
-                    {"body", result.stats.body_voxels},
-                    {"bone", result.stats.bone_voxels},
-                    {"removed_non_patient", result.stats.removed_non_patient_voxels},
-                    {"table", result.stats.table_voxels}};
-  json["distance_range_mm"] = {{"d_surf", {surf_range[0], surf_range[1]}},
-                               {"d_bone", {bone_range[0], bone_range[1]}}};
-  nlohmann::json timings = nlohmann::json::object();
-  for (const auto& s : result.stages) timings[s.name] = s.seconds;
-  timings["total"] = result.total_seconds;
-  json["timings_s"] = timings;
-  nlohmann::json cpu = nlohmann::json::object();
-  for (const auto& s : result.stages)
-    if (s.cpu_seconds > 0.0) cpu[s.name] = s.cpu_seconds;
-  cpu["total"] = process_cpu_seconds();
-  json["cpu_seconds"] = cpu;
-  json["peak_memory_bytes"] = result.peak_rss_bytes;
-  nlohmann::json stage_peaks = nlohmann::json::object();
-  for (const auto& s : result.stages) stage_peaks[s.name] = s.peak_rss_bytes;
-  json["peak_memory_bytes_after_stage"] = stage_peaks;
-  json["threads"] = params.distance.threads;
-  nlohmann::json sizes = nlohmann::json::object();
-  for (const char* name :
-       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
-    sizes[name] = fs::file_size(dir / name);
-  }
-  json["file_bytes"] = sizes;
-  const fs::path json_path = dir / kPrepJsonFile;
-  {
-    std::ofstream out(json_path.string() + ".partial");
-    out << json.dump(2) << '\n';
-    if (!out) throw Error(json_path.string() + ": cannot be written");
-  }
-  fs::rename(json_path.string() + ".partial", json_path, ec);
-  if (ec) throw Error(json_path.string() + ": cannot be written: " + ec.message());
+  write_json_atomically(dir / kPrepJsonFile,
+                        prep_json(result, params, segmentation, surface, record, dir));
   guard.commit();
   return result;
 }

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "base/errors.hpp"
+#include "base/parallel.hpp"
 #include "io/ct_io.hpp"
 #include "io/gzip.hpp"
 #include "io/nifti.hpp"
@@ -138,6 +139,9 @@ TEST_F(PrepTest, SubvoxelIsTheDefaultAndWritesTheMapsOfTheIsoSurfacesInsideTheMa
   std::ifstream json_file(dir_ / "out" / kPrepJsonFile);
   const auto json = nlohmann::json::parse(json_file);
   EXPECT_EQ(json["surface"], "subvoxel");
+  // threads 0 (the default) ran on the default count, and prep.json says how many that was.
+  EXPECT_EQ(params.distance.threads, 0u);
+  EXPECT_EQ(json["threads"].get<unsigned>(), default_thread_count());
   EXPECT_EQ(json["surface_iso_hu"]["skin"], -400.0);
   // The bone level follows the scan's soft-tissue peak (prep/segment/hu_levels.hpp), recorded
   // beside it.
