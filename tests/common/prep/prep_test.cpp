@@ -343,6 +343,11 @@ TEST_F(PrepTest, FailedWriteLeavesNoTemporaryFile) {
 // The outputs do not depend on the thread count (the maps' passes, the background writes and the
 // parallel gzip members): a torso with bone, prepped with 1 and 3 threads by both surface
 // methods, gives byte-identical files, and the maps equal the single-threaded computation.
+// The decompressed bytes, not the .nii.gz files: ISA-L's igzip (libisal 2.30) picks its matches
+// by the buffers' addresses now and then, so the same bytes compress to another, equally valid
+// stream in about 1 % of processes (measured on one 352-byte member: 14 of 1200 processes with
+// address space randomization, 0 of 300 without; docs/prep.md, "Determinism of the written
+// files").
 TEST_F(PrepTest, OutputsAreByteIdenticalForAnyThreadCount) {
   PhantomOptions options;
   options.dims = Index3{72, 60, 30};
@@ -361,11 +366,16 @@ TEST_F(PrepTest, OutputsAreByteIdenticalForAnyThreadCount) {
     }
     for (const char* name :
          {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
-      std::ifstream a(outs[1] / name, std::ios::binary), b(outs[3] / name, std::ios::binary);
-      const std::string bytes_a{std::istreambuf_iterator<char>(a), {}};
-      const std::string bytes_b{std::istreambuf_iterator<char>(b), {}};
+      const auto decompressed = [&](const fs::path& path) {
+        std::ifstream in(path, std::ios::binary);
+        const std::vector<std::uint8_t> file{std::istreambuf_iterator<char>(in), {}};
+        return decompress(ByteSpan(file.data(), file.size()), Compression::gzip,
+                          std::size_t{1} << 30, path.string());
+      };
+      const std::vector<std::uint8_t> bytes_a = decompressed(outs[1] / name);
       EXPECT_FALSE(bytes_a.empty()) << name;
-      EXPECT_EQ(bytes_a, bytes_b) << name << " (" << surface_method_name(method) << ")";
+      EXPECT_TRUE(bytes_a == decompressed(outs[3] / name))
+          << name << " (" << surface_method_name(method) << ")";
     }
     const Mask bone = read_nifti_mask((outs[3] / kBoneFile).string());
     EXPECT_GT(std::count(bone.data.begin(), bone.data.end(), 1), 100);
