@@ -28,15 +28,20 @@ inline unsigned default_thread_count() {
   return n == 0 ? 1 : n;
 }
 
+// What a `threads` option of 0 means everywhere in palp: default_thread_count().
+inline unsigned thread_count_or_default(unsigned threads) {
+  return threads != 0 ? threads : default_thread_count();
+}
+
 // Calls body(begin, end) on disjoint chunks covering [0, n). Chunks are claimed dynamically in
 // pieces of `grain` items so uneven work balances. The first exception thrown is rethrown.
-// threads == 0 means default_thread_count(), as every `threads` option in prep says.
+// threads == 0 means default_thread_count() (thread_count_or_default).
 template <class Body>
 void parallel_for_chunks(std::int64_t n, std::int64_t grain, Body&& body,
                          unsigned threads = default_thread_count()) {
   if (n <= 0) return;
   grain = std::max<std::int64_t>(grain, 1);
-  if (threads == 0) threads = default_thread_count();
+  threads = thread_count_or_default(threads);
   const std::int64_t chunks = (n + grain - 1) / grain;
   const unsigned workers = static_cast<unsigned>(std::min<std::int64_t>(threads, chunks));
   if (workers <= 1) {

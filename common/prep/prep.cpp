@@ -108,7 +108,6 @@ double process_cpu_seconds() {
 
 // The smallest and largest value of a map, in parallel (the maps hold 10^8 voxels).
 void value_range(const DistanceMap& map, float range[2], unsigned threads) {
-  if (threads == 0) threads = default_thread_count();
   const auto n = static_cast<std::int64_t>(map.data.size());
   constexpr std::int64_t kGrain = std::int64_t{1} << 20;
   std::vector<std::pair<float, float>> parts(static_cast<std::size_t>((n + kGrain - 1) / kGrain));
@@ -234,7 +233,7 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
   nlohmann::json stage_peaks = nlohmann::json::object();
   for (const auto& s : result.stages) stage_peaks[s.name] = s.peak_rss_bytes;
   json["peak_memory_bytes_after_stage"] = stage_peaks;
-  json["threads"] = params.distance.threads ? params.distance.threads : default_thread_count();
+  json["threads"] = thread_count_or_default(params.distance.threads);
   nlohmann::json sizes = nlohmann::json::object();
   for (const char* name :
        {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {

@@ -30,7 +30,7 @@ VolumeCache::VolumeCache(const SceneDescription& scene, std::size_t chunk_bytes,
     : scene_(scene),
       chunk_bytes_(chunk_bytes),
       notify_(std::move(notify)),
-      threads_(threads ? threads : default_thread_count()),
+      threads_(thread_count_or_default(threads)),
       max_plans_(std::max<std::size_t>(1, max_plans)),
       body_box_(scene.body ? net::body_box(*scene.body, kCropMarginMm) : VoxelBox{}) {
   if (warm && scene.fields) {

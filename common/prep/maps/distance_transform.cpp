@@ -323,7 +323,7 @@ void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap
   const Grid& grid = mask.grid;
   validate_grid(grid, "mask");
   if (mask.data.size() != grid.voxel_count()) throw UsageError("mask data does not match its grid");
-  const unsigned threads = params.threads == 0 ? default_thread_count() : params.threads;
+  const unsigned threads = thread_count_or_default(params.threads);
   const float band = static_cast<float>(params.band_mm);
   const Index3 n = grid.dims;
   const double h = grid.min_spacing();

@@ -255,7 +255,7 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
   if (!(reach_mm > 0.0)) return stats;
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2) return stats;
-  if (threads == 0) threads = default_thread_count();
+  threads = thread_count_or_default(threads);
   const Order order = canonical_order(ct.grid);
   const View ct_view(ct.grid, order), map_view(grid, order);
   const std::int64_t step[3] = {refine[order.axis[0]], refine[order.axis[1]],

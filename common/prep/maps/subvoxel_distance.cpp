@@ -355,7 +355,7 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
     throw UsageError("sub-voxel refinement: the map, the mask and the points differ in grid");
   }
   if (!(band_mm > 0.0)) throw UsageError("sub-voxel band must be positive");
-  if (threads == 0) threads = default_thread_count();
+  threads = thread_count_or_default(threads);
   const Index3 n = grid.dims;
   const Vec3 s = grid.spacing;
   // The disc radius: half the diagonal of the two coarsest spacings, so the discs around the
@@ -441,7 +441,7 @@ void subvoxel_signed_distance(const SurfacePoints& surface, const Mask& mask, do
     throw UsageError("sub-voxel distance: the mask and the points differ in grid");
   }
   if (!(clamp_mm > 0.0)) throw UsageError("distance band must be positive (--band)");
-  if (threads == 0) threads = default_thread_count();
+  threads = thread_count_or_default(threads);
   if (out.data.size() != grid.voxel_count()) {
     out = DistanceMap();
     out = DistanceMap(grid, 0.0f, "distance map");

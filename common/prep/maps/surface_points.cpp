@@ -97,7 +97,7 @@ SurfacePoints surface_points(const CtVolume& ct, const Mask& mask, double iso_hu
   if (mask.grid.dims != grid.dims || mask.data.size() != grid.voxel_count()) {
     throw UsageError("surface points: the mask and the CT have different grids");
   }
-  if (threads == 0) threads = default_thread_count();
+  threads = thread_count_or_default(threads);
   const Index3 n = grid.dims;
   std::vector<std::vector<SurfacePoint>> per_slice(static_cast<std::size_t>(n[2]));
   std::vector<std::size_t> interpolated(static_cast<std::size_t>(n[2]), 0);
