@@ -44,6 +44,7 @@
 #include <thread>
 
 #include "devices/device.hpp"
+#include "loop/tick_stages.hpp"
 #include "loop/wake.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
@@ -54,19 +55,6 @@
 #include "safety/safety.hpp"
 
 namespace palp::rt {
-
-// Why a tick's force was zeroed (TickRecord::fault). The low byte are faults.
-enum LoopFault : std::uint32_t {
-  kFaultNone = 0,
-  kFaultDeadline = 1u << 0,       // the tick started too late (watchdog bound)
-  kFaultDeviceTimeout = 1u << 1,  // the device did not answer in time
-  kFaultDeviceLost = 1u << 2,     // the device is disconnected or failed
-  kFaultDeviceWrite = 1u << 3,    // writing the force failed
-  kFaultMask = 0xffu,
-  kZeroPaused = 1u << 8,         // paused by a command: zero force, model not ticked
-  kZeroNoPose = 1u << 9,         // no pose from the device yet
-  kZeroDeviceAbsent = 1u << 10,  // the device is not plugged in (hot-plug; not a fault)
-};
 
 struct LoopConfig {
   double rate_hz = 1000.0;
@@ -183,8 +171,24 @@ class HapticLoop {
   void sample_cpu(std::int64_t cpu0) noexcept;  // the loop thread's CPU time since cpu0
   std::string realtime_setup();  // pinning and scheduling of the started thread; its report
   void collect_retired();
-  void publish(const TickRecord& record, const State* state, std::uint32_t points,
-               DeviceState device_state) noexcept;
+
+  // The stages of step(), in order (haptic_loop.cpp; the pure ones in tick_stages.hpp).
+  struct Tick;  // one tick's values, handed from stage to stage
+  void swap_in_pending_model() noexcept;
+  void apply_record_request() noexcept;
+  void count_lateness(std::int64_t late_ns) noexcept;
+  std::uint32_t watchdog(std::int64_t late_ns) noexcept;
+  bool read_device(Tick& t) noexcept;
+  void recentre() noexcept;
+  DeviceState device_presence(std::uint32_t zero) noexcept;
+  void begin_record(Tick& t) noexcept;
+  void run_model_and_chain(Tick& t) noexcept;
+  void run_force_chain_stage(Tick& t) noexcept;
+  void write_device(Tick& t) noexcept;
+  void zero_on_fault(Tick& t) noexcept;
+  void remember(const Tick& t) noexcept;
+  void publish(const Tick& t) noexcept;
+  void account(std::int64_t begin_ns) noexcept;
 
   LoopConfig config_;
   Device& device_;
