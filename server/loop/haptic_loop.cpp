@@ -391,8 +391,12 @@ void HapticLoop::publish(const Tick& t) noexcept {
       }
       s->contact_count = static_cast<std::uint32_t>(n);
     }
-    net_ring_.commit();
-    net_signal_.notify();  // never blocks (wake_signal.hpp)
+    // The network thread is woken (an eventfd write, never blocking: wake_signal.hpp) only when
+    // it waits and a client is due a frame, the ring is half full or the device came or went
+    // (Stats at once); otherwise it drains the ring on its own timer. No system call on a tick
+    // nobody waits for (issue 41).
+    commit_and_notify(net_ring_, net_signal_, t.rec.t_ns, t.device_state != net_device_state_);
+    net_device_state_ = t.device_state;
   }
   if (recording_on_) {
     if (Snapshot* r = record_ring_.claim()) {

@@ -7,8 +7,10 @@
 // tick n is due at start + n * period; how the loop waits for one (sleep, or sleep then a bounded
 // spin) and the skipping of deadlines a long tick passed (counted as overruns) are in wake.hpp.
 // The lateness of every tick's start goes into a fixed histogram, the wake-up latency of every
-// sleep into another. After each snapshot it publishes, the loop signals the network thread
-// (net_signal(), an eventfd written without blocking; rt/wake_signal.hpp).
+// sleep into another. After a snapshot it publishes, the loop wakes the network thread
+// (net_signal(), an eventfd written without blocking; rt/wake_signal.hpp) only when that thread
+// waits and a client is due a frame (or the ring is half full, or the device came or went): no
+// system call on the loop thread but its sleep while nobody is due a frame.
 //
 // Watchdog: a tick that starts more than `watchdog_late_s` after its deadline, or a device that
 // answers Timeout / Disconnected / Error (or NoData for longer than `device_timeout_s`), zeroes
@@ -209,7 +211,8 @@ class HapticLoop {
   bool have_pose_ = false;
   std::int32_t last_contacts_ = 0;
   std::int64_t last_sample_ns_ = 0;
-  bool absent_ = false;  // the last tick found the device absent
+  bool absent_ = false;                                  // the last tick found the device absent
+  DeviceState net_device_state_ = DeviceState::Present;  // in the last snapshot to the network
 
   // Shared counters (relaxed atomics: written by the loop, read by anyone).
   std::atomic<std::uint64_t> ticks_{0}, overruns_{0}, faults_{0};

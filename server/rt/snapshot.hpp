@@ -104,6 +104,11 @@ class SnapshotRing {
     tail_.store(tail_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   }
 
+  // Snapshots committed and not yet popped (either side; a moment's view).
+  std::size_t size() const noexcept {
+    return static_cast<std::size_t>(head_.load(std::memory_order_relaxed) -
+                                    tail_.load(std::memory_order_relaxed));
+  }
   std::uint64_t published() const { return published_.load(std::memory_order_relaxed); }
   std::uint64_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
 
