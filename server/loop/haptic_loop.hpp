@@ -46,7 +46,7 @@
 #include <thread>
 
 #include "devices/device.hpp"
-#include "loop/tick_stages.hpp"
+#include "loop/step_stages.hpp"
 #include "loop/wake.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
@@ -174,7 +174,7 @@ class HapticLoop {
   std::string realtime_setup();  // pinning and scheduling of the started thread; its report
   void collect_retired();
 
-  // The stages of step(), in order (haptic_loop.cpp; the pure ones in tick_stages.hpp).
+  // The stages of step(), in order (haptic_loop.cpp; the pure ones in step_stages.hpp).
   struct Tick;  // one tick's values, handed from stage to stage
   void swap_in_pending_model() noexcept;
   void apply_record_request() noexcept;

@@ -46,7 +46,7 @@ struct TickRecord {
   std::int32_t n_contact = 0;
   std::uint32_t tick_status = 0;    // TickStatus bits
   std::uint32_t safety_status = 0;  // SafetyStatus bits
-  std::uint32_t fault = 0;          // LoopFault bits (loop/tick_stages.hpp)
+  std::uint32_t fault = 0;          // LoopFault bits (loop/step_stages.hpp)
   std::int64_t late_ns = 0;         // how late the tick started after its deadline
   bool operator==(const TickRecord& o) const {
     return seq == o.seq && t_ns == o.t_ns && pose.position == o.pose.position &&

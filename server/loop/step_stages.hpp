@@ -1,6 +1,6 @@
 // The pure stages of HapticLoop::step (haptic_loop.cpp): what a tick decides from values alone,
 // with no device, clock or atomic, so each is tested by itself (tests/server/loop/
-// tick_stages_test.cpp). The stages that touch the device or the shared counters stay members of
+// step_stages_test.cpp). The stages that touch the device or the shared counters stay members of
 // the loop and call these.
 #pragma once
 

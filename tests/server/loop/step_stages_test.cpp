@@ -1,7 +1,7 @@
-// The pure stages of a tick (loop/tick_stages.hpp): the watchdog's bound, what each device answer
+// The pure stages of a tick (loop/step_stages.hpp): the watchdog's bound, what each device answer
 // means for the force, when a re-centre may happen and where it moves the home, the state a
 // snapshot tells and the zero bits of an idle tick.
-#include "loop/tick_stages.hpp"
+#include "loop/step_stages.hpp"
 
 #include <gtest/gtest.h>
 
