@@ -1,5 +1,8 @@
 // palp probe --check-rate HZ: a local timing test of this machine with the loop's own wake-up
-// and deadline logic (loop/wake.hpp), a stand-in tick of --work-us busy time, and a verdict.
+// and deadline logic (loop/wake.hpp), a stand-in tick of --work-us busy time followed by palpd's
+// hand-off to the network thread (a snapshot into a ring, the eventfd written when a stand-in
+// client is due a frame: rt/wake_signal.hpp, net/frame_pump.hpp, a network thread draining it),
+// and a verdict.
 #pragma once
 
 #include "cli/cli.hpp"
@@ -15,6 +18,10 @@ inline constexpr const char* kCheckRateHelp =
   --spin-us US            a fixed spin window, as palpd's --spin-us (0 = measured)
   --rt-cpu N              pin the timing thread to CPU N
   --work-us US            busy time per tick standing in for the force model (default 5)
+  --clients N             stand-in clients of the network thread it hands snapshots to, as
+                          palpd's loop does (default 0: palpd with nobody connected)
+  --client-hz HZ          the frames per second they ask for (default 0: every tick)
+  --net-wake MODE         event (default), event-every or poll, as palpd's --net-wake
   --max-miss PCT          the deadline misses it may have and still hold the rate (0.1)
   --no-realtime           do not ask for SCHED_FIFO
 )";

@@ -82,7 +82,8 @@ std::shared_ptr<interop::DdsPublisher> dds_beside(const Args& args,
   gethostname(host, sizeof host - 1);
   auto publisher =
       std::make_shared<interop::DdsPublisher>(*config, scene, loop, &control, host, tool);
-  server.add_snapshot_tap([publisher](const rt::Snapshot& s) { publisher->offer(s); });
+  server.add_snapshot_tap([publisher](const rt::Snapshot& s) { publisher->offer(s); },
+                          config->rate_hz);
   publisher->start();
   if (!quiet) {
     std::printf(

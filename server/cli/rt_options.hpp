@@ -25,7 +25,8 @@ inline constexpr const char* kRtOptionsHelp =
                           (pair with isolcpus=N nohz_full=N on the kernel command line)
   --net-cpu N             pin the network thread to CPU N (not --rt-cpu's)
   --net-wake MODE         how the network thread learns of new frames: event (default: the
-                          loop signals an eventfd when the network thread waits), event-every
+                          loop signals an eventfd when the network thread waits and a client
+                          is due a frame at the rate it asked for), event-every
                           (the loop signals after every tick) or poll (every --poll-us)
 )";
 

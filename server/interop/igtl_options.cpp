@@ -99,7 +99,7 @@ std::shared_ptr<IgtlServer> igtl_beside(const cli::Args& args, const Grid& grid,
       "(deploy/install-deps.sh) and build again to use --igtl-port");
 #else
   auto igtl = std::make_shared<IgtlServer>(*config, grid);
-  server.add_snapshot_tap([igtl](const rt::Snapshot& s) { igtl->offer(s); });
+  server.add_snapshot_tap([igtl](const rt::Snapshot& s) { igtl->offer(s); }, config->rate_hz);
   igtl->start();
   if (!quiet) {
     std::printf("palpd: OpenIGTLink on %s:%u: %s, %s, %s at %g Hz (RAS patient frame)\n",

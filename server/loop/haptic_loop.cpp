@@ -180,173 +180,206 @@ void HapticLoop::sample_cpu(std::int64_t cpu0) noexcept {
                           std::memory_order_relaxed);
 }
 
+// One tick's values, handed from stage to stage (the state that outlives the tick - the last pose,
+// the force chain, the registration - stays in the loop's members).
+struct HapticLoop::Tick {
+  Tick(std::int64_t deadline, std::int64_t late) noexcept : deadline_ns(deadline), late_ns(late) {}
+  std::int64_t deadline_ns = 0;
+  std::int64_t late_ns = 0;  // start - deadline
+  std::uint32_t zero = 0;    // LoopFault bits: why the force is zeroed (0: it is not)
+  DeviceState device_state = DeviceState::Present;  // what the snapshot says of the device
+  Vec3d force{}, torque{};                          // device frame, as the force chain left them
+  std::uint32_t safety = kSafetyOk;
+  TickRecord rec;
+  const State* state = nullptr;  // contacts to publish: set when the force was written
+};
+
+// The chain named in haptic_loop.hpp, one stage a line (in the shape of MuJoCo's mj_step).
 void HapticLoop::step(std::int64_t deadline_ns, std::int64_t now_ns) noexcept {
   const std::int64_t begin = monotonic_ns();
-  if (retired_.load(std::memory_order_acquire) == nullptr) {
-    if (Bundle* fresh = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
-      retired_.store(current_.release(), std::memory_order_release);
-      current_.reset(fresh);
-      reset_force_chain(chain_);  // a new tool or parameters: engage afresh
-    }
-  }
-  Bundle& bundle = *current_;
-  // A recording starts from a clean state (as a replay does): contacts restart at its first tick.
-  if (const int request = record_request_.exchange(0, std::memory_order_acq_rel)) {
-    recording_on_ = request == 1;
-    if (recording_on_) {
-      reset(bundle.state);
-      reset_force_chain(chain_);
-    }
-  }
-  const std::int64_t late = now_ns - deadline_ns;
-  jitter_[jitter_bucket(late)].fetch_add(1, std::memory_order_relaxed);
-  store_max(max_late_ns_, late);
+  Tick t(deadline_ns, now_ns - deadline_ns);
+  swap_in_pending_model();        // pending_ -> current_ (the old one to retired_)
+  apply_record_request();         // record_request_ -> recording_on_ (a start resets state)
+  count_lateness(t.late_ns);      // lateness -> jitter_ histogram, max_late_ns_
+  t.zero |= watchdog(t.late_ns);  // too late -> kFaultDeadline, device zeroed at once
+  if (!read_device(t)) return;    // device -> last_pose_, have_pose_, t.zero (false: Finished)
+  recentre();                     // recentre_request_, last_device_pose_ -> registration_
+  t.device_state = device_presence(t.zero);  // t.zero, device state -> device_state_, unplugs
+  t.zero |= idle_bits(have_pose_, paused_.load(std::memory_order_relaxed));  // no pose, paused
+  begin_record(t);                          // seq_, deadline, lateness, last_pose_ -> t.rec
+  if (t.zero == 0) run_model_and_chain(t);  // pose -> model tick -> force chain -> t.force
+  if (t.zero == 0) write_device(t);   // t.force -> device; t.rec's force and contacts, or a fault
+  if (t.zero != 0) zero_on_fault(t);  // zero bits -> zero force, state reset, t.rec.fault
+  remember(t);                        // contacts, engagement gain -> last_contacts_, stats
+  publish(t);                         // t.rec + contacts -> net ring (+ signal), record ring
+  account(begin);                     // ticks_, compute time -> tick_ns_sum_, tick_ns_max_
+}
 
-  std::uint32_t zero = 0;
-  const auto watchdog_ns = static_cast<std::int64_t>(config_.watchdog_late_s * 1e9);
-  if (watchdog_ns > 0 && late > watchdog_ns) {
-    zero |= kFaultDeadline;
-    device_.write(DeviceCommand{});  // force to zero before anything else
+void HapticLoop::swap_in_pending_model() noexcept {
+  if (retired_.load(std::memory_order_acquire) != nullptr) return;  // the last one not freed
+  if (Bundle* fresh = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
+    retired_.store(current_.release(), std::memory_order_release);
+    current_.reset(fresh);
+    reset_force_chain(chain_);  // a new tool or parameters: engage afresh
   }
+}
 
+// A recording starts from a clean state (as a replay does): contacts restart at its first tick.
+void HapticLoop::apply_record_request() noexcept {
+  const int request = record_request_.exchange(0, std::memory_order_acq_rel);
+  if (request == 0) return;
+  recording_on_ = request == 1;
+  if (recording_on_) {
+    reset(current_->state);
+    reset_force_chain(chain_);
+  }
+}
+
+void HapticLoop::count_lateness(std::int64_t late_ns) noexcept {
+  jitter_[jitter_bucket(late_ns)].fetch_add(1, std::memory_order_relaxed);
+  store_max(max_late_ns_, late_ns);
+}
+
+std::uint32_t HapticLoop::watchdog(std::int64_t late_ns) noexcept {
+  const std::uint32_t bits =
+      watchdog_bits(late_ns, static_cast<std::int64_t>(config_.watchdog_late_s * 1e9));
+  if (bits != 0) device_.write(DeviceCommand{});  // force to zero before anything else
+  return bits;
+}
+
+bool HapticLoop::read_device(Tick& t) noexcept {
   DeviceSample sample;
-  switch (device_.read(deadline_ns, sample)) {
-    case DeviceStatus::Ok:
-      // device pose -> scene pose (registration; identity skipped)
-      last_device_pose_ = sample.pose;
-      last_pose_ = identity_ ? sample.pose : to_scene(registration_, sample.pose);
-      have_pose_ = true;
-      last_sample_ns_ = deadline_ns;
-      zero |= sample.forced_fault;
-      break;
-    case DeviceStatus::NoData: {
-      const auto timeout_ns = static_cast<std::int64_t>(config_.device_timeout_s * 1e9);
-      if (have_pose_ && timeout_ns > 0 && deadline_ns - last_sample_ns_ > timeout_ns)
-        zero |= kFaultDeviceTimeout;
-      break;
-    }
-    case DeviceStatus::Timeout:
-      zero |= kFaultDeviceTimeout;
-      break;
-    case DeviceStatus::Finished:
-      device_.write(DeviceCommand{});
-      finished_.store(true, std::memory_order_release);
-      stop_.store(true, std::memory_order_release);
-      return;
-    case DeviceStatus::Disconnected:
-    case DeviceStatus::Error:
-      zero |= kFaultDeviceLost;
-      break;
-    case DeviceStatus::Absent:
-      zero |= kZeroDeviceAbsent;
-      have_pose_ = false;  // after a replug, wait for a fresh pose
-      break;
+  const DeviceStatus status = device_.read(t.deadline_ns, sample);
+  if (status == DeviceStatus::Finished) {
+    device_.write(DeviceCommand{});
+    finished_.store(true, std::memory_order_release);
+    stop_.store(true, std::memory_order_release);
+    return false;
   }
-  // re-centre (requested by a controller): only out of contact, so the force cannot step
-  if (recentre_request_.load(std::memory_order_relaxed) && have_pose_ && last_contacts_ == 0 &&
-      !identity_) {
-    recentre_request_.store(false, std::memory_order_relaxed);
-    const Vec3d moved = point_to_scene(
-        Registration{registration_.rotation, registration_.scale, {}}, last_device_pose_.position);
-    registration_.home = config_.registration.home - moved;
-    last_pose_ = to_scene(registration_, last_device_pose_);
-    home_[0].store(registration_.home.x, std::memory_order_relaxed);
-    home_[1].store(registration_.home.y, std::memory_order_relaxed);
-    home_[2].store(registration_.home.z, std::memory_order_relaxed);
-    recentres_.fetch_add(1, std::memory_order_relaxed);
+  t.zero |= read_bits(status, sample.forced_fault, have_pose_, t.deadline_ns - last_sample_ns_,
+                      static_cast<std::int64_t>(config_.device_timeout_s * 1e9));
+  if (status == DeviceStatus::Ok) {
+    // device pose -> scene pose (registration; identity skipped)
+    last_device_pose_ = sample.pose;
+    last_pose_ = identity_ ? sample.pose : to_scene(registration_, sample.pose);
+    have_pose_ = true;
+    last_sample_ns_ = t.deadline_ns;
+  } else if (status == DeviceStatus::Absent) {
+    have_pose_ = false;  // after a replug, wait for a fresh pose
   }
-  DeviceState device_state = device_.state();
-  if ((zero & kZeroDeviceAbsent) && device_state == DeviceState::Present)
-    device_state = DeviceState::Absent;
+  return true;
+}
+
+// A re-centre (requested by a controller) only out of contact, so the force cannot step.
+void HapticLoop::recentre() noexcept {
+  if (!may_recentre(recentre_request_.load(std::memory_order_relaxed), have_pose_, last_contacts_,
+                    identity_))
+    return;
+  recentre_request_.store(false, std::memory_order_relaxed);
+  registration_.home =
+      recentred_home(registration_, config_.registration.home, last_device_pose_.position);
+  last_pose_ = to_scene(registration_, last_device_pose_);
+  home_[0].store(registration_.home.x, std::memory_order_relaxed);
+  home_[1].store(registration_.home.y, std::memory_order_relaxed);
+  home_[2].store(registration_.home.z, std::memory_order_relaxed);
+  recentres_.fetch_add(1, std::memory_order_relaxed);
+}
+
+DeviceState HapticLoop::device_presence(std::uint32_t zero) noexcept {
+  const DeviceState state = presence(zero, device_.state());
   const bool absent = (zero & kZeroDeviceAbsent) != 0;
   if (absent && !absent_) absent_events_.fetch_add(1, std::memory_order_relaxed);
   absent_ = absent;
-  device_state_.store(static_cast<std::uint8_t>(device_state), std::memory_order_relaxed);
-  if (!have_pose_) zero |= kZeroNoPose;
-  if (paused_.load(std::memory_order_relaxed)) zero |= kZeroPaused;
-
-  TickRecord rec;
-  rec.seq = seq_++;
-  rec.t_ns = deadline_ns;
-  rec.late_ns = late;
-  rec.pose = last_pose_;
-  const auto points = static_cast<std::uint32_t>(bundle.model->contact_count());
-  const State* published_state = nullptr;
-  if (zero == 0) {
-    // tool pose (the virtual coupling's tool, device frame) -> scene pose -> model tick ->
-    // scene force -> device frame -> force chain (device frame) -> write
-    const Vec3d position = last_device_pose_.position;
-    Pose model_pose = last_pose_;
-    if (config_.profile && chain_config_.coupling) {
-      const Pose tool{force_chain_tool(chain_, chain_config_, position),
-                      last_device_pose_.orientation};
-      model_pose = identity_ ? tool : to_scene(registration_, tool);
-    }
-    tick(*bundle.model, bundle.state, model_pose);
-    Vec3d force = bundle.state.f_device, torque = bundle.state.tau_device;
-    if (!identity_) {
-      force = force_to_device(registration_, force);
-      torque = torque_to_device(registration_, torque);
-    }
-    std::uint32_t safety = kSafetyOk;
-    if (config_.profile) {  // the force chain (safety/force_chain.hpp): limits, engagement,
-                            // passivity, step bound, clamp
-      const ForceChainOutput out = run_force_chain(
-          chain_, chain_config_, with_declared(*config_.profile, device_.declared_limits()), force,
-          torque,
-          // N per scene mm -> N per device mm (a device mm moves the tool `scale` scene mm)
-          bundle.state.stiffness * (identity_ ? 1.0 : registration_.scale), position, dt_s_);
-      force = out.force, torque = out.torque, safety = out.status;
-      if (out.damping_N_s_per_mm > 0.0) {
-        passivity_ticks_.fetch_add(1, std::memory_order_relaxed);
-        passivity_dissipated_mJ_.store(
-            passivity_dissipated_mJ_.load(std::memory_order_relaxed) + out.dissipated_mJ,
-            std::memory_order_relaxed);  // one writer: the loop
-      }
-    }
-    const DeviceStatus written = device_.write(DeviceCommand{force, torque});
-    if (written == DeviceStatus::Ok || written == DeviceStatus::NoData) {
-      rec.force = identity_ ? force : force_to_scene(registration_, force);
-      rec.torque = identity_ ? torque : torque_to_scene(registration_, torque);
-      rec.u = bundle.state.u;
-      rec.n_contact = bundle.state.n_contact;
-      rec.tick_status = bundle.state.status;
-      rec.safety_status = safety;
-      published_state = &bundle.state;
-    } else {
-      zero |= kFaultDeviceWrite;
-    }
-  }
-  if (zero != 0) {
-    device_.write(DeviceCommand{});  // zero first, then report
-    reset(bundle.state);
-    reset_force_chain(chain_);  // and ramp back in after it
-    chain_.position_prev = last_device_pose_.position;
-    chain_.have_prev = have_pose_;
-    rec.fault = zero;
-    if (zero & kFaultMask) {
-      faults_.fetch_add(1, std::memory_order_relaxed);
-      last_fault_.store(zero & kFaultMask, std::memory_order_relaxed);
-    }
-  }
-  last_contacts_ = rec.n_contact;
-  if (config_.engage)
-    engage_gain_.store(zero != 0 ? 0.0 : chain_.engagement.gain, std::memory_order_relaxed);
-  publish(rec, published_state, points, device_state);
-  ticks_.fetch_add(1, std::memory_order_release);
-  const std::int64_t spent = monotonic_ns() - begin;
-  tick_ns_sum_.fetch_add(static_cast<std::uint64_t>(spent), std::memory_order_relaxed);
-  store_max(tick_ns_max_, spent);
+  device_state_.store(static_cast<std::uint8_t>(state), std::memory_order_relaxed);
+  return state;
 }
 
-void HapticLoop::publish(const TickRecord& record, const State* state, std::uint32_t points,
-                         DeviceState device_state) noexcept {
+void HapticLoop::begin_record(Tick& t) noexcept {
+  t.rec.seq = seq_++;
+  t.rec.t_ns = t.deadline_ns;
+  t.rec.late_ns = t.late_ns;
+  t.rec.pose = last_pose_;
+}
+
+// tool pose (the virtual coupling's tool, device frame) -> scene pose -> model tick -> scene force
+// -> device frame -> force chain (device frame)
+void HapticLoop::run_model_and_chain(Tick& t) noexcept {
+  Bundle& bundle = *current_;
+  Pose model_pose = last_pose_;
+  if (config_.profile && chain_config_.coupling) {
+    const Pose tool{force_chain_tool(chain_, chain_config_, last_device_pose_.position),
+                    last_device_pose_.orientation};
+    model_pose = identity_ ? tool : to_scene(registration_, tool);
+  }
+  tick(*bundle.model, bundle.state, model_pose);
+  t.force = bundle.state.f_device, t.torque = bundle.state.tau_device;
+  if (!identity_) {
+    t.force = force_to_device(registration_, t.force);
+    t.torque = torque_to_device(registration_, t.torque);
+  }
+  if (config_.profile) run_force_chain_stage(t);
+}
+
+// The force chain (safety/force_chain.hpp): limits, engagement, passivity, step bound, clamp.
+void HapticLoop::run_force_chain_stage(Tick& t) noexcept {
+  const ForceChainOutput out = run_force_chain(
+      chain_, chain_config_, with_declared(*config_.profile, device_.declared_limits()), t.force,
+      t.torque,
+      // N per scene mm -> N per device mm (a device mm moves the tool `scale` scene mm)
+      current_->state.stiffness * (identity_ ? 1.0 : registration_.scale),
+      last_device_pose_.position, dt_s_);
+  t.force = out.force, t.torque = out.torque, t.safety = out.status;
+  if (out.damping_N_s_per_mm > 0.0) {
+    passivity_ticks_.fetch_add(1, std::memory_order_relaxed);
+    passivity_dissipated_mJ_.store(
+        passivity_dissipated_mJ_.load(std::memory_order_relaxed) + out.dissipated_mJ,
+        std::memory_order_relaxed);  // one writer: the loop
+  }
+}
+
+void HapticLoop::write_device(Tick& t) noexcept {
+  const DeviceStatus written = device_.write(DeviceCommand{t.force, t.torque});
+  if (written != DeviceStatus::Ok && written != DeviceStatus::NoData) {
+    t.zero |= kFaultDeviceWrite;
+    return;
+  }
+  const State& state = current_->state;
+  t.rec.force = identity_ ? t.force : force_to_scene(registration_, t.force);
+  t.rec.torque = identity_ ? t.torque : torque_to_scene(registration_, t.torque);
+  t.rec.u = state.u;
+  t.rec.n_contact = state.n_contact;
+  t.rec.tick_status = state.status;
+  t.rec.safety_status = t.safety;
+  t.state = &state;
+}
+
+void HapticLoop::zero_on_fault(Tick& t) noexcept {
+  device_.write(DeviceCommand{});  // zero first, then report
+  reset(current_->state);
+  reset_force_chain(chain_);  // and ramp back in after it
+  chain_.position_prev = last_device_pose_.position;
+  chain_.have_prev = have_pose_;
+  t.rec.fault = t.zero;
+  if (t.zero & kFaultMask) {
+    faults_.fetch_add(1, std::memory_order_relaxed);
+    last_fault_.store(t.zero & kFaultMask, std::memory_order_relaxed);
+  }
+}
+
+void HapticLoop::remember(const Tick& t) noexcept {
+  last_contacts_ = t.rec.n_contact;  // the next re-centre waits for no contact
+  if (config_.engage)
+    engage_gain_.store(t.zero != 0 ? 0.0 : chain_.engagement.gain, std::memory_order_relaxed);
+}
+
+void HapticLoop::publish(const Tick& t) noexcept {
+  const auto points = static_cast<std::uint32_t>(current_->model->contact_count());
   if (Snapshot* s = net_ring_.claim()) {
-    s->tick = record;
-    s->device_state = device_state;
+    s->tick = t.rec;
+    s->device_state = t.device_state;
     s->contact_points = points;
     s->contact_count = 0;
-    if (state) {
+    if (const State* state = t.state) {
       const std::size_t n = std::min<std::size_t>(points, s->contacts.size());
       for (std::size_t i = 0; i < n; ++i) {
         ContactSnapshot& c = s->contacts[i];
@@ -358,18 +391,29 @@ void HapticLoop::publish(const TickRecord& record, const State* state, std::uint
       }
       s->contact_count = static_cast<std::uint32_t>(n);
     }
-    net_ring_.commit();
-    net_signal_.notify();  // never blocks (wake_signal.hpp)
+    // The network thread is woken (an eventfd write, never blocking: wake_signal.hpp) only when
+    // it waits and a client is due a frame, the ring is half full or the device came or went
+    // (Stats at once); otherwise it drains the ring on its own timer. No system call on a tick
+    // nobody waits for (issue 41).
+    commit_and_notify(net_ring_, net_signal_, t.rec.t_ns, t.device_state != net_device_state_);
+    net_device_state_ = t.device_state;
   }
   if (recording_on_) {
     if (Snapshot* r = record_ring_.claim()) {
-      r->tick = record;
-      r->device_state = device_state;
+      r->tick = t.rec;
+      r->device_state = t.device_state;
       r->contact_points = points;
       r->contact_count = 0;
       record_ring_.commit();
     }
   }
+}
+
+void HapticLoop::account(std::int64_t begin_ns) noexcept {
+  ticks_.fetch_add(1, std::memory_order_release);
+  const std::int64_t spent = monotonic_ns() - begin_ns;
+  tick_ns_sum_.fetch_add(static_cast<std::uint64_t>(spent), std::memory_order_relaxed);
+  store_max(tick_ns_max_, spent);
 }
 
 void HapticLoop::collect_retired() {

@@ -7,8 +7,10 @@
 // tick n is due at start + n * period; how the loop waits for one (sleep, or sleep then a bounded
 // spin) and the skipping of deadlines a long tick passed (counted as overruns) are in wake.hpp.
 // The lateness of every tick's start goes into a fixed histogram, the wake-up latency of every
-// sleep into another. After each snapshot it publishes, the loop signals the network thread
-// (net_signal(), an eventfd written without blocking; rt/wake_signal.hpp).
+// sleep into another. After a snapshot it publishes, the loop wakes the network thread
+// (net_signal(), an eventfd written without blocking; rt/wake_signal.hpp) only when that thread
+// waits and a client is due a frame (or the ring is half full, or the device came or went): no
+// system call on the loop thread but its sleep while nobody is due a frame.
 //
 // Watchdog: a tick that starts more than `watchdog_late_s` after its deadline, or a device that
 // answers Timeout / Disconnected / Error (or NoData for longer than `device_timeout_s`), zeroes
@@ -44,6 +46,7 @@
 #include <thread>
 
 #include "devices/device.hpp"
+#include "loop/step_stages.hpp"
 #include "loop/wake.hpp"
 #include "model/force_model.hpp"
 #include "model/registration.hpp"
@@ -54,19 +57,6 @@
 #include "safety/safety.hpp"
 
 namespace palp::rt {
-
-// Why a tick's force was zeroed (TickRecord::fault). The low byte are faults.
-enum LoopFault : std::uint32_t {
-  kFaultNone = 0,
-  kFaultDeadline = 1u << 0,       // the tick started too late (watchdog bound)
-  kFaultDeviceTimeout = 1u << 1,  // the device did not answer in time
-  kFaultDeviceLost = 1u << 2,     // the device is disconnected or failed
-  kFaultDeviceWrite = 1u << 3,    // writing the force failed
-  kFaultMask = 0xffu,
-  kZeroPaused = 1u << 8,         // paused by a command: zero force, model not ticked
-  kZeroNoPose = 1u << 9,         // no pose from the device yet
-  kZeroDeviceAbsent = 1u << 10,  // the device is not plugged in (hot-plug; not a fault)
-};
 
 struct LoopConfig {
   double rate_hz = 1000.0;
@@ -183,8 +173,24 @@ class HapticLoop {
   void sample_cpu(std::int64_t cpu0) noexcept;  // the loop thread's CPU time since cpu0
   std::string realtime_setup();  // pinning and scheduling of the started thread; its report
   void collect_retired();
-  void publish(const TickRecord& record, const State* state, std::uint32_t points,
-               DeviceState device_state) noexcept;
+
+  // The stages of step(), in order (haptic_loop.cpp; the pure ones in step_stages.hpp).
+  struct Tick;  // one tick's values, handed from stage to stage
+  void swap_in_pending_model() noexcept;
+  void apply_record_request() noexcept;
+  void count_lateness(std::int64_t late_ns) noexcept;
+  std::uint32_t watchdog(std::int64_t late_ns) noexcept;
+  bool read_device(Tick& t) noexcept;
+  void recentre() noexcept;
+  DeviceState device_presence(std::uint32_t zero) noexcept;
+  void begin_record(Tick& t) noexcept;
+  void run_model_and_chain(Tick& t) noexcept;
+  void run_force_chain_stage(Tick& t) noexcept;
+  void write_device(Tick& t) noexcept;
+  void zero_on_fault(Tick& t) noexcept;
+  void remember(const Tick& t) noexcept;
+  void publish(const Tick& t) noexcept;
+  void account(std::int64_t begin_ns) noexcept;
 
   LoopConfig config_;
   Device& device_;
@@ -205,7 +211,8 @@ class HapticLoop {
   bool have_pose_ = false;
   std::int32_t last_contacts_ = 0;
   std::int64_t last_sample_ns_ = 0;
-  bool absent_ = false;  // the last tick found the device absent
+  bool absent_ = false;                                  // the last tick found the device absent
+  DeviceState net_device_state_ = DeviceState::Present;  // in the last snapshot to the network
 
   // Shared counters (relaxed atomics: written by the loop, read by anyone).
   std::atomic<std::uint64_t> ticks_{0}, overruns_{0}, faults_{0};

@@ -1,11 +1,14 @@
 // How the network thread learns that the loop published frames, on its Asio io_context:
 //   event        (default) the loop signals an eventfd (rt/wake_signal.hpp) when the network
-//                thread is waiting, and the io thread waits on it (asio::posix::stream_descriptor):
-//                frames go out as soon as they are published, and an idle network thread sleeps
+//                thread is waiting and a snapshot is due for a client (the callback says when, with
+//                WakeSignal::want_from, before the pump arms), and the io thread waits on it
+//                (asio::posix::stream_descriptor): frames go out as soon as they are due, and an
+//                idle network thread sleeps
 //   event-every  the same, the loop writing the eventfd after every snapshot (one syscall a tick)
 //   poll         a timer every poll interval (the frames wait up to that interval)
 // Each wake-up runs the server's callback once (it drains the ring). A backstop timer runs it
-// too, every 20 ms in the event modes, so housekeeping tied to it goes on when the loop is quiet.
+// too, every 20 ms in the event modes, so housekeeping tied to it goes on, and the ring is drained,
+// when the loop wakes nobody.
 #pragma once
 
 #include <atomic>

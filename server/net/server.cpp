@@ -91,7 +91,11 @@ class Server::Impl {
   void scene_changed() {
     asio::post(io_, [this] { scene_dirty_ = true; });
   }
-  std::vector<std::function<void(const rt::Snapshot&)>> taps_;  // added before start()
+  struct Tap {
+    std::function<void(const rt::Snapshot&)> offer;
+    FrameSchedule frames;
+  };
+  std::vector<Tap> taps_;  // added before start()
 
   std::uint16_t port() const { return port_; }
   std::size_t client_count() const { return client_count_.load(); }
@@ -284,8 +288,7 @@ class Server::Impl {
     s->role = h.role();
     s->name = h.client_name();
     s->want_contacts = h.want_contacts();
-    s->frame_interval_ns =
-        h.frame_rate_hz() > 0.0 ? static_cast<std::int64_t>(1e9 / h.frame_rate_hz()) : 0;
+    s->frames.interval_ns = frame_interval_ns(h.frame_rate_hz());
     v1::ServerMessage m;
     v1::Welcome* w = m.mutable_welcome();
     w->set_protocol_version(kProtocolVersion);
@@ -294,13 +297,14 @@ class Server::Impl {
     w->set_server_name(config_.server_name);
     w->set_tick_rate_hz(loop_.config().rate_hz);
     w->set_server_time_ns(rt::monotonic_ns());
+    drain();  // the loop wakes this thread only for due frames: take what the ring holds first
     v1::ServerMessage history;  // the force before it came, after SceneInfo (force_history.hpp)
     force_history_.fill(history.mutable_history());
     s->history = frame_of(history);
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
     plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(),
                      h.volume_deflate(), h.volume_crop()});
-    if (s->volume.chunks == 0) s->ready = true;
+    if (s->volume.chunks == 0) became_ready(*s);
     log_client(who(*s) + " joined");
     pump(s);
   }
@@ -349,7 +353,7 @@ class Server::Impl {
 
   Bytes next_volume_chunk(Session& s) {  // null: not encoded yet (volume_cache_ wakes us)
     Bytes b = s.volume_frames->frame(s.volume_chunk);
-    if (b && ++s.volume_chunk == s.volume.chunks) s.ready = true;
+    if (b && ++s.volume_chunk == s.volume.chunks) became_ready(s);
     if (s.ready) s.volume_frames.reset();
     return b;
   }
@@ -442,11 +446,28 @@ class Server::Impl {
   }
 
   // ------------------------------------------------------------------ frames from the loop
-  // Run by the frame pump (frame_pump.hpp) whenever the loop published, and on its backstop.
+  // Run by the frame pump (frame_pump.hpp) whenever the loop woke it, and on its backstop.
   void frames_published() {
     if (scene_dirty_) send_scene_to_all();
     drain();
+    want_frames();
     graveyard_.free_some(kFreePerPoll);
+  }
+
+  // Tells the loop the earliest snapshot time a client or a tap takes next (before the pump
+  // arms: frame_pump.hpp), so it wakes this thread for that tick and not for every one (issue 41).
+  void want_frames() {
+    std::int64_t due = rt::WakeSignal::kNobody;
+    for (const SessionPtr& s : sessions_)
+      if (s->ready && !s->closing && !s->closed) due = std::min(due, s->frames.due());
+    for (const Tap& tap : taps_) due = std::min(due, tap.frames.due());
+    loop_.net_signal().want_from(due);
+  }
+
+  // Frames flow to `s` from the next snapshot on: the loop is told at once.
+  void became_ready(Session& s) {
+    s.ready = true;
+    loop_.net_signal().want_from(std::min(loop_.net_signal().wanted_from(), s.frames.due()));
   }
 
   void drain() {
@@ -463,11 +484,7 @@ class Server::Impl {
       const std::int64_t t = snap->tick.t_ns;
       for (const SessionPtr& s : sessions_) {
         if (!s->ready || s->closing || s->closed) continue;
-        if (s->frame_interval_ns > 0) {
-          if (t < s->next_frame_ns) continue;
-          s->next_frame_ns = std::max(s->next_frame_ns + s->frame_interval_ns, t);
-          if (s->next_frame_ns <= t) s->next_frame_ns = t + s->frame_interval_ns;
-        }
+        if (!s->frames.take(t)) continue;
         Bytes& bytes = s->want_contacts ? full : plain;
         if (!bytes) {
           v1::ServerMessage m;
@@ -478,7 +495,10 @@ class Server::Impl {
         counted(*s, true);
         if (std::find(touched.begin(), touched.end(), s) == touched.end()) touched.push_back(s);
       }
-      for (const auto& tap : taps_) tap(*snap);
+      for (Tap& tap : taps_) {
+        tap.frames.take(t);  // its own rate, to know when it is due (the tap applies it too)
+        tap.offer(*snap);
+      }
       force_history_.add(snap->tick.t_ns, snap->tick.force);
       ring.pop();
     }
@@ -607,8 +627,8 @@ std::size_t Server::client_count() const {
 ServerCounters Server::counters() const {
   return impl_->counters();
 }
-void Server::add_snapshot_tap(std::function<void(const rt::Snapshot&)> tap) {
-  impl_->taps_.push_back(std::move(tap));
+void Server::add_snapshot_tap(std::function<void(const rt::Snapshot&)> tap, double rate_hz) {
+  impl_->taps_.push_back({std::move(tap), FrameSchedule{frame_interval_ns(rate_hz), 0}});
 }
 void Server::scene_changed() {
   impl_->scene_changed();

@@ -122,8 +122,10 @@ class Server {
   // Sends SceneInfo again to every client (after the tool or parameters changed).
   void scene_changed();
   // Called on the io thread with every snapshot it drains (the OpenIGTLink and DDS bridges read
-  // the same snapshots as palp.v1); added before start(), in order, never blocks.
-  void add_snapshot_tap(std::function<void(const rt::Snapshot&)> tap);
+  // the same snapshots as palp.v1); added before start(), in order, never blocks. `rate_hz`: the
+  // rate at which the tap keeps snapshots (0: every one), so the loop wakes the io thread for
+  // the ticks it keeps and not for every one (frame_schedule.hpp).
+  void add_snapshot_tap(std::function<void(const rt::Snapshot&)> tap, double rate_hz = 0.0);
 
  private:
   class Impl;

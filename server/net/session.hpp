@@ -9,6 +9,7 @@
 
 #include "asio.hpp"
 #include "net/client_queue.hpp"
+#include "net/frame_schedule.hpp"
 #include "net/scene_messages.hpp"
 #include "net/server.hpp"
 #include "net/volume_cache.hpp"
@@ -40,8 +41,7 @@ struct ServerSession {
   bool writing = false;
   bool want_contacts = false;
   bool end_logged = false;  // its leaving (or refusal) is in the log
-  std::int64_t frame_interval_ns = 0;
-  std::int64_t next_frame_ns = 0;
+  FrameSchedule frames;     // its requested frame rate: which snapshots it takes
   wire::FrameDecoder decoder;
   std::array<std::uint8_t, 8192> rbuf{};
   ClientQueue queue;

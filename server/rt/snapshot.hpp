@@ -46,7 +46,7 @@ struct TickRecord {
   std::int32_t n_contact = 0;
   std::uint32_t tick_status = 0;    // TickStatus bits
   std::uint32_t safety_status = 0;  // SafetyStatus bits
-  std::uint32_t fault = 0;          // LoopFault bits (haptic_loop.hpp)
+  std::uint32_t fault = 0;          // LoopFault bits (loop/step_stages.hpp)
   std::int64_t late_ns = 0;         // how late the tick started after its deadline
   bool operator==(const TickRecord& o) const {
     return seq == o.seq && t_ns == o.t_ns && pose.position == o.pose.position &&
@@ -104,6 +104,11 @@ class SnapshotRing {
     tail_.store(tail_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   }
 
+  // Snapshots committed and not yet popped (either side; a moment's view).
+  std::size_t size() const noexcept {
+    return static_cast<std::size_t>(head_.load(std::memory_order_relaxed) -
+                                    tail_.load(std::memory_order_relaxed));
+  }
   std::uint64_t published() const { return published_.load(std::memory_order_relaxed); }
   std::uint64_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
 

@@ -38,14 +38,14 @@ std::uint64_t WakeSignal::consume() noexcept {
   return value;
 }
 
-void WakeSignal::notify() noexcept {
+void WakeSignal::notify(std::int64_t t_ns, bool urgent) noexcept {
   const int mode = mode_.load(std::memory_order_relaxed);
   if (mode == kDetached) return;
   if (mode == kCoalesce) {
     std::atomic_thread_fence(std::memory_order_seq_cst);
-    if (!armed_.load(std::memory_order_relaxed) ||
-        !armed_.exchange(false, std::memory_order_relaxed))
-      return;
+    if (!armed_.load(std::memory_order_relaxed)) return;  // the reader is busy: it looks again
+    if (!urgent && t_ns < due_ns_.load(std::memory_order_relaxed)) return;  // nobody due yet
+    if (!armed_.exchange(false, std::memory_order_relaxed)) return;
   }
   const std::uint64_t one = 1;
   // EFD_NONBLOCK: EAGAIN only when the counter would overflow, and then the reader is woken

@@ -1,7 +1,8 @@
 // palpd's timing options (server/cli/rt_options.cpp) and palp probe --check-rate
 // (server/cli/check_rate.cpp) end to end: usage errors, a session in each wake-up mode whose
-// --stats-json says which it ran and what it spent, and the check's verdict. No assertion depends
-// on how well this machine keeps time: only on the reports being there and agreeing.
+// --stats-json says which it ran and what it spent, the check's verdict and its hand-off. No
+// assertion depends on how well this machine keeps time: only on the reports being there and
+// agreeing.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -125,6 +126,32 @@ TEST(CheckRate, GivesAVerdictThatAgreesWithItsExitStatus) {
   EXPECT_TRUE(lax.exit_code == 0 || lax.output.find("ticks past the watchdog") != std::string::npos)
       << lax.output;
   EXPECT_NE(lax.output.find("\"wake\":\"sleep\""), std::string::npos) << lax.output;
+}
+
+// Its stand-in tick hands off to a network thread as palpd's loop does (issue 41): with no
+// client no eventfd write at all, with a client taking 100 frames a second about one write per
+// frame, with --net-wake event-every one a tick. Counts only; any verdict is accepted.
+TEST(CheckRate, HandsItsTicksOffAsPalpdsLoopDoes) {
+  const fs::path cache = shared_cli_dir() / "cache";
+  const std::string base = "probe --check-rate 2000 --duration 0.3 --max-miss 100 -q ";
+  const auto ticks = [](const std::string& json) {
+    return number_after(json, "deadlines") - number_after(json, "missed");
+  };
+  const auto none = run_palp_cli(base, cache);
+  ASSERT_TRUE(none.exit_code == 0 || none.exit_code == 1) << none.output;
+  EXPECT_EQ(number_after(none.output, "net_signals"), 0) << none.output;
+  const auto every = run_palp_cli(base + "--net-wake event-every", cache);
+  ASSERT_TRUE(every.exit_code == 0 || every.exit_code == 1) << every.output;
+  EXPECT_GT(ticks(every.output), 500);
+  EXPECT_EQ(number_after(every.output, "net_signals"), ticks(every.output)) << every.output;
+  const auto station = run_palp_cli(base + "--clients 1 --client-hz 100", cache);
+  ASSERT_TRUE(station.exit_code == 0 || station.exit_code == 1) << station.output;
+  EXPECT_GE(number_after(station.output, "net_signals"), 1) << station.output;
+  EXPECT_LE(number_after(station.output, "net_signals"), 60) << station.output;  // 30 frames
+  EXPECT_EQ(run_palp_cli(base + "--clients -1", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli(base + "--clients 1.5", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli(base + "--client-hz 5000", cache).exit_code, 2);  // above the rate
+  EXPECT_EQ(run_palp_cli(base + "--net-wake sometimes", cache).exit_code, 2);
 }
 
 TEST(CheckRate, UsageErrors) {

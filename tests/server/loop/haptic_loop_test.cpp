@@ -505,6 +505,32 @@ TEST(HapticLoop, StepNeverAllocates) {
   EXPECT_EQ(loop.net_signal().consume(), 199u);
 }
 
+// Issue 41: while the network thread waits and no client is due a frame, the loop hands its
+// snapshots over without one eventfd write (a system call a tick before); a tick a client is due
+// wakes it, and so does the device going or coming back (Stats at once).
+TEST(HapticLoop, WakesTheNetworkThreadOnlyForTicksAClientIsDue) {
+  auto model = testing::ball_model();
+  ScriptedDevice d = pressing_device(300);
+  d.script[285].status = DeviceStatus::Absent;  // unplugged for one tick
+  HapticLoop loop(model, d, quiet_config());
+  WakeSignal& signal = loop.net_signal();
+  signal.attach(true);                    // coalescing, as palpd's network thread
+  signal.want_from(WakeSignal::kNobody);  // nobody connected
+  std::vector<std::int64_t> woken;
+  for (std::int64_t n = 0; n < 300; ++n) {
+    if (n == 200) signal.want_from(250 * kPeriod);  // a 100 Hz client's first frame
+    signal.arm();                                   // the network thread waits
+    loop.step(n * kPeriod, n * kPeriod);
+    if (signal.consume() > 0) {  // woken: it drains and says when its client is due next
+      woken.push_back(n);
+      if (n >= 250) signal.want_from((n / 10 + 1) * 10 * kPeriod);
+    }
+    drain(loop);
+  }
+  EXPECT_EQ(woken, (std::vector<std::int64_t>{250, 260, 270, 280, 285, 286, 290}));
+  EXPECT_EQ(loop.stats().net_signals, woken.size());
+}
+
 // The rates palpd is tested at, on the loop's own thread; only counts are checked.
 TEST(HapticLoop, RunsFrom500HzTo10kHz) {
   for (const double rate : {500.0, 1000.0, 10000.0}) {

@@ -47,6 +47,50 @@ TEST(WakeSignal, CoalescingWritesOnlyForAWaitingReader) {
   EXPECT_EQ(s.writes(), 1u);
 }
 
+// Issue 41: a waiting reader that nobody's frame is due for is not woken (no system call on
+// the loop thread), one whose client is due at t is woken at the first snapshot from t on, and
+// an urgent snapshot (the ring filling, the device coming or going) wakes it whatever it wants.
+TEST(WakeSignal, AWaitingReaderIsWokenOnlyForDueOrUrgentSnapshots) {
+  WakeSignal s;
+  s.attach(true);
+  EXPECT_EQ(s.wanted_from(), WakeSignal::kEveryTick);  // until told otherwise: every snapshot
+  s.want_from(WakeSignal::kNobody);
+  s.arm();
+  for (std::int64_t t = 0; t < 1000; ++t) s.notify(t);
+  EXPECT_EQ(s.writes(), 0u);
+  s.want_from(500);
+  s.arm();
+  for (std::int64_t t = 0; t < 500; ++t) s.notify(t);
+  EXPECT_EQ(s.writes(), 0u);
+  s.notify(500);
+  s.notify(501);  // coalesced: the reader has not re-armed
+  EXPECT_EQ(s.writes(), 1u);
+  EXPECT_EQ(s.consume(), 1u);
+  s.want_from(WakeSignal::kNobody);
+  s.arm();
+  s.notify(600, true);
+  EXPECT_EQ(s.writes(), 2u);
+  s.arm();
+  s.notify();  // no snapshot time: always due
+  EXPECT_EQ(s.writes(), 3u);
+}
+
+TEST(WakeSignal, AHalfFullRingWakesAReaderNobodyIsDueFor) {
+  SnapshotRing ring(8, 0);
+  WakeSignal s;
+  s.attach(true);
+  s.want_from(WakeSignal::kNobody);
+  s.arm();
+  for (std::int64_t t = 0; t < 3; ++t) {
+    ring.claim();
+    commit_and_notify(ring, s, t, false);
+  }
+  EXPECT_EQ(s.writes(), 0u);
+  ring.claim();
+  commit_and_notify(ring, s, 3, false);  // 4 of 8: drain it before it drops
+  EXPECT_EQ(s.writes(), 1u);
+}
+
 TEST(WakeSignal, EveryModeWritesEachPublish) {
   WakeSignal s;
   s.attach(false);
