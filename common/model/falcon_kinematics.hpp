@@ -15,7 +15,7 @@
 //
 //   encoder counts --joint_angle--> t1 (rad) --forward()--> position (Newton's method)
 //   position --inverse()--> t1 ;  jacobian(): d t1 / d p (rad per mm)
-//   force (N) --efforts()--> motor efforts (signed 16-bit, clamped, never wrapped)
+//   force (N) --efforts()--> motor efforts (at most kMaxEffort, direction kept, never wrapped)
 // Pure functions: no allocation, no state; safe in the real-time thread.
 #pragma once
 
@@ -50,9 +50,20 @@ inline constexpr double kThetaOffsetDeg = 35.0;
 // Motor effort per joint torque: libnifalcon src/kinematic/FalconKinematicStamper.cpp getForces()
 // sends -10000 x torque (N m) as the motor value, i.e. -10 per N mm.
 inline constexpr double kEffortPerNmm = 10.0;
-// The firmware takes a signed 16-bit effort; palp clamps to this (scaling all three alike, so the
-// force keeps its direction) before encoding: nothing wraps.
-inline constexpr int kMaxEffort = 32767;
+// The largest effort palp sends a motor. The frame carries a signed 16-bit value, but what
+// Novint's firmware does with more than 12 bits is published nowhere: libnifalcon documents its
+// efforts as "capped at 4096" (include/falcon/core/FalconKinematic.h:95,
+// include/falcon/kinematic/FalconKinematicStamper.h:61, commit f7c727a) and the kinematics it
+// shipped first clamp each motor to +-4095 (boneyard/ouellet_kinematics/
+// FalconKinematicStamper.cpp:49), with the gain of 10000 per N m fitted to Novint's own driver
+// (same file, :41-43). Its current kinematics cap the torque at 30 N m instead
+// (src/kinematic/FalconKinematicStamper.cpp:253, "Rather random choice"), i.e. 300000 counts,
+// which the 16-bit frame would wrap (src/firmware/FalconFirmwareNovintSDK.cpp:87-90). palp keeps
+// to the documented cap. When a force needs more, all three efforts are scaled by one factor (as
+// libnifalcon's current code does with its torque cap, FalconKinematicStamper.cpp:264-270) so the
+// force keeps its direction, and the caller counts it. docs/devices.md charts the force this
+// leaves across the workspace.
+inline constexpr int kMaxEffort = 4095;
 // The middle of the workspace in the Falcon frame (mm): libnifalcon's examples keep the handle
 // near z = 0.11 m; the centre used here is the point where the three joint angles are equal and
 // the handle is 110 mm out (palp's device origin).
@@ -93,7 +104,7 @@ bool end_effector_force(const Vec3d& falcon_position, const Vec3d& torque_Nmm, V
 
 struct Efforts {
   std::array<std::int16_t, 3> value{};
-  bool clamped = false;  // the request exceeded kMaxEffort (or max_effort) and was scaled down
+  bool clamped = false;  // the request exceeded max_effort (kMaxEffort) and was scaled down
 };
 // Motor efforts for `force` at the position: -kEffortPerNmm x torque, rounded, all three scaled
 // by one factor when any exceeds `max_effort` (<= kMaxEffort). Zero when the position is

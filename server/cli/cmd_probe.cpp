@@ -421,11 +421,14 @@ int cmd_probe(const Arguments& argv) {
       std::printf("  status    device %s%s%s", st >= 0 && st <= 3 ? kStates[st] : "?",
                   s.device_message().empty() ? "" : ": ", s.device_message().c_str());
       if (s.device_exchanges() > 0)
-        std::printf("; link %llu exchanges, %llu corrupt and %llu short frames, %llu lost replies",
-                    static_cast<unsigned long long>(s.device_exchanges()),
-                    static_cast<unsigned long long>(s.device_corrupt_frames()),
-                    static_cast<unsigned long long>(s.device_short_frames()),
-                    static_cast<unsigned long long>(s.device_lost_replies()));
+        std::printf(
+            "; link %llu exchanges, %llu corrupt and %llu short frames, %llu lost replies, "
+            "%llu commands force-limited",
+            static_cast<unsigned long long>(s.device_exchanges()),
+            static_cast<unsigned long long>(s.device_corrupt_frames()),
+            static_cast<unsigned long long>(s.device_short_frames()),
+            static_cast<unsigned long long>(s.device_lost_replies()),
+            static_cast<unsigned long long>(s.device_force_limited()));
       std::printf("\n");
       if (!s.tuning().empty() || !s.tuning_note().empty())
         std::printf("  tuning    %s%s%s\n", s.tuning().empty() ? "defaults" : s.tuning().c_str(),

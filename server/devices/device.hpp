@@ -67,10 +67,12 @@ struct DeviceSample {
 
 // A framed device link's counters (Stats), for devices that have one (0: none).
 struct DeviceLinkCounters {
-  std::uint64_t exchanges = 0;     // frames answered
-  std::uint64_t corrupt = 0;       // frames dropped as corrupt
-  std::uint64_t short_frames = 0;  // frames dropped as cut short
-  std::uint64_t lost_replies = 0;  // requests never answered
+  std::uint64_t exchanges = 0;      // frames answered
+  std::uint64_t corrupt = 0;        // frames dropped as corrupt
+  std::uint64_t short_frames = 0;   // frames dropped as cut short
+  std::uint64_t lost_replies = 0;   // requests never answered
+  std::uint64_t force_limited = 0;  // commands the device could not render whole: its motors'
+                                    // limit scaled the force down (direction kept)
 };
 
 struct DeviceCommand {

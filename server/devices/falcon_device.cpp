@@ -417,8 +417,9 @@ DeviceStatus FalconDevice::write(const DeviceCommand& command) noexcept {
   if (!active_ || !link_) return DeviceStatus::Disconnected;
   Outgoing out;
   if (homed_.load(std::memory_order_relaxed) && !clutch_) {
-    // the last guard: never more than the declared 8 N, the direction kept; torque is not
-    // rendered (3-DOF), clients still show it
+    // the last guard: never more than the declared 8 N, the direction kept; then no motor beyond
+    // the firmware's effort cap (falcon::kMaxEffort), the direction kept again and the command
+    // counted (Stats.device_force_limited). Torque is not rendered (3-DOF), clients still show it
     Vec3d force = is_finite(command.force) ? command.force : Vec3d{};
     const double limit = declared_limits().max_force_N;
     if (norm(force) > limit) force = force * (limit / norm(force));

@@ -84,7 +84,7 @@ class FalconDevice final : public Device {
     std::uint64_t host_frames = 0;      // host frames sent
     std::uint64_t zero_frames = 0;      // of them, zero efforts sent because the loop stalled
     std::uint64_t lost_replies = 0;     // requests with no reply within reply_timeout_ms
-    std::uint64_t clamped = 0;          // commands whose efforts were scaled into 16 bits
+    std::uint64_t clamped = 0;          // commands scaled down to falcon::kMaxEffort a motor
     std::uint64_t fk_failures = 0;      // encoder readings forward kinematics could not solve
     std::uint64_t uploads = 0;          // firmware loads that succeeded
     std::uint64_t upload_failures = 0;  // load attempts that failed (handshake, echo, silence)
@@ -98,7 +98,8 @@ class FalconDevice final : public Device {
   Counters counters() const noexcept;
   DeviceLinkCounters link_counters() const noexcept override {
     return {frames_.load(std::memory_order_relaxed), corrupt_.load(std::memory_order_relaxed),
-            short_frames_.load(std::memory_order_relaxed), lost_.load(std::memory_order_relaxed)};
+            short_frames_.load(std::memory_order_relaxed), lost_.load(std::memory_order_relaxed),
+            clamped_.load(std::memory_order_relaxed)};
   }
   usb::LinkState link_state() const noexcept;
   // All three motors homed, as the firmware last said (false while absent).

@@ -274,6 +274,7 @@ void fill_stats(const rt::LoopStats& ls, const rt::HapticLoop& loop, const Scene
   st->set_device_corrupt_frames(link.corrupt);
   st->set_device_short_frames(link.short_frames);
   st->set_device_lost_replies(link.lost_replies);
+  st->set_device_force_limited(link.force_limited);
   if (const auto it = scene.metadata.find("tuning"); it != scene.metadata.end())
     st->set_tuning(it->second);
   if (const auto it = scene.metadata.find("tuning_note"); it != scene.metadata.end())

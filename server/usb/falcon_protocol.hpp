@@ -8,7 +8,8 @@
 //   USB: VID:PID 0403:cb48, interface 0, bulk OUT 0x02, bulk IN 0x81 (64-byte packets).
 //   IN packet:   [modem status][line status][serial bytes ...]   (strip_ftdi_status)
 //   host frame:  '<' e0 e0 e0 e0 e1 .. e1 e2 .. e2 ctl 0 '>'   16 bytes; each middle byte is
-//                0x41 + one nibble; efforts are signed 16-bit, least significant nibble first;
+//                0x41 + one nibble; efforts are signed 16-bit, least significant nibble first
+//                (palp sends at most +-falcon::kMaxEffort, 4095: docs/devices.md);
 //                ctl = LED bits | homing-mode bit
 //   device frame: '<' enc0 x4, enc1 x4, enc2 x4, status, 0 '>'  status - 0x41: bits 0-3 grip
 //                buttons, bits 4-6 "homed" per motor
@@ -59,12 +60,18 @@ inline constexpr std::size_t kMaxFirmwareBytes = 256 * 1024;
 
 inline constexpr std::size_t kFrameSize = 16;
 inline constexpr std::uint8_t kFrameStart = '<', kFrameEnd = '>', kNibbleBase = 0x41;
-// Host frame control bits (FalconFirmware.h: LED_RED 2, LED_GREEN 4, LED_BLUE 8, homing 1).
+// Host frame control bits. libnifalcon (github.com/libnifalcon/libnifalcon at f7c727a)
+// include/falcon/core/FalconFirmware.h:68-70: GREEN_LED 0x2, BLUE_LED 0x4, RED_LED 0x8; the homing
+// bit is OR-ed in as 0x01 (src/firmware/FalconFirmwareNovintSDK.cpp:93). palp had red 0x02,
+// green 0x04, blue 0x08 before (a real Falcon would have shown green while homing, blue homed).
 inline constexpr std::uint8_t kHomingMode = 0x01;
-inline constexpr std::uint8_t kLedRed = 0x02, kLedGreen = 0x04, kLedBlue = 0x08;
-// Grip buttons of the standard four-button grip (FalconGripFourButton.h).
-inline constexpr std::uint8_t kButtonCentre = 0x01, kButtonMinus = 0x02, kButtonPlus = 0x04,
-                              kButtonForward = 0x08;
+inline constexpr std::uint8_t kLedGreen = 0x02, kLedBlue = 0x04, kLedRed = 0x08;
+// Grip buttons of the standard four-button grip, libnifalcon
+// include/falcon/grip/FalconGripFourButton.h:40-43: PLUS 0x1, FORWARD 0x2, CENTER 0x4, MINUS 0x8
+// (its examples/falcon_test_cli/FalconWallTest.cpp:38/46 reads the "center button" as BUTTON_3,
+// 0x4, too).
+inline constexpr std::uint8_t kButtonPlus = 0x01, kButtonForward = 0x02, kButtonCentre = 0x04,
+                              kButtonMinus = 0x08;
 
 struct HostFrame {
   std::array<std::int16_t, 3> efforts{};

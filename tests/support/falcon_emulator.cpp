@@ -1,35 +1,88 @@
-// The emulated Falcon: see falcon_emulator.hpp.
+// The emulated Falcon: see falcon_emulator.hpp. Wire constants in nif:: (cited there); the
+// mechanism through falcon_reference.hpp (libnifalcon's Stamper kinematics, metres).
 #include "support/falcon_emulator.hpp"
 
 #include <algorithm>
 #include <cmath>
-
-#include "model/falcon_kinematics.hpp"
+#include <cstdlib>
 
 namespace palp::usbemu {
 
-namespace fp = usb::falcon;
-namespace fk = falcon;
+namespace ref = falconref;
 
 namespace {
 
 DeviceSpec falcon_spec() {
   DeviceSpec s;
-  s.vendor_id = fp::kVendor;
-  s.product_id = fp::kProduct;
+  s.vendor_id = nif::kVendorId;
+  s.product_id = nif::kProductId;
   s.bcd_device = 0x0400;
   s.bcd_usb = 0x0200;
   InterfaceSpec& itf = s.interfaces[0];
   itf.interface_class = 0xff;
   itf.subclass = 0xff;
   itf.protocol = 0xff;
-  itf.endpoints = {{fp::kEndpointIn, 0x02, 64, 0}, {fp::kEndpointOut, 0x02, 64, 0}};
+  itf.endpoints = {{nif::kBulkIn, 0x02, 64, 0}, {nif::kBulkOut, 0x02, 64, 0}};
   return s;
 }
 
 constexpr double kMassKg = 0.15;     // the handle and arms, moving mass (emulation choice)
 constexpr double kFriction = 0.002;  // N s/mm, the mechanism's own damping (emulation choice)
 constexpr double kIndexZ = 150.0;    // mm: pulling out past here crosses the encoder index
+// FTDI modem and line status as an FT232 reports them idle (emulation choice; the host skips them)
+constexpr std::uint8_t kModemStatus[nif::kModemStatusBytes] = {0x31, 0x60};
+
+ref::V3 metres(const Vec3d& p_mm) {
+  return {p_mm.x * 1e-3, p_mm.y * 1e-3, p_mm.z * 1e-3};
+}
+
+// One 16-bit value from four bytes, each 0x41 + a nibble, least significant first (SDK:51-55);
+// false when a byte is out of that range.
+bool get_nibbles(const std::uint8_t* in, std::uint16_t& value) {
+  value = 0;
+  for (int n = 0; n < 4; ++n) {
+    if (in[n] < nif::kNibbleOffset || in[n] > nif::kNibbleOffset + 0x0f) return false;
+    value = std::uint16_t(value | ((in[n] - nif::kNibbleOffset) << (4 * n)));
+  }
+  return true;
+}
+void put_nibbles(std::uint16_t value, std::uint8_t* out) {
+  for (int n = 0; n < 4; ++n)
+    out[n] = std::uint8_t(nif::kNibbleOffset + ((value >> (4 * n)) & 0x0f));  // SDK:87-90, 96
+}
+
+// A host frame (SDK formatInput, SDK:74-98, read back): three signed efforts and byte 13.
+bool decode_host(const std::uint8_t* in, std::array<std::int16_t, 3>& efforts,
+                 std::uint8_t& control) {
+  if (in[0] != nif::kFrameOpen || in[nif::kFrameBytes - 1] != nif::kFrameClose) return false;
+  for (int i = 0; i < 3; ++i) {
+    std::uint16_t v = 0;
+    if (!get_nibbles(in + 1 + 4 * i, v)) return false;
+    efforts[std::size_t(i)] = static_cast<std::int16_t>(v);
+  }
+  for (const int at : {13, 14})
+    if (in[at] < nif::kNibbleOffset || in[at] > nif::kNibbleOffset + 0x0f) return false;
+  control = std::uint8_t(in[13] - nif::kNibbleOffset);
+  return true;
+}
+
+// A device frame as SDK formatOutput (SDK:40-72) reads it: encoders, then byte 13 = 0x41 +
+// (homing status << 4 | grip nibble), byte 14 0x41.
+void encode_device(const std::array<std::int16_t, 3>& encoders, std::uint8_t grip,
+                   std::uint8_t homed, std::uint8_t out[nif::kFrameBytes]) {
+  out[0] = nif::kFrameOpen;
+  for (int i = 0; i < 3; ++i)
+    put_nibbles(static_cast<std::uint16_t>(encoders[std::size_t(i)]), out + 1 + 4 * i);
+  out[13] = std::uint8_t(nif::kNibbleOffset + ((homed & nif::kAllHomed) << 4) + (grip & 0x0f));
+  out[14] = nif::kNibbleOffset;
+  out[15] = nif::kFrameClose;
+}
+
+bool ends_with_probe(const std::vector<std::uint8_t>& rx) {
+  return rx.size() >= nif::kBootProbe.size() &&
+         std::equal(nif::kBootProbe.begin(), nif::kBootProbe.end(),
+                    rx.end() - std::ptrdiff_t(nif::kBootProbe.size()));
+}
 
 }  // namespace
 
@@ -37,7 +90,7 @@ EmulatedFalcon::EmulatedFalcon(UsbTestbed& testbed, std::vector<std::uint8_t> fi
     : firmware_(std::move(firmware)), usb_(testbed, falcon_spec()) {
   usb_.on_control([this](const ControlRequest& r) { return control(r); });
   usb_.on_out([this](std::uint8_t endpoint, const std::vector<std::uint8_t>& packet) {
-    if (endpoint == fp::kEndpointOut) out(packet);
+    if (endpoint == nif::kBulkOut) out(packet);
   });
 }
 
@@ -72,8 +125,7 @@ void EmulatedFalcon::power_on() {
   usb_.start_in_stream(
       // a bridge keeps what its serial side received until the host reads it: nothing is
       // dropped (a busy host, e.g. a loaded CI machine, reads late but loses no frame)
-      fp::kEndpointIn, 1000.0, [this](std::uint64_t, std::int64_t t_ns) { return tick(t_ns); },
-      4096);
+      nif::kBulkIn, 1000.0, [this](std::uint64_t, std::int64_t t_ns) { return tick(t_ns); }, 4096);
 }
 
 void EmulatedFalcon::unplug() {
@@ -138,16 +190,16 @@ EmulatedFalcon::Snapshot EmulatedFalcon::snapshot() {
 
 ControlReply EmulatedFalcon::control(const ControlRequest& r) {
   const std::lock_guard lock(mutex_);
-  if (r.request_type != fp::kFtdiRequestType) return ControlReply::stalled();
+  if (r.request_type != nif::kVendorOut) return ControlReply::stalled();
   switch (r.request) {
-    case fp::kSioReset:
-      if (r.value == fp::kPurgeRx) {  // what the chip holds for the host
+    case nif::kSioReset:
+      if (r.value == nif::kPurgeRx) {  // what the chip holds for the host
         tx_.clear();
-        usb_.clear_in(fp::kEndpointIn);
+        usb_.clear_in(nif::kBulkIn);
       }
       break;
-    case fp::kSioModemCtrl:
-      if (r.value == fp::kDtrHigh) {
+    case nif::kSioModemCtrl:
+      if (r.value == nif::kDtrHigh) {
         if (!dtr_) {  // DTR low -> high resets the DSP into its bootloader
           mode_ = Mode::Boot;
           dtr_reset_ = true;
@@ -157,23 +209,23 @@ ControlReply EmulatedFalcon::control(const ControlRequest& r) {
           ++counters_.dtr_resets;
         }
         dtr_ = true;
-      } else if (r.value == fp::kDtrLow) {
+      } else if (r.value == nif::kDtrLow) {
         dtr_ = false;
       }
       break;
-    case fp::kSioSetBaudRate:
+    case nif::kSioSetBaudRate:
       baud_ = r.value;
-      if (baud_ == fp::kBaudRuntime && mode_ == Mode::Loading) {
+      if (baud_ == nif::kBaudRuntime && mode_ == Mode::Loading) {
         const bool good = image_ == firmware_;
         mode_ = good ? Mode::Running : Mode::Crashed;
         if (good) ++counters_.loads;
       }
       break;
-    case fp::kSioSetLatency:
+    case nif::kSioSetLatency:
       latency_ = std::max<std::uint16_t>(1, r.value);
       break;
-    case fp::kSioSetData:
-    case fp::kSioSetFlowCtrl:
+    case nif::kSioSetData:
+    case nif::kSioSetFlowCtrl:
       break;
     default:
       return ControlReply::stalled();
@@ -181,32 +233,30 @@ ControlReply EmulatedFalcon::control(const ControlRequest& r) {
   return ControlReply::ack();
 }
 
-void EmulatedFalcon::out(const std::vector<std::uint8_t>& packet) {
-  const std::lock_guard lock(mutex_);
+void EmulatedFalcon::boot_out(const std::vector<std::uint8_t>& packet) {
   switch (mode_) {
     case Mode::Boot:
-      if (!dtr_reset_ || baud_ != fp::kBaud9600) return;
+      if (!dtr_reset_ || baud_ != nif::kBaud9600) return;
       boot_rx_.insert(boot_rx_.end(), packet.begin(), packet.end());
-      if (boot_rx_.size() >= 3 &&
-          std::equal(fp::kBootProbe.begin(), fp::kBootProbe.end(), boot_rx_.end() - 3)) {
-        tx_.insert(tx_.end(), fp::kBootProbeReply.begin(), fp::kBootProbeReply.end());
+      if (ends_with_probe(boot_rx_)) {
+        tx_.insert(tx_.end(), nif::kBootReply.begin(), nif::kBootReply.end());
         boot_rx_.clear();
         mode_ = Mode::Probed;
         ++counters_.probes;
       }
       return;
     case Mode::Probed:
-      if (baud_ == fp::kBaud9600) {  // the probe again: answered again
+      if (baud_ == nif::kBaud9600) {  // the probe again: answered again
         boot_rx_.insert(boot_rx_.end(), packet.begin(), packet.end());
-        if (boot_rx_.size() >= 3 &&
-            std::equal(fp::kBootProbe.begin(), fp::kBootProbe.end(), boot_rx_.end() - 3)) {
-          tx_.insert(tx_.end(), fp::kBootProbeReply.begin(), fp::kBootProbeReply.end());
+        if (ends_with_probe(boot_rx_)) {
+          tx_.insert(tx_.end(), nif::kBootReply.begin(), nif::kBootReply.end());
           boot_rx_.clear();
         }
         return;
       }
-      if (baud_ == fp::kBaudUpload && !dtr_ && packet.size() == 1 && packet[0] == fp::kBootEnter) {
-        tx_.push_back(fp::kBootEnter);
+      if (baud_ == nif::kBaudUpload && !dtr_ && packet.size() == 1 &&
+          packet[0] == nif::kBootEnter) {
+        tx_.push_back(nif::kBootEnter);
         mode_ = Mode::Loading;
         image_.clear();
         echo_fault_this_load_ = echo_faults_ > 0;
@@ -214,7 +264,7 @@ void EmulatedFalcon::out(const std::vector<std::uint8_t>& packet) {
       }
       return;
     case Mode::Loading:
-      if (baud_ != fp::kBaudUpload) return;
+      if (baud_ != nif::kBaudUpload) return;
       for (const std::uint8_t b : packet) {
         image_.push_back(b);
         const bool flip = echo_fault_this_load_ && image_.size() == 100;
@@ -223,27 +273,45 @@ void EmulatedFalcon::out(const std::vector<std::uint8_t>& packet) {
       }
       return;
     case Mode::Crashed:
-      return;
     case Mode::Running:
-      break;
+      return;
   }
-  if (baud_ != fp::kBaudRuntime) return;
+}
+
+void EmulatedFalcon::out(const std::vector<std::uint8_t>& packet) {
+  const std::lock_guard lock(mutex_);
+  if (mode_ != Mode::Running) {
+    boot_out(packet);
+    return;
+  }
+  if (baud_ != nif::kBaudRuntime) return;
   host_rx_.insert(host_rx_.end(), packet.begin(), packet.end());
-  while (host_rx_.size() >= fp::kFrameSize) {
-    const auto start = std::find(host_rx_.begin(), host_rx_.end(), fp::kFrameStart);
+  take_host_frames();
+}
+
+void EmulatedFalcon::take_host_frames() {
+  while (host_rx_.size() >= nif::kFrameBytes) {
+    const auto start = std::find(host_rx_.begin(), host_rx_.end(), nif::kFrameOpen);
     host_rx_.erase(host_rx_.begin(), start);
-    if (host_rx_.size() < fp::kFrameSize) break;
-    fp::HostFrame frame;
-    if (!fp::decode_host_frame(host_rx_.data(), frame)) {
+    if (host_rx_.size() < nif::kFrameBytes) break;
+    std::array<std::int16_t, 3> efforts{};
+    std::uint8_t control = 0;
+    if (!decode_host(host_rx_.data(), efforts, control)) {
+      ++counters_.bad_frames;
       host_rx_.erase(host_rx_.begin());
       continue;
     }
-    host_rx_.erase(host_rx_.begin(), host_rx_.begin() + fp::kFrameSize);
+    host_rx_.erase(host_rx_.begin(), host_rx_.begin() + std::ptrdiff_t(nif::kFrameBytes));
     ++counters_.frames_in;
-    if ((homed_ & 7) != 7 && (frame.efforts[0] || frame.efforts[1] || frame.efforts[2]))
+    if ((homed_ & nif::kAllHomed) != nif::kAllHomed && (efforts[0] || efforts[1] || efforts[2]))
       ++counters_.nonzero_while_unhomed;
-    efforts_ = frame.efforts;
-    control_ = frame.control;
+    for (const std::int16_t e : efforts)
+      if (std::abs(int(e)) > ref::kDocumentedEffortCap) {
+        ++counters_.over_cap;
+        break;
+      }
+    efforts_ = efforts;
+    control_ = control;
     reply();
   }
 }
@@ -255,19 +323,17 @@ void EmulatedFalcon::reply() {
   }
   tx_.insert(tx_.end(), inject_.begin(), inject_.end());
   inject_.clear();
-  fp::DeviceFrame frame;
-  Vec3d t;
-  if (fk::inverse(p_, t))
-    for (int i = 0; i < 3; ++i) {
-      const double angle = i == 0 ? t.x : (i == 1 ? t.y : t.z);
-      frame.encoders[std::size_t(i)] = static_cast<std::int16_t>(
-          std::lround(fk::encoder_counts(angle) + offsets_[std::size_t(i)]));
+  std::array<std::int16_t, 3> encoders{};
+  ref::Angles q;
+  if (ref::ik(metres(p_), q))
+    for (std::size_t i = 0; i < 3; ++i) {
+      // KIN:61 inverted, theta1 in degrees as STA:307 converts it
+      const double counts = ref::encoder_for_theta_deg(q.theta1[i] / ref::kDegToRad);
+      encoders[i] = static_cast<std::int16_t>(std::lround(counts + offsets_[i]));
     }
-  frame.buttons = buttons_;
-  frame.homed = homed_;
-  std::uint8_t bytes[fp::kFrameSize];
-  fp::encode_device_frame(frame, bytes);
-  std::size_t size = fp::kFrameSize;
+  std::uint8_t bytes[nif::kFrameBytes];
+  encode_device(encoders, buttons_, homed_, bytes);
+  std::size_t size = nif::kFrameBytes;
   if (corrupt_ > 0) {
     --corrupt_;
     bytes[5] = 0x20;  // out of the nibble range
@@ -279,34 +345,37 @@ void EmulatedFalcon::reply() {
   ++counters_.replies;
 }
 
-void EmulatedFalcon::step(double dt) {
-  // homing: with homing asked, a leg pulled past its index angle gets its true count
-  Vec3d t;
-  Vec3d index_angles;
-  fk::inverse({0, 0, kIndexZ}, index_angles);
-  if ((control_ & fp::kHomingMode) && fk::inverse(p_, t))
-    for (int i = 0; i < 3; ++i) {
-      const double angle = i == 0 ? t.x : (i == 1 ? t.y : t.z);
-      const double index = i == 0 ? index_angles.x : (i == 1 ? index_angles.y : index_angles.z);
-      if (angle >= index) {
-        homed_ = std::uint8_t(homed_ | (1 << i));
-        offsets_[std::size_t(i)] = 0.0;
-      }
+// Homing: with the homing bit set, a leg pulled past its index angle gets its true count.
+void EmulatedFalcon::home_legs() {
+  ref::Angles now, index;
+  if (!(control_ & nif::kHomingBit) || !ref::ik(metres(p_), now) ||
+      !ref::ik(metres({0, 0, kIndexZ}), index))
+    return;
+  for (std::size_t i = 0; i < 3; ++i)
+    if (now.theta1[i] >= index.theta1[i]) {
+      homed_ = std::uint8_t(homed_ | (1u << i));
+      offsets_[i] = 0.0;
     }
+}
+
+void EmulatedFalcon::step(double dt) {
+  home_legs();
   const int substeps = 8;
   const double h = dt / substeps;
+  const ref::V3 effort{double(efforts_[0]), double(efforts_[1]), double(efforts_[2])};
   for (int s = 0; s < substeps; ++s) {
-    Vec3d motor{};
-    if (!fk::end_effector_force(p_, fk::torques_from_efforts(efforts_), motor)) motor = {};
+    ref::V3 f{};
+    if (!ref::force_from_efforts(metres(p_), effort, f)) f = {};
+    const Vec3d motor{f[0], f[1], f[2]};
     const Vec3d hand = hand_ ? (target_ - p_) * k_ - v_ * c_ : Vec3d{};
     const Vec3d total = motor + hand - v_ * kFriction;
     motor_force_ = motor;
     hand_force_ = hand;
     v_ += total * (1000.0 / kMassKg * h);  // N / kg = m/s^2 = 1000 mm/s^2
     const Vec3d next = p_ + v_ * h;
-    Vec3d angles;
+    ref::Angles q;
     if (std::abs(next.x) < 60 && std::abs(next.y) < 60 && next.z > 60 && next.z < 170 &&
-        fk::inverse(next, angles))
+        ref::ik(metres(next), q))
       p_ = next;
     else
       v_ = {};  // a mechanical stop
@@ -319,8 +388,8 @@ std::optional<std::vector<std::uint8_t>> EmulatedFalcon::tick(std::int64_t t_ns)
   last_tick_ns_ = t_ns;
   if (tx_.empty() && t_ns - last_in_ns_ < std::int64_t(latency_) * 1'000'000) return std::nullopt;
   last_in_ns_ = t_ns;
-  std::vector<std::uint8_t> packet = {0x31, 0x60};  // FTDI modem and line status
-  const std::size_t n = std::min<std::size_t>(tx_.size(), fp::kUsbPacket - 2);
+  std::vector<std::uint8_t> packet(std::begin(kModemStatus), std::end(kModemStatus));
+  const std::size_t n = std::min<std::size_t>(tx_.size(), nif::kUsbPacket - packet.size());
   packet.insert(packet.end(), tx_.begin(), tx_.begin() + static_cast<std::ptrdiff_t>(n));
   tx_.erase(tx_.begin(), tx_.begin() + static_cast<std::ptrdiff_t>(n));
   return packet;

@@ -34,12 +34,39 @@ TEST(FalconProtocol, HostFrameIsNibbleEncodedLeastSignificantFirst) {
   std::uint8_t b[kFrameSize];
   encode_host_frame(f, b);
   const std::uint8_t expected[kFrameSize] = {'<',  0x45, 0x44, 0x43, 0x42, 0x50, 0x50, 0x50,
-                                             0x50, 0x41, 0x41, 0x41, 0x49, 0x44, 0x41, '>'};
+                                             0x50, 0x41, 0x41, 0x41, 0x49, 0x4a, 0x41, '>'};
   for (std::size_t i = 0; i < kFrameSize; ++i) EXPECT_EQ(b[i], expected[i]) << i;
   HostFrame back;
   ASSERT_TRUE(decode_host_frame(b, back));
   EXPECT_EQ(back.efforts, f.efforts);
   EXPECT_EQ(back.control, f.control);
+}
+
+// The control and grip bits as libnifalcon publishes them (commit f7c727a), written here as
+// literals, not taken from the header under test: include/falcon/core/FalconFirmware.h:68-70
+// (GREEN_LED 0x2, BLUE_LED 0x4, RED_LED 0x8), src/firmware/FalconFirmwareNovintSDK.cpp:93 (homing
+// 0x01), include/falcon/grip/FalconGripFourButton.h:40-43 (PLUS 0x1, FORWARD 0x2, CENTER 0x4,
+// MINUS 0x8).
+TEST(FalconProtocol, LedHomingAndButtonBitsAreLibnifalcons) {
+  EXPECT_EQ(kHomingMode, 0x01);
+  EXPECT_EQ(kLedGreen, 0x02);
+  EXPECT_EQ(kLedBlue, 0x04);
+  EXPECT_EQ(kLedRed, 0x08);
+  EXPECT_EQ(kButtonPlus, 0x01);
+  EXPECT_EQ(kButtonForward, 0x02);
+  EXPECT_EQ(kButtonCentre, 0x04);
+  EXPECT_EQ(kButtonMinus, 0x08);
+  // homing with the red LED on the wire: byte 13 = 0x41 + (0x08 | 0x01)
+  std::uint8_t b[kFrameSize];
+  encode_host_frame({{0, 0, 0}, std::uint8_t(kLedRed | kHomingMode)}, b);
+  EXPECT_EQ(b[13], 0x41 + 0x09);
+  // a Falcon reporting its centre button (0x4) and all three motors homed (bits 4-6)
+  const std::uint8_t centre[kFrameSize] = {'<',  0x41, 0x41, 0x41, 0x41, 0x41,        0x41, 0x41,
+                                           0x41, 0x41, 0x41, 0x41, 0x41, 0x41 + 0x74, 0x41, '>'};
+  DeviceFrame f;
+  ASSERT_TRUE(decode_device_frame(centre, f));
+  EXPECT_EQ(f.buttons, kButtonCentre);
+  EXPECT_TRUE(f.all_homed());
 }
 
 TEST(FalconProtocol, DeviceFrameCarriesEncodersButtonsAndHomedBits) {
