@@ -73,6 +73,9 @@ int run(const Options& o) {
   stream.volume_crop = !o.show_outside;  // the body's box, unless the outside is wanted
   stream.force_history_s = o.chart_s;
 
+  // before the window: a token for another machine without TLS is never sent
+  if (const std::string no = connect_refusal(stream); !no.empty()) throw UsageError(no);
+
   ViewWindow window(
       {o.width, o.height, !screenshot, "palpview " + o.host + ":" + std::to_string(o.port)});
   SceneSettings settings;

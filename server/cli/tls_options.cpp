@@ -4,6 +4,7 @@
 #include <ctime>
 
 #include "net/client_log.hpp"
+#include "tls/client_policy.hpp"
 
 namespace palp::cli {
 
@@ -42,11 +43,8 @@ std::unique_ptr<tls::ClientContext> client_tls(const Args& args) {
   o.pin = args.get("tls-pin").value_or("");
   o.cert_file = args.get("tls-cert").value_or("");
   o.key_file = args.get("tls-key").value_or("");
-  if (!o.enabled()) {
-    if (!o.cert_file.empty() || !o.key_file.empty())
-      throw UsageError("--tls-cert/--tls-key need TLS: give --tls-ca FILE or --tls-pin SHA256");
-    return nullptr;
-  }
+  tls::check_client_options(o);
+  if (!o.enabled()) return nullptr;
   return std::make_unique<tls::ClientContext>(o);
 }
 

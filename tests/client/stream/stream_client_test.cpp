@@ -224,6 +224,36 @@ TEST(StreamClient, RejectsUnusableOptions) {
   EXPECT_STREQ(view::to_string(view::DeviceState::Absent), "absent");
 }
 
+// A token for another machine without TLS is never sent: the client goes Refused before it
+// connects, naming --tls-ca and --tls-pin; to loopback, or without a token, it may connect. A
+// certificate without TLS is refused when the client is made.
+TEST(StreamClient, ATokenForAnotherMachineWithoutTlsIsRefusedBeforeConnecting) {
+  StreamOptions o;
+  o.host = "192.0.2.1";  // TEST-NET-1: nothing answers, a client that tried would keep trying
+  o.controller = true;
+  o.token = "s3cret";
+  EXPECT_NE(connect_refusal(o).find("--tls-ca"), std::string::npos) << connect_refusal(o);
+  StreamClient client(o);
+  client.start();
+  const LatestState s = wait_for(
+      client, [](const LatestState& l) { return is_state(l, LinkState::Refused); }, 10.0);
+  EXPECT_EQ(s.link.state, LinkState::Refused) << s.link.message;
+  EXPECT_NE(s.link.message.find("clear text"), std::string::npos) << s.link.message;
+  EXPECT_NE(s.link.message.find("--tls-pin"), std::string::npos) << s.link.message;
+  EXPECT_EQ(s.link.connections, 0u);
+  client.stop();
+  o.host = "127.0.0.1";
+  EXPECT_EQ(connect_refusal(o), "");
+  o.host = "localhost";
+  EXPECT_EQ(connect_refusal(o), "");
+  o.host = "192.0.2.1";
+  o.token.clear();
+  EXPECT_EQ(connect_refusal(o), "");
+  o.tls_cert = "station.crt";
+  o.tls_key = "station.key";
+  EXPECT_THROW(StreamClient{o}, UsageError);
+}
+
 // ------------------------------------------------------------------------------ against palpd
 
 TEST(StreamClient, ReceivesSceneVolumeAndFramesFromPalpd) {

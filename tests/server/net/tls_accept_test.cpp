@@ -22,6 +22,7 @@
 #include "base/errors.hpp"
 #include "net/server.hpp"
 #include "support/net_test_client.hpp"
+#include "support/outside_address.hpp"
 #include "support/palpd_test_util.hpp"
 #include "support/test_certs.hpp"
 #include "wire/framing.hpp"
@@ -373,27 +374,10 @@ TEST_F(TlsTest, CaptureOfATlsSessionHoldsNoTokenAndNoFrame) {
   EXPECT_EQ(tapped.find("palpd"), std::string::npos);  // the server's name in Welcome
 }
 
-// This machine's first non-loopback IPv4 address ("" when it has none).
-std::string outside_address() {
-  ifaddrs* list = nullptr;
-  if (::getifaddrs(&list) != 0) return "";
-  std::string found;
-  for (ifaddrs* a = list; a && found.empty(); a = a->ifa_next) {
-    if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET || (a->ifa_flags & IFF_LOOPBACK) ||
-        !(a->ifa_flags & IFF_UP))
-      continue;
-    char text[INET_ADDRSTRLEN];
-    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
-    if (::inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) found = text;
-  }
-  ::freeifaddrs(list);
-  return found;
-}
-
 // A token in plain text from beyond loopback is refused without being compared; the same
 // palpd takes a token-less observer from there, and the token over TLS.
 TEST_F(TlsTest, PlainTextTokenFromBeyondLoopbackIsRefused) {
-  const std::string address = outside_address();
+  const std::string address = testing::outside_address();
   if (address.empty()) GTEST_SKIP() << "this machine has no non-loopback IPv4 address";
   start(false, "token-0f-the-lab-7731", "0.0.0.0");
   SecureClient controller(port(), nullptr, address);
