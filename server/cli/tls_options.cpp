@@ -13,9 +13,14 @@ std::shared_ptr<tls::ServerContext> server_tls(const Args& args) {
   o.cert_file = args.get("tls-cert").value_or("");
   o.key_file = args.get("tls-key").value_or("");
   o.client_ca_file = args.get("tls-client-ca").value_or("");
+  o.controllers_file = args.get("tls-controllers").value_or("");
   if (!o.enabled()) {
     if (!o.client_ca_file.empty())
       throw UsageError("--tls-client-ca needs TLS: give --tls-cert FILE and --tls-key FILE too");
+    if (!o.controllers_file.empty())
+      throw UsageError(
+          "--tls-controllers needs TLS: give --tls-cert FILE, --tls-key FILE and --tls-client-ca "
+          "FILE too");
     return nullptr;
   }
   return std::make_shared<tls::ServerContext>(o);

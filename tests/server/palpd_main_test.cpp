@@ -62,6 +62,14 @@ TEST(Palpd, HelpAndUsageErrors) {
   }
 }
 
+// --tls-controllers without TLS is refused before palpd starts.
+TEST(Palpd, ControllerListWithoutTlsIsRefused) {
+  const auto r = run_palpd(
+      "--scene phantom:sphere --device remote --no-realtime --tls-controllers controllers.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--tls-controllers needs TLS"), std::string::npos) << r.output;
+}
+
 // Placing a device on the patient: scene-frame devices note that the options do not apply; a
 // device whose workspace, so placed, cannot reach the skin is refused with what it would need.
 TEST(Palpd, DevicePlacementIsCheckedBeforeStarting) {
