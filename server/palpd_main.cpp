@@ -320,6 +320,7 @@ int run_configured(cli::Arguments argv) {
     throw UsageError("--port must be an integer in 0..65535");
   server_config.port = static_cast<std::uint16_t>(port);
   server_config.token = args.get("token").value_or("");
+  (void)cli::dds_config_from(args, loop_config.rate_hz);  // its refusals before TLS loads
   server_config.tls = cli::server_tls(args);
   server_config.max_clients = static_cast<std::size_t>(within(args, "max-clients", 16, 1, 1024));
   server_config.queue_frames =
