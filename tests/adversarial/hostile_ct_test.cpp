@@ -254,6 +254,12 @@ std::vector<Case> cases() {
                    return file("loop.mhd");
                  },
                  "a loop of symbolic links"});
+  all.push_back({"input-symlink-loop",  // the INPUT itself (reported "no such file" before)
+                 [=] {
+                   fs::create_symlink("self.nii", file("self.nii"));
+                   return file("self.nii");
+                 },
+                 "self.nii: a loop of symbolic links"});
   all.push_back({"mha-data-file-missing-dotdot",
                  [=] {
                    write_text(file("gone.mhd"),
