@@ -31,7 +31,7 @@ std::shared_ptr<SceneDescription> decode_scene(const v1::SceneInfo& s) {
   if (g.dims_size() != 3 || g.spacing_size() != 3)
     throw ProtocolViolation("SceneInfo: the grid needs 3 dims and 3 spacings");
   // palpd serves what prep accepts: [kMinSpacingMm, kMaxSpacingMm] per axis (base/volume.hpp).
-  // Beyond it the render scene's extents and steps overflow or never end (1e300, 1e-300).
+  // Beyond it (1e300, 1e-300) a render frame never returned once frames arrived (issue 37).
   for (int a = 0; a < 3; ++a)
     if (!(g.spacing(a) >= kMinSpacingMm && g.spacing(a) <= kMaxSpacingMm)) {
       char text[160];

@@ -57,13 +57,14 @@ std::string scene(std::array<double, 3> spacing = {1.0, 1.0, 1.0}) {
   return wire::encode_frame(m);
 }
 
-std::string volume_chunk(std::int64_t dims, std::size_t bytes) {
+std::string volume_chunk(std::int64_t dims, std::size_t bytes,
+                         std::array<double, 3> spacing = {1.0, 1.0, 1.0}) {
   v1::ServerMessage m;
   v1::VolumeChunk* v = m.mutable_volume();
   v->set_step(1);
   for (int a = 0; a < 3; ++a) {
     v->add_dims(dims);
-    v->add_spacing(1.0);
+    v->add_spacing(spacing[static_cast<std::size_t>(a)]);
   }
   v->set_k_begin(0);
   v->set_k_count(static_cast<std::uint32_t>(std::min<std::int64_t>(dims, 1 << 30)));
@@ -108,6 +109,21 @@ std::string wild_frame(std::uint64_t seq, double value) {
   v1::Contact* c = f->add_contacts();
   c->mutable_position()->set_x(value);
   c->mutable_proxy()->set_y(value);
+  c->set_in_contact(true);
+  return wire::encode_frame(m);
+}
+
+// A frame of a tool at the origin pressing 1 mm into the skin there.
+std::string contact_frame(std::uint64_t seq) {
+  v1::ServerMessage m;
+  v1::HapticFrame* f = m.mutable_frame();
+  f->set_seq(seq);
+  f->mutable_device_pose()->mutable_orientation()->set_w(1.0);
+  f->mutable_force()->set_z(1.0);
+  f->mutable_displacement()->set_z(1.0);
+  f->set_n_contact(1);
+  v1::Contact* c = f->add_contacts();
+  c->mutable_proxy()->set_z(1.0);
   c->set_in_contact(true);
   return wire::encode_frame(m);
 }
@@ -259,8 +275,13 @@ TEST(HostileServerScene, AbsurdSpacingEndsWithinTheTimeoutNamingIt) {
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
   HostileServer server([](int fd, const std::atomic<bool>& stop) {
-    send_all(fd, welcome() + scene({1e300, 1e-300, 1e300}));
-    linger(fd, stop, 30.0);
+    // the scene, and a render volume consistent with it (palpview draws it if it takes both)
+    constexpr std::array<double, 3> kSpacing = {1e300, 1e-300, 1e300};
+    send_all(fd, welcome() + scene(kSpacing) + volume_chunk(100, 100 * 100 * 100 * 4, kSpacing));
+    for (std::uint64_t seq = 1; seq < 3000 && !stop.load(); ++seq) {  // a tool in contact
+      if (!send_all(fd, contact_frame(seq))) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
   });
   ScratchDir dir("palpview-spacing");
   constexpr double kTimeout = 6.0, kStartSeconds = 5.0;
