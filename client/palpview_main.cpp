@@ -18,14 +18,17 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -50,6 +53,43 @@ Pose script_pose(const Trajectory& script, double t) {
   return script[n].pose;
 }
 
+// Screenshot mode ends within --timeout whatever the main loop is doing. The loop checks the
+// timeout after each frame and says why it ends; this is for a frame that never returns (a scene
+// the checks let through that the renderer cannot draw, a driver): kDeadlineGraceS after the
+// timeout it says what the link was doing and ends the process, exit code 1.
+constexpr double kDeadlineGraceS = 3.0;
+
+class Deadline {
+ public:
+  Deadline(double seconds, std::function<std::string()> describe) {
+    thread_ = std::thread([this, seconds, describe = std::move(describe)] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (done_cv_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return done_; }))
+        return;
+      std::fprintf(stderr, "palpview: %s\n", describe().c_str());
+      std::fflush(stderr);
+      std::fflush(stdout);
+      std::_Exit(1);
+    });
+  }
+  ~Deadline() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    done_cv_.notify_all();
+    thread_.join();
+  }
+  Deadline(const Deadline&) = delete;
+  Deadline& operator=(const Deadline&) = delete;
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable done_cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
 int run(const Options& o) {
   Trajectory script;
   if (!o.script.empty()) script = read_trajectory_csv(o.script);
@@ -72,6 +112,9 @@ int run(const Options& o) {
   stream.volume_bone = !o.ct;            // the CT's presets never read d_bone
   stream.volume_crop = !o.show_outside;  // the body's box, unless the outside is wanted
   stream.force_history_s = o.chart_s;
+
+  // before the window: a token for another machine without TLS is never sent
+  if (const std::string no = connect_refusal(stream); !no.empty()) throw UsageError(no);
 
   ViewWindow window(
       {o.width, o.height, !screenshot, "palpview " + o.host + ":" + std::to_string(o.port)});
@@ -179,6 +222,16 @@ int run(const Options& o) {
 
   StreamClient client(stream);
   client.start();
+  std::optional<Deadline> deadline;
+  if (screenshot)
+    deadline.emplace(o.timeout_s + kDeadlineGraceS, [&client, &o] {
+      const LinkStats link = client.latest().link;
+      std::ostringstream text;
+      text << "no screenshot within --timeout " << o.timeout_s
+           << " s: a frame did not return (link " << to_string(link.state)
+           << (link.message.empty() ? "" : ": " + link.message) << "); ended";
+      return text.str();
+    });
 
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();

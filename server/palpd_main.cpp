@@ -121,6 +121,9 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   --tls-key FILE          ... and its key (mode 600); plain-text clients are refused
   --tls-client-ca FILE    controllers must present a client certificate signed by this CA (its
                           subject names them in Stats, logs and recordings; observers may)
+  --tls-controllers FILE  only these certificate subjects may be the controller, one per line
+                          as `openssl x509 -noout -subject -nameopt RFC2253` prints them;
+                          other certificates from the CA may observe (docs/security.md)
   --max-clients N         default 16 (1..1024)
   --queue N               haptic frames queued per client before the oldest is dropped
                           (256; 1..65536)
@@ -189,6 +192,7 @@ const std::vector<std::string> kValued = {"device",
                                           "tls-cert",
                                           "tls-key",
                                           "tls-client-ca",
+                                          "tls-controllers",
                                           "tune-budget-s",
                                           "map-window"};
 const std::vector<std::string> kValuedAll =
@@ -316,6 +320,7 @@ int run_configured(cli::Arguments argv) {
     throw UsageError("--port must be an integer in 0..65535");
   server_config.port = static_cast<std::uint16_t>(port);
   server_config.token = args.get("token").value_or("");
+  (void)cli::dds_config_from(args, loop_config.rate_hz);  // its refusals before TLS loads
   server_config.tls = cli::server_tls(args);
   server_config.max_clients = static_cast<std::size_t>(within(args, "max-clients", 16, 1, 1024));
   server_config.queue_frames =

@@ -10,6 +10,7 @@
 #include "base/errors.hpp"
 #include "dds_common.hpp"
 #include "stream/stream_client.hpp"
+#include "tls/client_policy.hpp"
 
 namespace palp::view {
 
@@ -25,7 +26,9 @@ and deforms the skin where the tool presses.
   --observer              only watch (default); the mouse moves this view's camera
   --controller            drive palpd's `remote` device (palpd --device remote) with mouse
                           and keyboard
-  --token T               the server's controller token (sent only over TLS or loopback)
+  --token T               the server's controller token, sent only over TLS or loopback:
+                          palpview refuses to connect to another machine with it and without
+                          --tls-ca/--tls-pin
   --tls-ca FILE           palp.v1 over TLS: check palpd's certificate against this CA and the
                           host name of --connect
   --tls-pin SHA256        or: trust exactly the palpd certificate with this SHA-256 fingerprint
@@ -204,6 +207,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   if (have_frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");
   if (o.follow_mm < 0) o.follow_mm = o.have_camera ? 0.0 : 150.0;
   if (!o.script.empty() && !o.controller) throw UsageError("--script needs --controller");
+  // a certificate without --tls-ca/--tls-pin would mean plain text (tls/client_policy.hpp)
+  palp::tls::check_client_options({o.tls_ca, o.tls_pin, o.tls_cert, o.tls_key});
   return o;
 }
 

@@ -2,11 +2,12 @@
 #include "stream/frame_decoding.hpp"
 
 #include <cmath>
-
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
+#include "base/volume.hpp"
 #include "stream/protocol_checks.hpp"
 #include "wire/messages.hpp"
 
@@ -29,12 +30,20 @@ std::shared_ptr<SceneDescription> decode_scene(const v1::SceneInfo& s) {
   const v1::Grid& g = s.grid();
   if (g.dims_size() != 3 || g.spacing_size() != 3)
     throw ProtocolViolation("SceneInfo: the grid needs 3 dims and 3 spacings");
+  // palpd serves what prep accepts: [kMinSpacingMm, kMaxSpacingMm] per axis (base/volume.hpp).
+  // Beyond it (1e300, 1e-300) a render frame never returned once frames arrived (issue 37).
+  for (int a = 0; a < 3; ++a)
+    if (!(g.spacing(a) >= kMinSpacingMm && g.spacing(a) <= kMaxSpacingMm)) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "SceneInfo: grid spacing (%g, %g, %g) mm is outside [%g, %g] mm per axis",
+                    g.spacing(0), g.spacing(1), g.spacing(2), kMinSpacingMm, kMaxSpacingMm);
+      throw ProtocolViolation(text);
+    }
   auto scene = std::make_shared<SceneDescription>();
   for (int a = 0; a < 3; ++a) {
     if (g.dims(a) < 1 || g.dims(a) > (std::int64_t{1} << 31))
       throw ProtocolViolation("SceneInfo: grid dimension " + std::to_string(g.dims(a)));
-    if (!positive_finite(g.spacing(a)))
-      throw ProtocolViolation("SceneInfo: grid spacing must be finite and > 0");
     scene->dims[a] = g.dims(a);
     scene->spacing[a] = g.spacing(a);
     if (g.origin_size() == 3) scene->origin[a] = g.origin(a);

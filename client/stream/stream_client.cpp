@@ -37,6 +37,7 @@
 #include "stream/handshake.hpp"
 #include "stream/protocol_checks.hpp"
 #include "stream/stream_client_impl.hpp"
+#include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
 #include "wire/messages.hpp"
 
@@ -76,6 +77,11 @@ void check_options(const StreamOptions& o) {
   if (!std::isfinite(o.force_history_s) || o.force_history_s < 0)
     throw UsageError("stream client: force_history_s must be >= 0");
   if (o.max_queued_commands == 0) throw UsageError("stream client: max_queued_commands is 0");
+  palp::tls::check_client_options({o.tls_ca, o.tls_pin, o.tls_cert, o.tls_key});
+}
+
+bool speaks_tls(const StreamOptions& o) {
+  return !o.tls_ca.empty() || !o.tls_pin.empty();
 }
 
 }  // namespace
@@ -147,6 +153,13 @@ void StreamClient::Impl::start_connect() {
         if (c != conn) return;
         if (ec) {
           drop(c, "cannot resolve " + opts.host + ": " + ec.message());
+          return;
+        }
+        // the token never leaves in clear text for another machine (tls/client_policy.hpp)
+        if (const std::string no = palp::tls::clear_text_token_refusal(
+                !opts.token.empty(), speaks_tls(opts), opts.host, results);
+            !no.empty()) {
+          refuse(c, no);
           return;
         }
         palp::tls::async_connect(c->stream, results, opts.host, std::to_string(opts.port),
@@ -490,6 +503,16 @@ std::uint64_t StreamClient::stop_recording() {
   v1::ClientMessage m;
   m.mutable_command()->mutable_stop_recording();
   return impl_->queue_command(m, "");
+}
+
+std::string connect_refusal(const StreamOptions& o) {
+  if (o.dds || o.token.empty()) return "";
+  asio::io_context io;
+  asio::ip::tcp::resolver resolver(io);
+  asio::error_code ec;
+  const auto endpoints = resolver.resolve(o.host, std::to_string(o.port), ec);
+  if (ec) return "";  // the network thread says why, and retries
+  return palp::tls::clear_text_token_refusal(true, speaks_tls(o), o.host, endpoints);
 }
 
 }  // namespace palp::view

@@ -57,7 +57,8 @@ struct StreamOptions {
   std::string token;          // the server's controller token, when it has one
   // palp.v1 over TLS (palpd --tls-cert): the CA to check the server with (and its host name), or
   // the server certificate's SHA-256 fingerprint; this client's certificate for a palpd that
-  // asks controllers for one. Neither tls_ca nor tls_pin: plain text.
+  // asks controllers for one. Neither tls_ca nor tls_pin: plain text (then no tls_cert/tls_key,
+  // and a token only to loopback: tls/client_policy.hpp).
   std::string tls_ca, tls_pin, tls_cert, tls_key;
   std::string client_name = "palpview";
   double frame_rate_hz = 120.0;  // HapticFrames per second to ask for (0: every tick)
@@ -220,6 +221,12 @@ class StreamClient {
   StreamOptions options_;
   std::unique_ptr<Impl> impl_;
 };
+
+// "" when `options` may connect; otherwise why not, said before anything is sent: a token for
+// another machine without TLS (tls/client_policy.hpp; the network thread checks again at every
+// connect and goes Refused). Resolves the host, blocking; a host that does not resolve is left to
+// the network thread. palpview asks before it opens its window.
+std::string connect_refusal(const StreamOptions& options);
 
 // "HOST:PORT" (or "[v6]:PORT") -> host and port (1..65535); UsageError when malformed.
 void parse_host_port(const std::string& text, std::string& host, std::uint16_t& port);

@@ -31,6 +31,7 @@
 #include "io/gzip.hpp"
 #include "prep/background_writes.hpp"
 #include "prep/ct_check.hpp"
+#include "prep/maps/distance_transform.hpp"
 #include "prep/maps/iso_projection.hpp"
 #include "prep/maps/map_refine.hpp"
 #include "prep/maps/subvoxel_distance.hpp"
@@ -269,6 +270,7 @@ SurfaceMethod parse_surface_method(const std::string& name) {
 
 PrepResult run_prep(const std::string& input, const std::string& out_dir, const PrepParams& params,
                     const PrepProgress& progress) {
+  check_distance_band(params.distance.band_mm);  // before anything is read or written
   const auto start = Clock::now();
   PrepResult result;
   result.input = input;

@@ -70,7 +70,8 @@ void hash_input(ContentHash& hash, const std::string& input) {
   if (fs::is_directory(path, ec)) {
     std::vector<fs::path> files;
     for (const auto& entry : fs::directory_iterator(path, ec)) {
-      if (entry.is_regular_file()) files.push_back(entry.path());
+      // as the DICOM reader does: what is not a regular file (a symlink loop too) is skipped
+      if (std::error_code entry_ec; entry.is_regular_file(entry_ec)) files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
     for (const auto& file : files) {
@@ -79,7 +80,9 @@ void hash_input(ContentHash& hash, const std::string& input) {
     }
     return;
   }
-  if (!fs::exists(path, ec)) throw InputError(input + ": no such file or directory");
+  // "no such file or directory", "a loop of symbolic links" (not "no such file": fs::exists
+  // says false for both), or what it is instead of a regular file
+  require_regular_file(input);
   hash.add_file(path);
   // A detached header (.mhd, .nhdr) names the file with the voxels: the key follows those too.
   const std::string voxel_file = ct_voxel_file(input);

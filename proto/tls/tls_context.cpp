@@ -6,12 +6,14 @@
 #include <openssl/x509v3.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <memory>
 
 #include "base/errors.hpp"
+#include "tls/controllers.hpp"
 
 namespace palp::tls {
 
@@ -171,6 +173,18 @@ ServerContext::ServerContext(const ServerOptions& options)
     context_.set_verify_mode(asio::ssl::verify_peer);
     context_.set_verify_callback([](bool, asio::ssl::verify_context&) { return true; });
   }
+  if (!options_.controllers_file.empty()) {
+    if (options_.client_ca_file.empty())
+      throw UsageError(
+          "--tls-controllers needs --tls-client-ca: a subject names a controller only on a "
+          "certificate that CA has verified");
+    controllers_ = read_controller_subjects(options_.controllers_file);
+  }
+}
+
+bool ServerContext::may_control(const std::string& subject) const {
+  if (controllers_.empty()) return true;
+  return std::find(controllers_.begin(), controllers_.end(), subject) != controllers_.end();
 }
 
 std::string ServerContext::describe(std::time_t now) const {
@@ -181,6 +195,9 @@ std::string ServerContext::describe(std::time_t now) const {
   text += options_.client_ca_file.empty()
               ? "; no --tls-client-ca: controllers are known by their token only"
               : "; controllers need a client certificate signed by " + options_.client_ca_file;
+  if (!controllers_.empty())
+    text += ", with a subject listed in " + options_.controllers_file + " (" +
+            std::to_string(controllers_.size()) + ")";
   return text;
 }
 

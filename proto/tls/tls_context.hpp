@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "tls/stream.hpp"
 
@@ -15,10 +16,12 @@ namespace palp::tls {
 
 // ------------------------------------------------------------------ server
 struct ServerOptions {
-  std::string cert_file;       // PEM: the server's certificate (and its chain)
-  std::string key_file;        // PEM: its private key, readable by its owner only
-  std::string client_ca_file;  // PEM: when set, clients may (controllers must) present a
-                               // certificate signed by this CA
+  std::string cert_file;         // PEM: the server's certificate (and its chain)
+  std::string key_file;          // PEM: its private key, readable by its owner only
+  std::string client_ca_file;    // PEM: when set, clients may (controllers must) present a
+                                 // certificate signed by this CA
+  std::string controllers_file;  // with client_ca_file: the subjects that may be the
+                                 // controller, one per line (tls/controllers.hpp); others observe
   bool enabled() const { return !cert_file.empty() || !key_file.empty(); }
 };
 
@@ -32,12 +35,15 @@ struct PeerCertificate {
 
 class ServerContext {
  public:
-  // Loads and checks: UsageError for a missing half (cert without key), ResourceError for an
-  // unreadable file, a key group/others can read, a key that does not match the certificate, a
-  // certificate that has expired or is not valid yet.
+  // Loads and checks: UsageError for a missing half (cert without key) and for --tls-controllers
+  // without --tls-client-ca, ResourceError for an unreadable file, a key group/others can read, a
+  // key that does not match the certificate, a certificate that has expired or is not valid yet.
   explicit ServerContext(const ServerOptions& options);
   asio::ssl::context& context() { return context_; }
   bool wants_client_certificates() const { return !options_.client_ca_file.empty(); }
+  // Whether a verified client certificate with this subject may be the controller: any, without
+  // --tls-controllers; with it, only a subject the file lists.
+  bool may_control(const std::string& subject) const;
   const ServerOptions& options() const { return options_; }
   std::string subject() const { return subject_; }
   std::time_t not_after() const { return not_after_; }
@@ -52,6 +58,7 @@ class ServerContext {
   ServerOptions options_;
   asio::ssl::context context_;
   std::string subject_, issuer_;
+  std::vector<std::string> controllers_;  // --tls-controllers (empty: any verified certificate)
   std::time_t not_after_ = 0;
   std::time_t last_reminder_ = 0;
 };

@@ -21,6 +21,7 @@
 #include "cli/tls_options.hpp"
 #include "net/protocol.hpp"
 #include "scene/trajectory.hpp"
+#include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::cli {
@@ -44,7 +45,9 @@ Actions:
   pause | resume          zero force and the model held, or ticking again (force ramps back in)
   recentre                move the device's home to where it is now (usb-haptic, spacemouse)
 Options:
-  --token TOKEN           palpd's token (default: the 'token' key of --config)
+  --token TOKEN           palpd's token (default: the 'token' key of --config); sent only over
+                          TLS or loopback: to another machine without --tls-ca/--tls-pin ctl
+                          refuses to connect
   --config FILE           palpd's config file, to read its token
   --name NAME             the name palpd logs for this client (default palp-ctl)
   --timeout S             seconds to wait for palpd's answers (default 5)
@@ -165,6 +168,11 @@ class Session {
     asio::error_code ec;
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
+    // the token never leaves in clear text for another machine (tls/client_policy.hpp)
+    if (const std::string no = tls::clear_text_token_refusal(!hello_.token().empty(),
+                                                             tls_ != nullptr, host_, endpoints);
+        !no.empty())
+      throw UsageError(no);
     tls::async_connect(link_.stream(), endpoints, host_, port_, tls_,
                        [this](const std::string& failure) {
                          if (!failure.empty()) return fail(failure);

@@ -96,6 +96,7 @@ int cmd_prep(const Arguments& argv) {
   seg.max_table_thickness_mm = args.number("max-table-thickness", seg.max_table_thickness_mm);
   seg.min_bone_island_ml = args.number("min-bone-island", seg.min_bone_island_ml);
   params.distance.band_mm = args.number("band", params.distance.band_mm);
+  check_distance_band(params.distance.band_mm);
   if (const auto surface = args.get("surface")) {
     params.surface.method = parse_surface_method(*surface);
   }

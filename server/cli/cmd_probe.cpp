@@ -27,6 +27,7 @@
 #include "cli/tls_options.hpp"
 #include "loop/haptic_loop.hpp"
 #include "net/protocol.hpp"
+#include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::cli {
@@ -46,7 +47,8 @@ Options:
                           loopback (another network namespace): report latency anyway
   --volume-max-dim N      ask for the render volume, at most N voxels along each axis
   --role ROLE             observer (default) or controller
-  --token TOKEN           the server's token (controller)
+  --token TOKEN           the server's token (controller); sent only over TLS or loopback:
+                          to another machine without --tls-ca/--tls-pin probe refuses to connect
   --name NAME             client name (default palp-probe)
   --tls-ca FILE           palp.v1 over TLS: check the server's certificate against this CA and
                           the host name
@@ -111,6 +113,11 @@ class Probe {
     asio::error_code ec;
     const auto endpoints = resolver.resolve(host_, port_, ec);
     if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
+    // the token never leaves in clear text for another machine (tls/client_policy.hpp)
+    if (const std::string no = tls::clear_text_token_refusal(!hello_.token().empty(),
+                                                             tls_ != nullptr, host_, endpoints);
+        !no.empty())
+      throw UsageError(no);
     start_ns_ = rt::monotonic_ns();
     tls::async_connect(link_.stream(), endpoints, host_, port_, tls_,
                        [this](const std::string& failure) {

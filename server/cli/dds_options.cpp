@@ -25,7 +25,7 @@ const char* const kDdsOptionsHelp =
                           each (palp probe --dds --batch); 0 = off; 1..100, default 10
   --dds-volume-max-dim N  render volume on DDS: at most N voxels per axis (128; 0 = none)
   --dds-control           read device poses from rt/palp/NAME/device_pose (needs --token; each
-                          sample must carry it)
+                          sample must carry it, in clear text: refused with --tls-cert)
 )";
 
 std::vector<std::string> with_dds_flags(std::vector<std::string> flags) {
@@ -67,6 +67,11 @@ std::unique_ptr<interop::DdsConfig> dds_config_from(const Args& args, double loo
     throw UsageError(
         "--dds-control needs --token: anyone on the DDS domain can publish device poses, each "
         "must carry the token");
+  if (config->control && (args.has("tls-cert") || args.has("tls-client-ca")))
+    throw UsageError(
+        "--dds-control with TLS (--tls-cert, --tls-client-ca) is refused: each DDS device pose "
+        "carries the token in clear text to anyone on the domain, without the client "
+        "certificate palp.v1 asks for; drive the device over palp.v1 (docs/security.md)");
   return config;
 }
 

@@ -22,7 +22,8 @@ std::vector<std::string> with_dds_flags(std::vector<std::string> flags);
 std::vector<std::string> with_dds_options(std::vector<std::string> valued);
 
 // The publisher's configuration asked for by `args` (nothing without --dds). UsageError for a
-// value out of range, a DDS option without --dds, or --dds-control without --token.
+// value out of range, a DDS option without --dds, --dds-control without --token or with TLS
+// (--tls-cert, --tls-client-ca: the token would travel in clear text on DDS).
 std::unique_ptr<interop::DdsConfig> dds_config_from(const Args& args, double loop_rate_hz);
 
 // Forwards everything to palpd's ControlTarget; device poses one at a time (the palp.v1 io

@@ -4,6 +4,7 @@
 #include <ctime>
 
 #include "net/client_log.hpp"
+#include "tls/client_policy.hpp"
 
 namespace palp::cli {
 
@@ -12,9 +13,14 @@ std::shared_ptr<tls::ServerContext> server_tls(const Args& args) {
   o.cert_file = args.get("tls-cert").value_or("");
   o.key_file = args.get("tls-key").value_or("");
   o.client_ca_file = args.get("tls-client-ca").value_or("");
+  o.controllers_file = args.get("tls-controllers").value_or("");
   if (!o.enabled()) {
     if (!o.client_ca_file.empty())
       throw UsageError("--tls-client-ca needs TLS: give --tls-cert FILE and --tls-key FILE too");
+    if (!o.controllers_file.empty())
+      throw UsageError(
+          "--tls-controllers needs TLS: give --tls-cert FILE, --tls-key FILE and --tls-client-ca "
+          "FILE too");
     return nullptr;
   }
   return std::make_shared<tls::ServerContext>(o);
@@ -42,11 +48,8 @@ std::unique_ptr<tls::ClientContext> client_tls(const Args& args) {
   o.pin = args.get("tls-pin").value_or("");
   o.cert_file = args.get("tls-cert").value_or("");
   o.key_file = args.get("tls-key").value_or("");
-  if (!o.enabled()) {
-    if (!o.cert_file.empty() || !o.key_file.empty())
-      throw UsageError("--tls-cert/--tls-key need TLS: give --tls-ca FILE or --tls-pin SHA256");
-    return nullptr;
-  }
+  tls::check_client_options(o);
+  if (!o.enabled()) return nullptr;
   return std::make_unique<tls::ClientContext>(o);
 }
 

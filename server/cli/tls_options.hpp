@@ -1,5 +1,6 @@
 // The TLS options of palpd, palp probe and palp ctl (palpview has the same client options):
-//   palpd:  --tls-cert FILE --tls-key FILE [--tls-client-ca FILE]   (or the config file's keys)
+//   palpd:  --tls-cert FILE --tls-key FILE [--tls-client-ca FILE [--tls-controllers FILE]]
+//           (or the config file's keys)
 //   client: --tls-ca FILE | --tls-pin SHA256 [--tls-cert FILE --tls-key FILE]
 #pragma once
 
@@ -12,7 +13,8 @@
 
 namespace palp::cli {
 
-inline const std::vector<std::string> kServerTlsOptions = {"tls-cert", "tls-key", "tls-client-ca"};
+inline const std::vector<std::string> kServerTlsOptions = {"tls-cert", "tls-key", "tls-client-ca",
+                                                           "tls-controllers"};
 inline const std::vector<std::string> kClientTlsOptions = {"tls-ca", "tls-pin", "tls-cert",
                                                            "tls-key"};
 

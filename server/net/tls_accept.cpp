@@ -71,6 +71,10 @@ std::string certificate_refusal(const tls::ServerContext* context,
   if (controller && !client.presented)
     return "CONTROLLER needs a client certificate signed by the server's --tls-client-ca: none "
            "was presented (give --tls-cert FILE --tls-key FILE)";
+  if (controller && !context->may_control(client.subject))
+    return "CONTROLLER: the client certificate " + client.subject + " is not in palpd's " +
+           "--tls-controllers " + context->options().controllers_file +
+           " (it may connect as an observer)";
   return "";
 }
 

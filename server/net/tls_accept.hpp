@@ -30,8 +30,8 @@ std::string plain_text_refusal();
 std::string clear_text_token_refusal(const std::string& address);
 
 // What Hello must refuse for this certificate in this role ("" when it may go on): a controller
-// needs a verified one when the server asks for client certificates; a certificate that fails
-// verification is refused in any role.
+// needs a verified one when the server asks for client certificates, and with --tls-controllers
+// one whose subject the file lists; a certificate that fails verification is refused in any role.
 std::string certificate_refusal(const tls::ServerContext* context,
                                 const tls::PeerCertificate& client, bool controller);
 

@@ -254,6 +254,12 @@ std::vector<Case> cases() {
                    return file("loop.mhd");
                  },
                  "a loop of symbolic links"});
+  all.push_back({"input-symlink-loop",  // the INPUT itself (reported "no such file" before)
+                 [=] {
+                   fs::create_symlink("self.nii", file("self.nii"));
+                   return file("self.nii");
+                 },
+                 "self.nii: a loop of symbolic links"});
   all.push_back({"mha-data-file-missing-dotdot",
                  [=] {
                    write_text(file("gone.mhd"),
@@ -410,6 +416,27 @@ INSTANTIATE_TEST_SUITE_P(Inputs, HostileCt, ::testing::ValuesIn(cases()),
                              name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
                            return name;
                          });
+
+// --band beyond what `palp prep --help` promises ("at most 1e6") is refused before any work,
+// as a usage mistake naming the option (1e308 ran to exit 0 before, issue 37).
+TEST(HostileCtOptions, BandBeyondItsHelpIsRefused) {
+  Child help({PALP_CLI_PATH, "prep", "--help"}, scratch().file("help.out"),
+             scratch().file("help.err"));
+  ASSERT_TRUE(help.wait(20.0));
+  ASSERT_NE(read_text(scratch().file("help.out")).find("at most 1e6"), std::string::npos);
+  // a scene prep completes in under a second: with --band 1e308 it did, exit 0, before
+  const std::string input = "phantom:sphere";
+  for (const char* band : {"1e308", "1e7", "1000000.5", "0", "nan", "inf"}) {
+    const std::string out = scratch().file(std::string("out-band-") + band);
+    Child prep({PALP_CLI_PATH, "prep", input, "--out", out, "--band", band, "-q"}, out + ".stdout",
+               out + ".stderr");
+    ASSERT_TRUE(prep.wait(20.0)) << band;
+    const std::string err = read_text(out + ".stderr");
+    EXPECT_EQ(prep.exit_code(), 2) << band << ": " << err;
+    EXPECT_NE(err.find("--band"), std::string::npos) << band << ": " << err;
+    EXPECT_FALSE(fs::exists(out)) << band << ": prep made its output directory";
+  }
+}
 
 TEST(HostileCtSuite, HasAtLeastTwentyKinds) {
   EXPECT_GE(cases().size(), 20u);

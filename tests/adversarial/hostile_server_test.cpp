@@ -2,13 +2,15 @@
 // reconnection) feeds the built palpview in screenshot mode garbage, a 2^40-byte length prefix,
 // silence, a Welcome dripped a byte at a time, render-volume chunks whose dimensions or bytes lie,
 // and frames of NaN and 1e300 poses and forces. palpview must end within its --timeout (plus
-// kGraceSeconds) with exit code 1 and a peak memory (ru_maxrss) under kViewerBound.
+// kGraceSeconds) with exit code 1 and a peak memory (ru_maxrss) under kViewerBound. A scene of
+// absurd spacing must end it within its --timeout, naming the spacing.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 
+#include <array>
 #include <atomic>
 #include <functional>
 #include <limits>
@@ -16,8 +18,8 @@
 
 #include "adversarial/adversarial_util.hpp"
 #include "palp.pb.h"
-#include "wire/volume_codec.hpp"
 #include "wire/messages.hpp"
+#include "wire/volume_codec.hpp"
 
 namespace palp::adversarial {
 namespace {
@@ -37,13 +39,13 @@ std::string welcome() {
   return wire::encode_frame(m);
 }
 
-std::string scene() {
+std::string scene(std::array<double, 3> spacing = {1.0, 1.0, 1.0}) {
   v1::ServerMessage m;
   v1::SceneInfo* s = m.mutable_scene();
   s->set_source("phantom:sphere");
   for (int a = 0; a < 3; ++a) {
     s->mutable_grid()->add_dims(100);
-    s->mutable_grid()->add_spacing(1.0);
+    s->mutable_grid()->add_spacing(spacing[static_cast<std::size_t>(a)]);
     s->mutable_grid()->add_origin(0.0);
   }
   for (double d : {1, 0, 0, 0, 1, 0, 0, 0, 1}) s->mutable_grid()->add_direction(d);
@@ -55,13 +57,14 @@ std::string scene() {
   return wire::encode_frame(m);
 }
 
-std::string volume_chunk(std::int64_t dims, std::size_t bytes) {
+std::string volume_chunk(std::int64_t dims, std::size_t bytes,
+                         std::array<double, 3> spacing = {1.0, 1.0, 1.0}) {
   v1::ServerMessage m;
   v1::VolumeChunk* v = m.mutable_volume();
   v->set_step(1);
   for (int a = 0; a < 3; ++a) {
     v->add_dims(dims);
-    v->add_spacing(1.0);
+    v->add_spacing(spacing[static_cast<std::size_t>(a)]);
   }
   v->set_k_begin(0);
   v->set_k_count(static_cast<std::uint32_t>(std::min<std::int64_t>(dims, 1 << 30)));
@@ -106,6 +109,21 @@ std::string wild_frame(std::uint64_t seq, double value) {
   v1::Contact* c = f->add_contacts();
   c->mutable_position()->set_x(value);
   c->mutable_proxy()->set_y(value);
+  c->set_in_contact(true);
+  return wire::encode_frame(m);
+}
+
+// A frame of a tool at the origin pressing 1 mm into the skin there.
+std::string contact_frame(std::uint64_t seq) {
+  v1::ServerMessage m;
+  v1::HapticFrame* f = m.mutable_frame();
+  f->set_seq(seq);
+  f->mutable_device_pose()->mutable_orientation()->set_w(1.0);
+  f->mutable_force()->set_z(1.0);
+  f->mutable_displacement()->set_z(1.0);
+  f->set_n_contact(1);
+  v1::Contact* c = f->add_contacts();
+  c->mutable_proxy()->set_z(1.0);
   c->set_in_contact(true);
   return wire::encode_frame(m);
 }
@@ -248,6 +266,38 @@ TEST_P(HostileServerTest, PalpviewEndsWithinItsTimeoutWithBoundedMemory) {
   EXPECT_LT(view.peak_bytes(), kViewerBound) << b.name;
   EXPECT_FALSE(std::filesystem::exists(dir.file("x.png"))) << b.name;
   EXPECT_GE(server.connections(), 1) << b.name;
+}
+
+// A scene whose spacing no palpd serves (1e300, 1e-300, 1e300 mm): palpview ends within its
+// --timeout 6, exit 1, with a message naming the spacing. It hung past the timeout before
+// (issue 37); the bound here is the timeout plus palpview's start, not kGraceSeconds.
+TEST(HostileServerScene, AbsurdSpacingEndsWithinTheTimeoutNamingIt) {
+  const char* display = std::getenv("DISPLAY");
+  if (!display || !*display) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  HostileServer server([](int fd, const std::atomic<bool>& stop) {
+    // the scene, and a render volume consistent with it (palpview draws it if it takes both)
+    constexpr std::array<double, 3> kSpacing = {1e300, 1e-300, 1e300};
+    send_all(fd, welcome() + scene(kSpacing) + volume_chunk(100, 100 * 100 * 100 * 4, kSpacing));
+    for (std::uint64_t seq = 1; seq < 3000 && !stop.load(); ++seq) {  // a tool in contact
+      if (!send_all(fd, contact_frame(seq))) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
+  ScratchDir dir("palpview-spacing");
+  constexpr double kTimeout = 6.0, kStartSeconds = 5.0;
+  Child view(
+      {PALPVIEW_PATH, "--connect", "127.0.0.1:" + std::to_string(server.port()), "--screenshot",
+       dir.file("x.png"), "--timeout", "6", "--width", "160", "--height", "120"},
+      dir.file("out"), dir.file("out"));
+  ASSERT_TRUE(view.wait(kTimeout + kStartSeconds))
+      << "palpview still running; " << read_text(dir.file("out"));
+  const std::string out = read_text(dir.file("out"));
+  std::printf("absurd spacing: exit %d  %5.2f s  peak %6.1f MiB\n", view.exit_code(),
+              view.seconds(), static_cast<double>(view.peak_bytes()) / 1048576.0);
+  EXPECT_EQ(view.signal_number(), 0) << out;
+  EXPECT_EQ(view.exit_code(), 1) << out;
+  EXPECT_NE(out.find("spacing (1e+300, 1e-300, 1e+300) mm"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
 }
 
 INSTANTIATE_TEST_SUITE_P(Servers, HostileServerTest, ::testing::ValuesIn(behaviours()),

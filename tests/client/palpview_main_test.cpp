@@ -27,6 +27,7 @@
 
 #include "scene/trajectory.hpp"
 #include "support/cli_test_util.hpp"
+#include "support/outside_address.hpp"
 
 namespace palp {
 namespace {
@@ -208,6 +209,36 @@ TEST(Palpview, UnreachableServerFailsAfterTheTimeout) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("no scene from 127.0.0.1:1 within 1.5 s"), std::string::npos) << r.output;
   EXPECT_GE(took, 1.5);
+  EXPECT_FALSE(fs::exists(dir / "x.png"));
+}
+
+// --token is "sent only over TLS or loopback" (its help): to another machine without
+// --tls-ca/--tls-pin palpview refuses before it connects (or opens a window), naming them.
+TEST(Palpview, ATokenIsNeverSentInClearTextOffLoopback) {
+  const fs::path dir = test_dir();
+  const auto started = std::chrono::steady_clock::now();
+  // 192.0.2.1 (TEST-NET-1) answers nothing: a palpview that tried would wait for its timeout.
+  auto r = run_palpview("--connect 192.0.2.1:7400 --controller --token s3cret --screenshot " +
+                        (dir / "x.png").string() + " --timeout 20 --width 160 --height 120");
+  const double took =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("clear text"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--tls-ca"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--tls-pin"), std::string::npos) << r.output;
+  EXPECT_LT(took, 10.0);
+  if (const std::string outside = testing::outside_address(); !outside.empty()) {
+    const testing::SilentListener listener;
+    r = run_palpview("--connect " + outside + ":" + std::to_string(listener.port()) +
+                     " --token s3cret --screenshot " + (dir / "x.png").string() +
+                     " --timeout 3 --width 160 --height 120");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("--tls-ca"), std::string::npos) << r.output;
+    EXPECT_FALSE(listener.connected()) << "palpview connected: " << r.output;
+  }
+  r = run_palpview("--connect 192.0.2.1:7400 --tls-cert s.crt --tls-key s.key");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--tls-ca FILE or --tls-pin"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "x.png"));
 }
 

@@ -62,6 +62,24 @@ TEST(Palpd, HelpAndUsageErrors) {
   }
 }
 
+// Options that would weaken TLS are refused before palpd starts: --dds-control with TLS (its
+// device poses carry the token in clear text to anyone on the DDS domain, without the client
+// certificate palp.v1 asks for; issue 37) and --tls-controllers without TLS.
+TEST(Palpd, OptionsThatWouldBypassTlsAreRefused) {
+  const std::string base = "--scene phantom:sphere --device remote --no-realtime --token s3cret ";
+  for (const char* tls : {"--tls-cert s.crt --tls-key s.key --tls-client-ca ca.crt",
+                          "--tls-cert s.crt --tls-key s.key"}) {
+    const auto r = run_palpd(base + "--dds 3 --dds-control " + tls);
+    EXPECT_EQ(r.exit_code, 2) << tls << ": " << r.output;
+    EXPECT_NE(r.output.find("--dds-control with TLS"), std::string::npos)
+        << tls << ": " << r.output;
+    EXPECT_NE(r.output.find("clear text"), std::string::npos) << tls << ": " << r.output;
+  }
+  const auto r = run_palpd(base + "--tls-controllers controllers.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--tls-controllers needs TLS"), std::string::npos) << r.output;
+}
+
 // Placing a device on the patient: scene-frame devices note that the options do not apply; a
 // device whose workspace, so placed, cannot reach the skin is refused with what it would need.
 TEST(Palpd, DevicePlacementIsCheckedBeforeStarting) {

@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -315,11 +316,15 @@ DistanceMap signed_distance(const Mask& mask, const DistanceParams& params) {
   return out;
 }
 
+void check_distance_band(double band_mm) {
+  if (band_mm > 0.0 && band_mm <= kMaxBandMm) return;
+  char text[96];
+  std::snprintf(text, sizeof text, "--band must be in (0, %g] mm, got %g", kMaxBandMm, band_mm);
+  throw UsageError(text);
+}
+
 void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap& out) {
-  if (!(params.band_mm > 0.0 && params.band_mm <= kMaxBandMm)) {
-    throw UsageError("distance band must be in (0, " +
-                     std::to_string(static_cast<int>(kMaxBandMm)) + "] mm (--band)");
-  }
+  check_distance_band(params.band_mm);
   const Grid& grid = mask.grid;
   validate_grid(grid, "mask");
   if (mask.data.size() != grid.voxel_count()) throw UsageError("mask data does not match its grid");

@@ -15,6 +15,10 @@ namespace palp {
 // integer arithmetic would overflow (--band 1e308).
 inline constexpr double kMaxBandMm = 1e6;
 
+// UsageError unless `band_mm` is in (0, kMaxBandMm]: the one check of --band, made by palp prep
+// as it parses it, by run_prep and by both distance transforms.
+void check_distance_band(double band_mm);
+
 struct DistanceParams {
   double band_mm = 60.0;  // |D| is clamped here; work is cropped to the mask's box + band
   unsigned threads = 0;   // 0 = default_thread_count()

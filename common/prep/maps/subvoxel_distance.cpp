@@ -14,6 +14,7 @@
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
+#include "prep/maps/distance_transform.hpp"
 #include "prep/maps/map_rounding.hpp"
 
 namespace palp {
@@ -440,7 +441,7 @@ void subvoxel_signed_distance(const SurfacePoints& surface, const Mask& mask, do
   if (mask.grid.dims != grid.dims || mask.data.size() != grid.voxel_count()) {
     throw UsageError("sub-voxel distance: the mask and the points differ in grid");
   }
-  if (!(clamp_mm > 0.0)) throw UsageError("distance band must be positive (--band)");
+  check_distance_band(clamp_mm);
   threads = thread_count_or_default(threads);
   if (out.data.size() != grid.voxel_count()) {
     out = DistanceMap();

@@ -87,6 +87,23 @@ TEST(ViewerOptions, MistakesAreRefusedWithWhatIsWrong) {
   EXPECT_NE(refusal({"--connect", "h:1", "--width"}), "");  // value missing
 }
 
+// A station's certificate without --tls-ca/--tls-pin would connect in plain text, the
+// certificate never shown: refused as palp ctl and palp probe refuse it.
+TEST(ViewerOptions, ACertificateWithoutTlsIsRefused) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--connect", "h:1", "--tls-cert", "s.crt", "--tls-key", "s.key"},
+        std::vector<std::string>{"--connect", "h:1", "--controller", "--tls-cert", "s.crt",
+                                 "--tls-key", "s.key", "--token", "t"},
+        std::vector<std::string>{"--connect", "h:1", "--tls-key", "s.key"}}) {
+    const std::string no = refusal(args);
+    EXPECT_NE(no.find("--tls-ca FILE or --tls-pin SHA256"), std::string::npos) << no;
+  }
+  EXPECT_NE(refusal({"--connect", "h:1", "--tls-ca", "ca.crt", "--tls-cert", "s.crt"}), "");
+  EXPECT_EQ(refusal({"--connect", "h:1", "--tls-ca", "ca.crt", "--tls-cert", "s.crt", "--tls-key",
+                     "s.key"}),
+            "");
+}
+
 TEST(FrameTimes, SummaryGivesMeanAndQuantilesOfTheSortedTimes) {
   std::vector<double> v;
   for (int i = 20; i >= 1; --i) v.push_back(i);  // 20 .. 1

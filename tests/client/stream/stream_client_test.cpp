@@ -224,6 +224,36 @@ TEST(StreamClient, RejectsUnusableOptions) {
   EXPECT_STREQ(view::to_string(view::DeviceState::Absent), "absent");
 }
 
+// A token for another machine without TLS is never sent: the client goes Refused before it
+// connects, naming --tls-ca and --tls-pin; to loopback, or without a token, it may connect. A
+// certificate without TLS is refused when the client is made.
+TEST(StreamClient, ATokenForAnotherMachineWithoutTlsIsRefusedBeforeConnecting) {
+  StreamOptions o;
+  o.host = "192.0.2.1";  // TEST-NET-1: nothing answers, a client that tried would keep trying
+  o.controller = true;
+  o.token = "s3cret";
+  EXPECT_NE(connect_refusal(o).find("--tls-ca"), std::string::npos) << connect_refusal(o);
+  StreamClient client(o);
+  client.start();
+  const LatestState s = wait_for(
+      client, [](const LatestState& l) { return is_state(l, LinkState::Refused); }, 10.0);
+  EXPECT_EQ(s.link.state, LinkState::Refused) << s.link.message;
+  EXPECT_NE(s.link.message.find("clear text"), std::string::npos) << s.link.message;
+  EXPECT_NE(s.link.message.find("--tls-pin"), std::string::npos) << s.link.message;
+  EXPECT_EQ(s.link.connections, 0u);
+  client.stop();
+  o.host = "127.0.0.1";
+  EXPECT_EQ(connect_refusal(o), "");
+  o.host = "localhost";
+  EXPECT_EQ(connect_refusal(o), "");
+  o.host = "192.0.2.1";
+  o.token.clear();
+  EXPECT_EQ(connect_refusal(o), "");
+  o.tls_cert = "station.crt";
+  o.tls_key = "station.key";
+  EXPECT_THROW(StreamClient{o}, UsageError);
+}
+
 // ------------------------------------------------------------------------------ against palpd
 
 TEST(StreamClient, ReceivesSceneVolumeAndFramesFromPalpd) {
@@ -788,6 +818,11 @@ TEST(StreamClient, MalformedServerInputDropsTheConnectionWithAClearMessage) {
   bone_short.mutable_volume()->set_d_bone(std::string(12, '\0'));
   v1::ServerMessage bad_grid = scene8();
   bad_grid.mutable_scene()->mutable_grid()->set_spacing(1, -1.0);
+  // Spacings no palpd serves (prep keeps them within [0.001, 100] mm, docs/security.md): a
+  // palpview that took them hung past its --timeout (issue 37).
+  v1::ServerMessage absurd_spacing = scene8();
+  for (int a = 0; a < 3; ++a)
+    absurd_spacing.mutable_scene()->mutable_grid()->set_spacing(a, a == 1 ? 1e-300 : 1e300);
   v1::ServerMessage frame;
   frame.mutable_frame()->set_seq(1);
   // A scene of 300^3 at step 1 and a first chunk that matches it: far more than the client's 8
@@ -821,7 +856,8 @@ TEST(StreamClient, MalformedServerInputDropsTheConnectionWithAClearMessage) {
       {"huge", {enc(scene8()), enc(huge)}, "out of 1..65536"},
       {"not the scene's grid", {enc(scene8()), enc(dims_mismatch)}, "the scene's grid"},
       {"d_bone size", {enc(scene8()), enc(bone_short)}, "d_bone has 12 bytes"},
-      {"bad grid", {enc(bad_grid)}, "spacing must be finite"},
+      {"bad grid", {enc(bad_grid)}, "grid spacing (1, -1, 1) mm is outside"},
+      {"absurd spacing", {enc(absurd_spacing)}, "grid spacing (1e+300, 1e-300, 1e+300) mm"},
       {"frame mid-volume",
        {enc(scene8()), enc(chunk(0, 2, 0, 4)), enc(frame)},
        "before the render"},

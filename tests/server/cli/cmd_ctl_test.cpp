@@ -1,12 +1,15 @@
 // palp ctl against a real palpd (sim device): a study's actions from one console, each printing
-// what palpd answered and what changed, refusals exiting 1, and recordings never overwritten.
+// what palpd answered and what changed, refusals exiting 1, and recordings never overwritten; a
+// token is never sent in clear text to another machine.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <string>
 
 #include "rt/recording.hpp"
 #include "support/cli_test_util.hpp"
+#include "support/outside_address.hpp"
 #include "support/palpd_process.hpp"
 
 namespace palp {
@@ -94,6 +97,50 @@ TEST(CmdCtl, UsageMistakesAndNoServer) {
   const auto help = run_palp_cli("ctl --help", cache);
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.output.find("record start [NAME]"), std::string::npos);
+}
+
+// A token never leaves in clear text for another machine: ctl and probe refuse before they
+// connect, naming --tls-ca and --tls-pin; palpd would refuse it too, but only after it crossed
+// the wire. To loopback (by address or by a name resolving there) they go on, and a client
+// certificate without --tls-ca/--tls-pin is refused rather than unused over plain text.
+TEST(CmdCtl, ATokenIsNeverSentInClearTextOffLoopback) {
+  const fs::path cache = shared_cli_dir() / "cache";
+  // 192.0.2.1 (TEST-NET-1, RFC 5737) answers nothing: a client that tried would wait 20 s.
+  for (const std::string command :
+       {"ctl 192.0.2.1:7400 status --token s3cret --timeout 20",
+        "probe 192.0.2.1:7400 --role controller --token s3cret --duration 20"}) {
+    const auto started = std::chrono::steady_clock::now();
+    const auto r = run_palp_cli(command, cache);
+    const double took =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("clear text"), std::string::npos) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("--tls-ca"), std::string::npos) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("--tls-pin"), std::string::npos) << command << ": " << r.output;
+    EXPECT_LT(took, 10.0) << command;
+  }
+  // A listener on this machine's outside address: nothing connects to it at all.
+  if (const std::string outside = testing::outside_address(); !outside.empty()) {
+    const testing::SilentListener listener;
+    const std::string at = outside + ":" + std::to_string(listener.port());
+    for (const std::string& command :
+         {"ctl " + at + " status --token s3cret --timeout 3", "probe " + at + " --token s3cret"}) {
+      const auto r = run_palp_cli(command, cache);
+      EXPECT_EQ(r.exit_code, 2) << command << ": " << r.output;
+      EXPECT_NE(r.output.find("--tls-ca"), std::string::npos) << command << ": " << r.output;
+      EXPECT_FALSE(listener.connected()) << command << " connected";
+    }
+  }
+  // To loopback the token may go: port 1 answers no one, so it fails connecting (exit 1).
+  for (const char* host : {"127.0.0.1", "localhost"}) {
+    const auto r =
+        run_palp_cli(std::string("ctl ") + host + ":1 status --token s3cret --timeout 2", cache);
+    EXPECT_EQ(r.exit_code, 1) << host << ": " << r.output;
+    EXPECT_NE(r.output.find("cannot connect"), std::string::npos) << host << ": " << r.output;
+  }
+  const auto cert = run_palp_cli("ctl 127.0.0.1:1 status --tls-cert a.crt --tls-key a.key", cache);
+  EXPECT_EQ(cert.exit_code, 2) << cert.output;
+  EXPECT_NE(cert.output.find("--tls-ca FILE or --tls-pin"), std::string::npos) << cert.output;
 }
 
 }  // namespace

@@ -4,24 +4,25 @@
 // certificate, a host name mismatch and a wrong pin are each refused with their own message while
 // the connected clients keep receiving; a relay's capture of a TLS session holds neither the token
 // nor a frame's plain encoding (and the same capture of a plain session does: the check can fail);
-// a plain-text token from this machine's outside address is refused.
+// a plain-text token from this machine's outside address is refused; with --tls-controllers only
+// a listed certificate subject may be the controller; a TLS 1.2 client is refused.
 #include "net/tls_accept.hpp"
 
-#include <arpa/inet.h>
-#include <ifaddrs.h>
-#include <net/if.h>
 #include <poll.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <mutex>
 #include <thread>
 
 #include "base/errors.hpp"
 #include "net/server.hpp"
 #include "support/net_test_client.hpp"
+#include "support/outside_address.hpp"
 #include "support/palpd_test_util.hpp"
 #include "support/test_certs.hpp"
 #include "wire/framing.hpp"
@@ -209,7 +210,7 @@ class TlsTest : public ::testing::Test {
     config.stats_interval_s = 0.2;
     if (with_tls)
       config.tls = std::make_shared<tls::ServerContext>(
-          tls::ServerOptions{server_.cert_file, server_.key_file, ca_.cert_file});
+          tls::ServerOptions{server_.cert_file, server_.key_file, ca_.cert_file, controllers_});
     SceneDescription scene;
     scene.source = "ball";
     scene.grid = model_->fields().grid();
@@ -232,6 +233,7 @@ class TlsTest : public ::testing::Test {
 
   std::unique_ptr<testing::TestPki> pki_;
   testing::Issued ca_, other_ca_, server_, station_, expired_, stranger_;
+  std::string controllers_;  // --tls-controllers FILE ("" for none)
   std::shared_ptr<const Model> model_;
   rt::RemoteDevice remote_;
   std::unique_ptr<rt::HapticLoop> loop;
@@ -324,23 +326,102 @@ TEST_F(TlsTest, ObserverAndControllerEndToEndAndEachRefusalHasItsOwnMessage) {
   EXPECT_TRUE(receives_frames(controller, 50));
 }
 
+// What an administrator does (docs/security.md): the subject as openssl prints it, one a line.
+std::string openssl_subject(const std::string& cert_file) {
+  const std::string command =
+      "openssl x509 -noout -subject -nameopt RFC2253 -in '" + cert_file + "' 2>&1";
+  std::string out;
+  if (FILE* pipe = ::popen(command.c_str(), "r")) {
+    char buffer[512];
+    while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
+    ::pclose(pipe);
+  }
+  return out;
+}
+
+// --tls-controllers: a certificate from the lab CA whose subject the file lists may be the
+// controller; one it does not list is refused as controller (and may observe).
+TEST_F(TlsTest, OnlyListedSubjectsMayBeTheController) {
+  const testing::Issued unlisted = pki_->issue("station-9", &ca_);
+  const std::string line = openssl_subject(station_.cert_file);
+  ASSERT_EQ(line.rfind("subject=", 0), 0u) << line;
+  controllers_ = (pki_->dir() / "controllers").string();
+  std::ofstream(controllers_) << "# controller stations\n" << line << "\n";
+  start(true, "token-0f-the-lab-7731");
+
+  const tls::ClientOptions listed_options = trusting(ca_, &station_);
+  SecureClient listed(port(), &listed_options);
+  ASSERT_EQ(listed.failure(), "");
+  listed.hello(v1::CONTROLLER, "token-0f-the-lab-7731");
+  v1::ServerMessage m;
+  ASSERT_TRUE(listed.next(m) && m.has_welcome()) << m.DebugString();
+  EXPECT_EQ(m.welcome().role(), v1::CONTROLLER);
+
+  const tls::ClientOptions unlisted_options = trusting(ca_, &unlisted);
+  SecureClient other(port(), &unlisted_options);
+  ASSERT_EQ(other.failure(), "");
+  other.hello(v1::CONTROLLER, "token-0f-the-lab-7731");
+  ASSERT_TRUE(other.wait_case(v1::ServerMessage::kError, m));
+  EXPECT_EQ(m.error().code(), v1::Error::UNAUTHORIZED);
+  EXPECT_NE(m.error().reason().find("CN=station-9"), std::string::npos) << m.error().reason();
+  EXPECT_NE(m.error().reason().find("--tls-controllers"), std::string::npos) << m.error().reason();
+
+  SecureClient watcher(port(), &unlisted_options);
+  ASSERT_EQ(watcher.failure(), "");
+  watcher.hello(v1::OBSERVER);
+  ASSERT_TRUE(watcher.next(m) && m.has_welcome());
+  EXPECT_EQ(m.welcome().role(), v1::OBSERVER);
+  EXPECT_TRUE(receives_frames(listed, 20));
+}
+
+TEST_F(TlsTest, ControllerListNeedsTheClientCa) {
+  controllers_ = (pki_->dir() / "controllers").string();
+  std::ofstream(controllers_) << "CN=station-1,O=palp test\n";
+  try {
+    tls::ServerContext context({server_.cert_file, server_.key_file, "", controllers_});
+    ADD_FAILURE() << "--tls-controllers without --tls-client-ca was accepted";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("--tls-client-ca"), std::string::npos) << e.what();
+  }
+}
+
+// palp.v1 is TLS 1.3 only: a client that offers at most TLS 1.2 gets no session.
+TEST_F(TlsTest, ATls12ClientIsRefused) {
+  start(true);
+  const auto handshake = [&](int max_version) {
+    asio::io_context io;
+    asio::ssl::context context(asio::ssl::context::tls_client);
+    SSL_CTX_set_max_proto_version(context.native_handle(), max_version);
+    context.set_verify_mode(asio::ssl::verify_none);
+    asio::ssl::stream<tcp::socket> stream(io, context);
+    stream.next_layer().connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), port()));
+    asio::error_code ec;
+    stream.handshake(asio::ssl::stream_base::client, ec);
+    return ec;
+  };
+  const asio::error_code tls12 = handshake(TLS1_2_VERSION);
+  EXPECT_TRUE(tls12) << "a TLS 1.2 client completed its handshake";
+  std::printf("TLS 1.2 client: %s\n", tls12.message().c_str());
+  EXPECT_FALSE(handshake(TLS1_3_VERSION)) << "the same client with TLS 1.3 must get through";
+}
+
 TEST_F(TlsTest, ServerRefusesAnExpiredCertificateAndAKeyOthersCanRead) {
   const testing::Issued old = pki_->issue("palpd-old", &ca_, false, -86400 * 30, -60);
   try {
-    tls::ServerContext context({old.cert_file, old.key_file, ""});
+    tls::ServerContext context({old.cert_file, old.key_file, "", ""});
     ADD_FAILURE() << "an expired certificate was accepted";
   } catch (const ResourceError& e) {
     EXPECT_NE(std::string(e.what()).find("expired on"), std::string::npos) << e.what();
   }
   ::chmod(server_.key_file.c_str(), 0644);
   try {
-    tls::ServerContext context({server_.cert_file, server_.key_file, ""});
+    tls::ServerContext context({server_.cert_file, server_.key_file, "", ""});
     ADD_FAILURE() << "a world-readable key was accepted";
   } catch (const ResourceError& e) {
     EXPECT_NE(std::string(e.what()).find("chmod 600"), std::string::npos) << e.what();
   }
   ::chmod(server_.key_file.c_str(), 0600);
-  const tls::ServerContext ok({server_.cert_file, server_.key_file, ""});
+  const tls::ServerContext ok({server_.cert_file, server_.key_file, "", ""});
   EXPECT_EQ(ok.expiry_warning(std::time(nullptr)), "");  // 90 days left, warned from 30
   EXPECT_NE(ok.expiry_warning(std::time(nullptr), 100).find("expires on"), std::string::npos);
 }
@@ -373,27 +454,10 @@ TEST_F(TlsTest, CaptureOfATlsSessionHoldsNoTokenAndNoFrame) {
   EXPECT_EQ(tapped.find("palpd"), std::string::npos);  // the server's name in Welcome
 }
 
-// This machine's first non-loopback IPv4 address ("" when it has none).
-std::string outside_address() {
-  ifaddrs* list = nullptr;
-  if (::getifaddrs(&list) != 0) return "";
-  std::string found;
-  for (ifaddrs* a = list; a && found.empty(); a = a->ifa_next) {
-    if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET || (a->ifa_flags & IFF_LOOPBACK) ||
-        !(a->ifa_flags & IFF_UP))
-      continue;
-    char text[INET_ADDRSTRLEN];
-    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
-    if (::inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) found = text;
-  }
-  ::freeifaddrs(list);
-  return found;
-}
-
 // A token in plain text from beyond loopback is refused without being compared; the same
 // palpd takes a token-less observer from there, and the token over TLS.
 TEST_F(TlsTest, PlainTextTokenFromBeyondLoopbackIsRefused) {
-  const std::string address = outside_address();
+  const std::string address = testing::outside_address();
   if (address.empty()) GTEST_SKIP() << "this machine has no non-loopback IPv4 address";
   start(false, "token-0f-the-lab-7731", "0.0.0.0");
   SecureClient controller(port(), nullptr, address);
