@@ -7,13 +7,16 @@
 //   filtered velocity; never pulls: a damper that would reverse the force lets go instead) ─► step
 //   bound on what was written last ─► clamp ─► device
 //
+// The passivity observer watches the port: at each tick, the force written the tick before against
+// the device's travel since (passivity.hpp), whatever the force was and whichever stage shaped it.
+//
 // With the coupling on, the model is to be evaluated at force_chain_tool() (the virtual tool),
 // not at the device. With it off (the chain before the coupling, kept for the studies), the
 // first stage is the stiffness limiter instead: clamp, stiffness and rate limits on the
 // limiter's own previous output (apply_device_limits), with the model at the device.
 //
 // The state is a value the caller keeps; reset_force_chain() after a fault or a model change
-// (zero written, engagement and observer restart).
+// (zero written, engagement and observer restart). Nothing else resets the observer.
 #pragma once
 
 #include <cstdint>
@@ -50,8 +53,9 @@ struct ForceChainOutput {
   Vec3d force{}, torque{};
   std::uint32_t status = kSafetyOk;
   double damping_N_s_per_mm = 0.0;  // the passivity controller's, this tick
-  double dissipated_mJ = 0.0;
+  double dissipated_mJ = 0.0;       // what the damper is to dissipate (the observer sees the rest)
   double coupling_stiffness_N_per_mm = 0.0;  // the coupling's K_c this tick (0: off)
+  double port_energy_mJ = 0.0;  // the observer's energy at the port, through last tick's force
 };
 
 // Where the model is to be evaluated this tick (device frame, mm): the virtual tool when the
