@@ -21,11 +21,16 @@ CouplingGains coupling_gains(const DeviceProfile& limits, double dt) {
   const double b_max = limits.damping_N_s_per_mm;
   if (b_max > 0.0 && b > b_max) {
     b = b_max;
-    k = std::min(k, b_max / (2.0 * t));  // b = 2 k t still: four times the bound k t / 2
+    k = std::min(k, b_max / (2.0 * t));  // B_c = 2 K_c T still
   }
   g.stiffness_N_per_mm = k;
   g.damping_N_s_per_mm = b;
   return g;
+}
+
+double passive_device_damping(const CouplingGains& gains, double dt, int delay_ticks) {
+  const double lag = (std::max(0, delay_ticks) + 0.5) * dt;
+  return gains.stiffness_N_per_mm * lag + std::fabs(gains.damping_N_s_per_mm);
 }
 
 Vec3d coupled_tool(const CouplingState& state, const Vec3d& device_position) {

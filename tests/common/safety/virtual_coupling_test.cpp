@@ -1,6 +1,6 @@
-// The virtual coupling: gains that keep b + B_c > K_c T / 2 at every rate, free motion exactly
-// free, a stiff model felt through the coupling's spring in series, a step in the model's force
-// never passed on as a step, and a device that is never pulled.
+// The virtual coupling: its gains and the device damping Colgate and Schenkel's condition asks of
+// them, free motion exactly free, a stiff model felt through the coupling's spring in series, a
+// step in the model's force never passed on as a step, and a device that is never pulled.
 #include "safety/virtual_coupling.hpp"
 
 #include <gtest/gtest.h>
@@ -28,14 +28,14 @@ Vec3d hold(CouplingState& s, const CouplingGains& g, const Wall& wall, double z_
   return f;
 }
 
-TEST(VirtualCoupling, GainsKeepTheDampingBoundAtEveryRate) {
+TEST(VirtualCoupling, GainsAreTheStableStiffnessAndTwiceItsTickInDamping) {
   for (const DeviceProfile& p : device_profiles()) {
     for (double rate : {500.0, 1000.0, 2000.0, 4000.0, 10000.0}) {
       const double t = 1.0 / rate;
       const CouplingGains g = coupling_gains(p, t);
       EXPECT_LE(g.stiffness_N_per_mm, p.max_stiffness_N_per_mm) << p.name << " " << rate;
       EXPECT_LE(g.damping_N_s_per_mm, p.damping_N_s_per_mm) << p.name << " " << rate;
-      EXPECT_GT(g.damping_N_s_per_mm, g.stiffness_N_per_mm * t / 2.0) << p.name << " " << rate;
+      EXPECT_NEAR(g.damping_N_s_per_mm, 2.0 * g.stiffness_N_per_mm * t, 1e-15) << p.name;
     }
   }
   // The Touch class at 1 kHz: K_c its 0.4 N/mm, B_c = 2 K_c T.
@@ -48,6 +48,29 @@ TEST(VirtualCoupling, GainsKeepTheDampingBoundAtEveryRate) {
   const CouplingGains capped = coupling_gains(weak, 0.001);
   EXPECT_DOUBLE_EQ(capped.damping_N_s_per_mm, 0.0004);
   EXPECT_DOUBLE_EQ(capped.stiffness_N_per_mm, 0.2);
+}
+
+TEST(VirtualCoupling, ColgateSchenkelAsksMoreDampingThanTheDevicesHave) {
+  // b > K T / 2 + |B| (Colgate & Schenkel 1997) with K = K_c and B = B_c = 2 K_c T: 2.5 K_c T.
+  // Falcon class at 1 kHz, no delay: K_c = 3 N/mm = 3000 N/m, T = 1 ms: 1.5 + 6 = 7.5 N s/m.
+  const CouplingGains falcon = coupling_gains(device_profile("falcon"), 0.001);
+  EXPECT_NEAR(passive_device_damping(falcon, 0.001), 7.5e-3, 1e-15);
+  // Touch class at 10 kHz: 400 N/m × 0.1 ms × 2.5 = 0.1 N s/m.
+  const CouplingGains touch = coupling_gains(device_profile("touch"), 1e-4);
+  EXPECT_NEAR(passive_device_damping(touch, 1e-4), 1e-4, 1e-18);
+  // Two ticks of delay at 1 kHz add K_c × 2 ms = 6 N s/m for the Falcon class.
+  EXPECT_NEAR(passive_device_damping(falcon, 0.001, 2), 13.5e-3, 1e-15);
+  // The device damping the closed-loop studies assume (N s/mm; tests/bench/closed_loop.hpp) is
+  // short of it at 1 kHz on every class: the coupling is not passive without a hand.
+  const struct {
+    const char* name;
+    double b;
+  } devices[] = {
+      {"touch", 0.1e-3}, {"falcon", 0.5e-3}, {"phantom-premium", 0.2e-3}, {"omega", 1.0e-3}};
+  for (const auto& d : devices) {
+    const CouplingGains g = coupling_gains(device_profile(d.name), 0.001);
+    EXPECT_LT(d.b, passive_device_damping(g, 0.001)) << d.name;
+  }
 }
 
 TEST(VirtualCoupling, FreeMotionIsExactlyFree) {
