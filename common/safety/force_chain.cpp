@@ -59,6 +59,14 @@ Vec3d passivity_stage(const ForceChainState& s, const ForceChainConfig& config,
   return damped;
 }
 
+// The force applied over the tick just ended: written last tick, or d ticks before that with the
+// profile's transport delay of d ticks.
+Vec3d applied_last_tick(const ForceChainState& s, const DeviceProfile& limits, double t) {
+  const long d = t > 0.0 ? std::lround(transport_delay(limits) / t) : 0;
+  if (d <= 0) return s.written_prev;
+  return s.written_earlier[static_cast<std::size_t>(std::min<long>(d, kMaxDelayTicks) - 1)];
+}
+
 }  // namespace
 
 ForceChainOutput run_force_chain(ForceChainState& s, const ForceChainConfig& config,
@@ -68,9 +76,11 @@ ForceChainOutput run_force_chain(ForceChainState& s, const ForceChainConfig& con
   ForceChainOutput out;
   const double t = std::isfinite(dt) ? std::clamp(dt, 0.0, kMaxFilterDt) : 0.0;
 
-  // the port, first: what was written last tick, against the travel while it was held
+  // the port, first: the force applied over the tick just ended (written last tick, or d ticks
+  // before that under a transport delay), against the travel while it was held
   if (s.have_prev && is_finite(position))
-    s.passivity = observe_port(s.passivity, s.written_prev, position - s.position_prev);
+    s.passivity =
+        observe_port(s.passivity, applied_last_tick(s, limits, t), position - s.position_prev);
   out.port_energy_mJ = s.passivity.energy_mJ;
 
   const SafetyOutput limited =
@@ -107,6 +117,9 @@ ForceChainOutput run_force_chain(ForceChainState& s, const ForceChainConfig& con
   out.status |= clamped.status;
   out.force = clamped.value;
   out.torque = torque;
+  std::copy_backward(s.written_earlier.begin(), s.written_earlier.end() - 1,
+                     s.written_earlier.end());
+  s.written_earlier[0] = s.written_prev;
   s.written_prev = out.force;
   s.position_prev = position;
   s.have_prev = true;
@@ -116,6 +129,7 @@ ForceChainOutput run_force_chain(ForceChainState& s, const ForceChainConfig& con
 void reset_force_chain(ForceChainState& s) {
   s.limited_prev = Vec3d{};
   s.written_prev = Vec3d{};
+  s.written_earlier.fill(Vec3d{});
   s.have_prev = false;
   s.velocity = Vec3d{};
   s.engagement = Engagement{};

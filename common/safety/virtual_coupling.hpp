@@ -46,10 +46,18 @@ struct CouplingGains {
   double damping_N_s_per_mm = 0.0;  // B_c
 };
 
-// The coupling for `limits` at tick `dt` (s): K_c = the profile's stable stiffness, B_c = 2 K_c dt
-// (chosen by measurement with a hand on the device: the closed-loop study ran 0.75, 1, 2 and 4
-// times K_c dt and 2 left the least injected energy), at most the profile's damping; where that
-// cap binds, K_c is lowered to B_max / (2 dt) so B_c = 2 K_c dt still holds.
+// The profile's transport delay (s), taken in [0, kMaxTransportDelayS] (non-finite: 0).
+inline constexpr double kMaxTransportDelayS = 0.02;
+double transport_delay(const DeviceProfile& limits);
+
+// The coupling for `limits` at tick `dt` (s): K_c = the profile's stable stiffness, B_c =
+// 2 K_c (dt + 2 t_d) with t_d the profile's transport delay, at most the profile's damping; where
+// that cap binds, K_c is lowered to B_max / (2 (dt + 2 t_d)) so the ratio still holds. Both
+// factors were chosen by measurement with a hand on the device: with no delay, study_stability
+// ran 0.75, 1, 2 and 4 times K_c dt and 2 left the least injected energy; a delay lags the spring
+// by t_d more (a spring lagging by τ acts as a damping down to -K τ) and delays the damper too,
+// and study_delay_release cycled with 2 K_c (dt + t_d) where 2 K_c (dt + 2 t_d) held
+// (docs/stability.md, "Delay and release").
 CouplingGains coupling_gains(const DeviceProfile& limits, double dt);
 
 // The device damping (N·s/mm) Colgate & Schenkel's sufficient condition asks for the coupling

@@ -14,8 +14,10 @@
 // scene. (study_stability's "lets go" only sets the push to 0 and keeps the hand attached.)
 //
 // Chains: palpd (run_force_chain as HapticLoop::step runs it: coupling, passivity controller,
-// step bound, clamp; engagement already over, as after a ramp in free air) and palpd-no-pc (the
-// same with the passivity controller off: what the coupling alone gives).
+// step bound, clamp; engagement already over, as after a ramp in free air), told the delay run
+// through the profile's transport_delay_s (its coupling damping widened, its observer lined up);
+// palpd-untold (the same with transport_delay_s = 0: the chain before it knew of delays, or a
+// device whose delay is not declared); palpd-no-pc (told, the passivity controller off).
 //
 // Scenarios (4 s each):
 //   a      skin, hand 50 % of max force            b30/b90  bone plate 10 mm deep, 30/90 %
@@ -31,7 +33,7 @@
 //              coupling's spring, clamped): 0 for a passive rendering, within res_mJ = F q / 2.
 //              For a release it is what the device left with beyond what the press had stored.
 //   recontacts (release) times the applied force came back on (>= 1 mN) after it had gone
-//              below 1 mN
+//              below 1 mN; recontact_N the largest force applied after that first drop
 //   cycles     hand on: p2p >= 0.1 mm (issue 12's goal); injects: inj_mJ > res_mJ;
 //              bounces: recontacts > 0
 //
@@ -76,12 +78,15 @@ constexpr Scenario kScenarios[] = {
 struct Variant {
   const char* name;
   bool passivity;
+  bool told;  // the profile's transport_delay_s is the delay run (else 0: the chain not told)
 };
-constexpr Variant kVariants[] = {{"palpd", true}, {"palpd-no-pc", false}};
+constexpr Variant kVariants[] = {
+    {"palpd", true, true}, {"palpd-untold", true, false}, {"palpd-no-pc", false, true}};
 
 struct RunResult {
   double p2p_mm = kNan, growth = kNan, inj_mJ = 0.0, res_mJ = 0.0;
   int recontacts = 0;
+  double recontact_N = 0.0;  // the largest force applied after the first drop below 1 mN
   long pc_ticks = 0;
   bool cycles = false, injects = false, bounces = false;
   bool bad() const { return cycles || injects || bounces; }
@@ -118,11 +123,13 @@ double plant_step(Plant& p, const DeviceClass& dc, const Hand& hand, double f, d
   return dx;
 }
 
-RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass& dc,
+RunResult run(Environment& env, const DeviceProfile& class_profile, const DeviceClass& dc,
               const Hand& hand, double rate, int delay, const Variant& variant,
               const Scenario& sc) {
   env.reset_state();
   const double period = 1.0 / rate;
+  DeviceProfile profile = class_profile;
+  profile.transport_delay_s = variant.told ? delay * period : 0.0;
   const int sub = std::max(1, static_cast<int>(std::lround(period / kSimDt)));
   const double dt = period / sub, q = dc.encoder_mm;
   const double push_N = sc.hand_frac * profile.max_force_N;
@@ -142,7 +149,7 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   p.xh = p.xd;
   RunResult r;
   double work = 0.0, u_start = 0.0;
-  bool measuring = false, off_since_release = false;
+  bool measuring = false, off_since_release = false, gone = false;
   Window ring, cycle;
   const long ticks = std::lround(kEndS * rate);
   for (long n = 0; n < ticks; ++n) {
@@ -159,9 +166,10 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
     const bool released = sc.release && t >= kEventS - 1e-9;
     if (released) {
       if (applied < kContactN)
-        off_since_release = true;
+        off_since_release = gone = true;
       else if (off_since_release)
         ++r.recontacts, off_since_release = false;
+      if (gone) r.recontact_N = std::max(r.recontact_N, applied);
     }
     if (!measuring && t >= kEventS - 1e-9) measuring = true, u_start = potential(p.xd);
     const double push = push_N * std::min(1.0, t / kRampS);
@@ -213,7 +221,7 @@ int main(int argc, char** argv) {
   const Hand hand;
   Csv csv(flags.out_dir + "/delay_release.csv",
           {"profile", "chain", "scenario", "rate_hz", "delay_ticks", "p2p_mm", "growth", "inj_mJ",
-           "res_mJ", "recontacts", "pc_ticks", "cycles", "injects", "bounces"});
+           "res_mJ", "recontacts", "recontact_N", "pc_ticks", "cycles", "injects", "bounces"});
   int runs = 0;
   for (const Variant& variant : kVariants) {
     std::printf("\n%s: what cycles (p2p >= 0.1 mm), injects (> F q / 2) or bounces, per delay\n",
@@ -233,8 +241,9 @@ int main(int argc, char** argv) {
             ++runs;
             csv.row({std::string(dc.profile), std::string(variant.name), std::string(sc.name), rate,
                      static_cast<double>(delay), r.p2p_mm, r.growth, r.inj_mJ, r.res_mJ,
-                     static_cast<double>(r.recontacts), static_cast<double>(r.pc_ticks),
-                     r.cycles ? 1.0 : 0.0, r.injects ? 1.0 : 0.0, r.bounces ? 1.0 : 0.0});
+                     static_cast<double>(r.recontacts), r.recontact_N,
+                     static_cast<double>(r.pc_ticks), r.cycles ? 1.0 : 0.0, r.injects ? 1.0 : 0.0,
+                     r.bounces ? 1.0 : 0.0});
             if (!r.bad()) continue;
             // the scenario and its worst figure: the cycle's p2p, else the energy, else bounces
             bad += (bad.empty() ? " " : ", ") + std::string(sc.name) + " ";
@@ -243,7 +252,7 @@ int main(int argc, char** argv) {
             else if (r.injects)
               bad += fmt(r.inj_mJ, "+%.2g mJ");
             else
-              bad += std::to_string(r.recontacts) + "x";
+              bad += std::to_string(r.recontacts) + "x " + fmt(r.recontact_N, "%.2g N");
           }
           std::printf("%s |", bad.empty() ? " —" : bad.c_str());
         }

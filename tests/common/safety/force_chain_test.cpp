@@ -12,6 +12,7 @@ namespace {
 // A profile whose stiffness limit never binds: only the clamp and the rate limit act.
 DeviceProfile stiff_profile() {
   DeviceProfile p = device_profile("falcon");  // 8 N, 1600 N/s: 1.6 N a tick at 1 kHz
+  p.transport_delay_s = 0.0;  // the force written at a tick is applied over the next
   p.max_stiffness_N_per_mm = 1e9;
   p.settle_rate_N_per_s = 1e9;  // at rest too
   return p;
@@ -79,6 +80,7 @@ TEST(ForceChain, TheObserverSeesTheForceAfterTheStepBound) {
   // The device moves 0.1 mm out, along the force, each tick. Observer only (no damping).
   DeviceProfile p = device_profile("falcon");
   p.damping_N_s_per_mm = 0.0;
+  p.transport_delay_s = 0.0;
   ForceChainConfig config;
   config.passivity = true;
   ForceChainState s;
@@ -133,6 +135,27 @@ TEST(ForceChain, ATickWithoutForceDoesNotResetTheObserver) {
   }
   reset_force_chain(s);  // a real reset does restart it
   EXPECT_EQ(s.passivity.energy_mJ, 0.0);
+}
+
+TEST(ForceChain, UnderADelayTheObserverPairsTheForceInFlight) {
+  // A transport delay of 2 ms at 1 kHz: the force written at tick k is applied over
+  // [k + 2, k + 3]. The limiter writes 1.6, 3.2, 4.8, 6.4, 8 N (step bound) while the device
+  // moves 0.1 mm out a tick; the travel over [n - 1, n] is pushed by what was written at n - 3,
+  // nothing before the first force arrives.
+  DeviceProfile p = stiff_profile();
+  p.damping_N_s_per_mm = 0.0;
+  p.transport_delay_s = 0.002;
+  ForceChainConfig config = limiter();
+  config.passivity = true;
+  ForceChainState s;
+  const double written[] = {1.6, 3.2, 4.8, 6.4, 8.0, 8.0};
+  const double energy[] = {0.0, 0.0, 0.0, -0.16, -0.48, -0.96};  // -0.1 × (1.6, +3.2, +4.8)
+  for (int n = 0; n < 6; ++n) {
+    const ForceChainOutput out =
+        run_force_chain(s, config, p, {0, 0, 100}, {}, 0.0, {0, 0, 0.1 * n}, 0.001);
+    EXPECT_NEAR(out.force.z, written[n], 1e-9) << n;
+    EXPECT_NEAR(s.passivity.energy_mJ, energy[n], 1e-9) << n;
+  }
 }
 
 }  // namespace

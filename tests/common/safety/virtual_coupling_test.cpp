@@ -35,7 +35,9 @@ TEST(VirtualCoupling, GainsAreTheStableStiffnessAndTwiceItsTickInDamping) {
       const CouplingGains g = coupling_gains(p, t);
       EXPECT_LE(g.stiffness_N_per_mm, p.max_stiffness_N_per_mm) << p.name << " " << rate;
       EXPECT_LE(g.damping_N_s_per_mm, p.damping_N_s_per_mm) << p.name << " " << rate;
-      EXPECT_NEAR(g.damping_N_s_per_mm, 2.0 * g.stiffness_N_per_mm * t, 1e-15) << p.name;
+      // B_c = 2 K_c (T + 2 t_d)
+      const double lag = t + 2.0 * p.transport_delay_s;
+      EXPECT_NEAR(g.damping_N_s_per_mm, 2.0 * g.stiffness_N_per_mm * lag, 1e-15) << p.name;
     }
   }
   // The Touch class at 1 kHz: K_c its 0.4 N/mm, B_c = 2 K_c T.
@@ -53,7 +55,9 @@ TEST(VirtualCoupling, GainsAreTheStableStiffnessAndTwiceItsTickInDamping) {
 TEST(VirtualCoupling, ColgateSchenkelAsksMoreDampingThanTheDevicesHave) {
   // b > K T / 2 + |B| (Colgate & Schenkel 1997) with K = K_c and B = B_c = 2 K_c T: 2.5 K_c T.
   // Falcon class at 1 kHz, no delay: K_c = 3 N/mm = 3000 N/m, T = 1 ms: 1.5 + 6 = 7.5 N s/m.
-  const CouplingGains falcon = coupling_gains(device_profile("falcon"), 0.001);
+  DeviceProfile undelayed = device_profile("falcon");
+  undelayed.transport_delay_s = 0.0;
+  const CouplingGains falcon = coupling_gains(undelayed, 0.001);
   EXPECT_NEAR(passive_device_damping(falcon, 0.001), 7.5e-3, 1e-15);
   // Touch class at 10 kHz: 400 N/m × 0.1 ms × 2.5 = 0.1 N s/m.
   const CouplingGains touch = coupling_gains(device_profile("touch"), 1e-4);
@@ -71,6 +75,24 @@ TEST(VirtualCoupling, ColgateSchenkelAsksMoreDampingThanTheDevicesHave) {
     const CouplingGains g = coupling_gains(device_profile(d.name), 0.001);
     EXPECT_LT(d.b, passive_device_damping(g, 0.001)) << d.name;
   }
+}
+
+TEST(VirtualCoupling, ATransportDelayWidensTheDamping) {
+  // B_c = 2 K_c (T + 2 t_d). Touch class, 1 ms of delay at 1 kHz: 2 × 0.4 × 3 ms = 0.0024 N s/mm,
+  // under its 0.004 cap: K_c stays 0.4.
+  DeviceProfile touch = device_profile("touch");
+  touch.transport_delay_s = 0.001;
+  const CouplingGains t = coupling_gains(touch, 0.001);
+  EXPECT_DOUBLE_EQ(t.stiffness_N_per_mm, 0.4);
+  EXPECT_NEAR(t.damping_N_s_per_mm, 0.0024, 1e-15);
+  // The Falcon class declares 2 ms: 2 × 3 × 5 ms = 0.03 N s/mm is over its 0.02 cap, so B_c =
+  // 0.02 and K_c = 0.02 / (2 × 5 ms) = 2 N/mm.
+  const CouplingGains f = coupling_gains(device_profile("falcon"), 0.001);
+  EXPECT_NEAR(f.damping_N_s_per_mm, 0.02, 1e-15);
+  EXPECT_NEAR(f.stiffness_N_per_mm, 2.0, 1e-12);
+  // A non-finite or negative delay counts as none.
+  touch.transport_delay_s = -1.0;
+  EXPECT_NEAR(coupling_gains(touch, 0.001).damping_N_s_per_mm, 0.0008, 1e-15);
 }
 
 TEST(VirtualCoupling, FreeMotionIsExactlyFree) {
