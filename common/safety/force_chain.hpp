@@ -7,15 +7,22 @@
 //   filtered velocity; never pulls: a damper that would reverse the force lets go instead) ─► step
 //   bound on what was written last ─► clamp ─► device
 //
+// The passivity observer watches the port: at each tick, the force applied over the tick just ended
+// against the device's travel over it (passivity.hpp), whatever the force was and whichever stage
+// shaped it. That force was written the tick before, or d ticks earlier under a transport delay of
+// d ticks (DeviceProfile::transport_delay_s, rounded to ticks; the coupling's damping widens with
+// it too: virtual_coupling.hpp).
+//
 // With the coupling on, the model is to be evaluated at force_chain_tool() (the virtual tool),
 // not at the device. With it off (the chain before the coupling, kept for the studies), the
 // first stage is the stiffness limiter instead: clamp, stiffness and rate limits on the
 // limiter's own previous output (apply_device_limits), with the model at the device.
 //
 // The state is a value the caller keeps; reset_force_chain() after a fault or a model change
-// (zero written, engagement and observer restart).
+// (zero written, engagement and observer restart). Nothing else resets the observer.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 
@@ -35,9 +42,15 @@ struct ForceChainConfig {
   bool coupling = true;
 };
 
+// The longest transport delay, in ticks, the observer lines up (2 ms at 10 kHz is 20).
+inline constexpr int kMaxDelayTicks = 32;
+
 struct ForceChainState {
   Vec3d limited_prev{};  // the limiter's own last output (its step limits follow it)
   Vec3d written_prev{};  // what the device was written last tick
+  // what it was written before that: [i] i + 2 ticks ago (the force still in flight under a
+  // transport delay, which the observer pairs with the travel it is applied over)
+  std::array<Vec3d, kMaxDelayTicks> written_earlier{};
   Vec3d position_prev{};
   bool have_prev = false;
   Vec3d velocity{};  // filtered device velocity, mm/s
@@ -50,8 +63,9 @@ struct ForceChainOutput {
   Vec3d force{}, torque{};
   std::uint32_t status = kSafetyOk;
   double damping_N_s_per_mm = 0.0;  // the passivity controller's, this tick
-  double dissipated_mJ = 0.0;
+  double dissipated_mJ = 0.0;       // what the damper is to dissipate (the observer sees the rest)
   double coupling_stiffness_N_per_mm = 0.0;  // the coupling's K_c this tick (0: off)
+  double port_energy_mJ = 0.0;  // the observer's energy at the port, through last tick's force
 };
 
 // Where the model is to be evaluated this tick (device frame, mm): the virtual tool when the

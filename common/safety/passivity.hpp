@@ -1,14 +1,28 @@
 // A time-domain passivity observer and controller at the device port (Hannaford & Ryu 2002), the
 // backstop behind the limits: it watches the energy the rendered environment exchanges with the
-// hand and, when the environment has put out more than it took in (sampling and the limiter can
-// make it do so), dissipates the excess with an adaptive damper that opposes the device's motion.
+// hand and, when the environment has put out more than it took in (sampling, delay and the
+// limiter can make it do so), dissipates the excess with an adaptive damper that opposes the
+// device's motion.
 //
-//   observer    E += -F · v · dt   (mJ = N·mm; F the force the device pushes the hand with, v the
-//                                   device's velocity: pushing into the skin stores energy, being
-//                                   pushed out returns it; a passive rendering keeps E >= 0)
-//   controller  E < 0: α = min(-E / (|v|² dt), α_max); F' = F - α v; E += α |v|² dt
+// The port is where the force meets the device: the observer sums the force actually written (after
+// the step bound and the clamp, zeroed or not) against the device's travel while that force was
+// held. With the force written at tick n-1 held over [n-1, n] and x(n) the position read at tick n:
 //
-// Pure: the state (the observed energy) is a value the loop keeps and resets with engagement.
+//   observer    E(n) = E(n-1) - f_w(n-1) · (x(n) - x(n-1))      (mJ = N·mm)
+//
+// E is the energy the hand has put into the rendered environment since the chain's last reset:
+// pushing into the skin stores energy (f_w points out, x moves in: E grows), being pushed out
+// returns it. A passive rendering keeps E >= 0. (x(n) - x(n-1) is v(n) T with v the backward
+// difference, Hannaford and Ryu's f(k) v(k) ΔT with the force paired to the interval it was held.)
+//
+//   controller  E(n) < 0: α = min(-E(n) / (|v|² T), α_max); F' = F - α v
+//
+// The controller does not credit itself: what its damper dissipates reaches E only through the
+// force written next, observed at the next tick. E is never reset but by the chain's reset (a
+// fault, a model change, re-engagement): a tick with no force adds nothing, it does not forgive
+// a deficit.
+//
+// Pure: the state (the observed energy) is a value the loop keeps and resets with the chain.
 #pragma once
 
 #include "base/vec.hpp"
@@ -19,16 +33,22 @@ struct PassivityState {
   double energy_mJ = 0.0;
 };
 
+// The observer, one tick: `written_prev` (N) the force written at the previous tick, held over the
+// period just ended, `travel_mm` the device's travel over it (x(n) - x(n-1), mm). A non-finite
+// force or travel adds nothing; a non-finite energy restarts at 0.
+PassivityState observe_port(PassivityState state, const Vec3d& written_prev,
+                            const Vec3d& travel_mm);
+
 struct PassivityOutput {
   Vec3d force{};
   double damping_N_s_per_mm = 0.0;  // α applied this tick (0: the controller was idle)
-  double dissipated_mJ = 0.0;
-  PassivityState state;
+  double dissipated_mJ = 0.0;       // α |v|² T: what the damper is to dissipate, if written
 };
 
-// One tick: `force` (N) about to be written, `velocity` (mm/s) of the device, `dt` (s, taken in
-// [0, 0.01]), `max_damping` (N·s/mm, the device's largest renderable damping; 0: observe only).
-PassivityOutput passivity_control(PassivityState state, const Vec3d& force, const Vec3d& velocity,
-                                  double dt, double max_damping_N_s_per_mm);
+// The controller, one tick: `force` (N) about to be written, `velocity` (mm/s) of the device,
+// `dt` (s, taken in [0, 0.01]), `max_damping` (N·s/mm, the device's largest renderable damping;
+// 0: idle). The state is read, not changed.
+PassivityOutput passivity_control(const PassivityState& state, const Vec3d& force,
+                                  const Vec3d& velocity, double dt, double max_damping_N_s_per_mm);
 
 }  // namespace palp

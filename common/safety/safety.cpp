@@ -22,11 +22,14 @@ namespace {
 //                    5 N s/m, 0.188 N m = 188 N mm torque. 6-DOF output.
 //   omega            Force Dimension omega.3 (CHAI3D CDeltaDevices.cpp): 12 N, 5000 N/m,
 //                    40 N s/m. 3-DOF force.
+// Transport delay: the Falcon's USB exchange (request / reply through its FTDI bridge, which
+// sends a packet each 1 ms latency period: server/devices/falcon_device.hpp) takes 1-2 ms; the
+// profile takes 2 ms. The others declare none (not known to palp).
 // No datasheet gives a force rate: palp allows the full force within 5 ms (5 ticks at 1 kHz)
 // and lets a stiffness-limited force settle at full force per second.
 constexpr std::array<DeviceProfile, 4> kProfiles{{
     {"touch", "3D Systems Touch class, 3-DOF", 3.3, 0.4, 660.0, 3.3, 3, 0.0, 0.004},
-    {"falcon", "Novint Falcon class, 3-DOF", 8.0, 3.0, 1600.0, 8.0, 3, 0.0, 0.020},
+    {"falcon", "Novint Falcon class, 3-DOF", 8.0, 3.0, 1600.0, 8.0, 3, 0.0, 0.020, 0.002},
     {"phantom-premium", "PHANToM Premium 1.5 class, 6-DOF", 8.5, 0.8, 1700.0, 8.5, 6, 188.0, 0.005},
     {"omega", "Force Dimension omega.3 class, 3-DOF", 12.0, 5.0, 2400.0, 12.0, 3, 0.0, 0.040},
 }};

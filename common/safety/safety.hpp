@@ -27,6 +27,10 @@ struct DeviceProfile {
   int dof;                        // 3: force only (torque is dropped); 6: force and torque
   double max_torque_Nmm;          // torque magnitude limit (dof 6)
   double damping_N_s_per_mm = 0;  // largest damping the device renders (CHAI3D's maxLinearDamping)
+  // Transport delay: from reading a position to the force computed from it reaching the motors,
+  // beyond the one tick over which a written force is held (0: none known). The force chain
+  // widens the coupling's damping and lines its passivity observer up by it (force_chain.hpp).
+  double transport_delay_s = 0;
 };
 
 // The profile palpd applies to a device that declares nothing when no profile is named: the

@@ -13,19 +13,31 @@ constexpr double kMaxStiffnessNPerMm = 1e6;  // K is capped (a step's secant is 
 
 }  // namespace
 
+double transport_delay(const DeviceProfile& limits) {
+  const double d = limits.transport_delay_s;
+  return std::isfinite(d) ? std::clamp(d, 0.0, kMaxTransportDelayS) : 0.0;
+}
+
 CouplingGains coupling_gains(const DeviceProfile& limits, double dt) {
   CouplingGains g;
+  // the lag the damping answers for: the tick, plus the transport delay
   const double t = std::isfinite(dt) ? std::clamp(dt, 1e-6, kMaxFilterDt) : 1e-3;
+  const double lag = t + 2.0 * transport_delay(limits);  // see coupling_gains() in the header
   double k = std::max(0.0, limits.max_stiffness_N_per_mm);
-  double b = 2.0 * k * t;
+  double b = 2.0 * k * lag;
   const double b_max = limits.damping_N_s_per_mm;
   if (b_max > 0.0 && b > b_max) {
     b = b_max;
-    k = std::min(k, b_max / (2.0 * t));  // b = 2 k t still: four times the bound k t / 2
+    k = std::min(k, b_max / (2.0 * lag));  // B_c = 2 K_c (T + t_d) still
   }
   g.stiffness_N_per_mm = k;
   g.damping_N_s_per_mm = b;
   return g;
+}
+
+double passive_device_damping(const CouplingGains& gains, double dt, int delay_ticks) {
+  const double lag = (std::max(0, delay_ticks) + 0.5) * dt;
+  return gains.stiffness_N_per_mm * lag + std::fabs(gains.damping_N_s_per_mm);
 }
 
 Vec3d coupled_tool(const CouplingState& state, const Vec3d& device_position) {

@@ -391,7 +391,10 @@ int main(int argc, char** argv) {
   std::printf("  %-15s %-13s %-4s %6s %9s %9s %8s %8s %8s %8s %8s\n", "profile", "chain", "scen",
               "rate", "p2p_mm", "inj_mJ", "step_N", "bound_N", "engage_s", "fault_N", "depth");
   for (const DeviceClass& dc : kDeviceClasses) {
-    const DeviceProfile& profile = device_profile(dc.profile);
+    // The plant here applies each force over the tick after its sample: no transport delay, so
+    // the chain is told none (study_delay_release runs delays, told and untold).
+    DeviceProfile profile = device_profile(dc.profile);
+    profile.transport_delay_s = 0.0;
     for (Chain chain : {Chain::Saturation, Chain::Limiter, Chain::PalpdLimiter, Chain::Palpd,
                         Chain::PalpdEngaged}) {
       for (const Scenario& sc : kScenarios) {

@@ -357,7 +357,7 @@ TEST(Palpd, ProbeShowsTheForceLimits) {
       "probe 127.0.0.1:" + std::to_string(port) + " --duration 0.5 --same-host", dir / "cache");
   EXPECT_EQ(probe.exit_code, 0) << probe.output;
   EXPECT_NE(probe.output.find("limits    falcon: 8.00 N, 3.00 N/mm, step <= 1.60 N per tick, "
-                              "virtual coupling 3.00 N/mm and 0.0060 N s/mm, "
+                              "virtual coupling 2.00 N/mm and 0.0200 N s/mm, "
                               "engages below 0.20 N over 1.5 s"),
             std::string::npos)
       << probe.output;

@@ -1,4 +1,6 @@
-// The passivity observer and controller: exact energies and damping, idle while passive.
+// The passivity observer and controller: the port energy summed by hand from its definition
+// (E(n) = E(n-1) - f_w(n-1) · (x(n) - x(n-1)), mJ = N·mm), the controller's damping, and a
+// controller that does not credit itself.
 #include "safety/passivity.hpp"
 
 #include <gtest/gtest.h>
@@ -8,39 +10,56 @@
 namespace palp {
 namespace {
 
-TEST(Passivity, PressingInStoresEnergyAndTheControllerStaysIdle) {
-  // The hand pushes in (v = -10 mm/s along z) against 2 N outward for 1 ms: 0.02 mJ stored.
-  const PassivityOutput o = passivity_control({}, {0, 0, 2}, {0, 0, -10}, 0.001, 0.02);
-  EXPECT_DOUBLE_EQ(o.state.energy_mJ, 0.02);
-  EXPECT_EQ(o.force, (Vec3d{0, 0, 2}));
-  EXPECT_EQ(o.damping_N_s_per_mm, 0.0);
+TEST(Passivity, TheObserverSumsTheWrittenForceAgainstTheTravel) {
+  // Pressed in at 0.01 mm a tick against 2 N outward, three ticks: 3 × 0.02 mJ stored; then
+  // pushed out 0.05 mm by 3 N: 0.15 mJ returned.
+  PassivityState s;
+  s = observe_port(s, {0, 0, 2}, {0, 0, -0.01});
+  EXPECT_NEAR(s.energy_mJ, 0.02, 1e-15);
+  s = observe_port(s, {0, 0, 2}, {0, 0, -0.01});
+  s = observe_port(s, {0, 0, 2}, {0, 0, -0.01});
+  EXPECT_NEAR(s.energy_mJ, 0.06, 1e-15);
+  s = observe_port(s, {0, 0, 3}, {0, 0, 0.05});
+  EXPECT_NEAR(s.energy_mJ, 0.06 - 0.15, 1e-15);
+  // a lateral force against lateral travel counts too; travel across the force does not
+  s = observe_port(s, {1, 0, 0}, {-0.2, 0.3, 0});
+  EXPECT_NEAR(s.energy_mJ, -0.09 + 0.2, 1e-15);
 }
 
-TEST(Passivity, ReturningMoreThanWasStoredIsDamped) {
-  // 0.005 mJ stored; pushed out at 10 mm/s by 2 N for 1 ms returns 0.02 mJ: a deficit of 0.015.
-  const PassivityOutput o = passivity_control({0.005}, {0, 0, 2}, {0, 0, 10}, 0.001, 1.0);
-  // α = 0.015 / (100 · 0.001) = 0.15 N s/mm; F' = 2 - 0.15 · 10 = 0.5 N.
+TEST(Passivity, NoForceAddsNothingAndForgivesNothing) {
+  PassivityState s{-0.4};
+  for (int n = 0; n < 5; ++n) s = observe_port(s, {}, {0, 0, 1.0});
+  EXPECT_EQ(s.energy_mJ, -0.4);
+  // non-finite inputs add nothing either; a non-finite energy restarts at 0
+  s = observe_port(s, {0, 0, std::nan("")}, {0, 0, 1.0});
+  EXPECT_EQ(s.energy_mJ, -0.4);
+  EXPECT_EQ(observe_port({std::nan("")}, {0, 0, 1}, {0, 0, 1}).energy_mJ, -1.0);
+}
+
+TEST(Passivity, ADeficitIsDampedWithoutCreditingTheController) {
+  // E = -0.015 mJ; moving out at 10 mm/s for 1 ms under 2 N: α = 0.015 / (100 · 0.001) = 0.15
+  // N s/mm, F' = 2 - 0.15 · 10 = 0.5 N, 0.015 mJ to dissipate.
+  const PassivityState s{-0.015};
+  const PassivityOutput o = passivity_control(s, {0, 0, 2}, {0, 0, 10}, 0.001, 1.0);
   EXPECT_NEAR(o.damping_N_s_per_mm, 0.15, 1e-12);
   EXPECT_NEAR(o.force.z, 0.5, 1e-12);
   EXPECT_NEAR(o.dissipated_mJ, 0.015, 1e-12);
-  EXPECT_NEAR(o.state.energy_mJ, 0.0, 1e-15);
+  // Written and held while the device moves 0.01 mm out, the port sees 0.5 N · 0.01 mm = 0.005 mJ
+  // returned (the undamped 2 N would have returned 0.02): nothing is credited beyond that.
+  EXPECT_NEAR(observe_port(s, o.force, {0, 0, 0.01}).energy_mJ, -0.015 - 0.005, 1e-15);
 }
 
-TEST(Passivity, DampingIsCappedByTheDevice) {
-  const PassivityOutput o = passivity_control({-1.0}, {0, 0, 0}, {0, 0, 1}, 0.001, 0.02);
-  EXPECT_EQ(o.damping_N_s_per_mm, 0.02);  // wants 1000
-  EXPECT_NEAR(o.force.z, -0.02, 1e-15);
-  EXPECT_LT(o.state.energy_mJ, 0.0);  // the rest waits for later ticks
-}
-
-TEST(Passivity, AtRestOrWithoutDampingNothingIsAdded) {
+TEST(Passivity, IdleWhilePassiveAtRestOrWithoutDamping) {
+  const PassivityOutput passive = passivity_control({0.02}, {0, 0, 2}, {0, 0, 10}, 0.001, 1.0);
+  EXPECT_EQ(passive.force, (Vec3d{0, 0, 2}));
+  EXPECT_EQ(passive.damping_N_s_per_mm, 0.0);
   const PassivityOutput rest = passivity_control({-1.0}, {0, 0, 3}, {0, 0, 0}, 0.001, 0.02);
   EXPECT_EQ(rest.force, (Vec3d{0, 0, 3}));
-  const PassivityOutput observe = passivity_control({-1.0}, {0, 0, 3}, {0, 0, 1}, 0.001, 0.0);
-  EXPECT_EQ(observe.force, (Vec3d{0, 0, 3}));
-  EXPECT_NEAR(observe.state.energy_mJ, -1.003, 1e-12);
-  const PassivityOutput nan = passivity_control({-1.0}, {0, 0, std::nan("")}, {0, 0, 1}, 0.001, 1);
-  EXPECT_EQ(nan.state.energy_mJ, 0.0);
+  const PassivityOutput off = passivity_control({-1.0}, {0, 0, 3}, {0, 0, 1}, 0.001, 0.0);
+  EXPECT_EQ(off.force, (Vec3d{0, 0, 3}));
+  const PassivityOutput capped = passivity_control({-1.0}, {0, 0, 0}, {0, 0, 1}, 0.001, 0.02);
+  EXPECT_EQ(capped.damping_N_s_per_mm, 0.02);  // wants 1000
+  EXPECT_NEAR(capped.force.z, -0.02, 1e-15);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
-// The virtual coupling: gains that keep b + B_c > K_c T / 2 at every rate, free motion exactly
-// free, a stiff model felt through the coupling's spring in series, a step in the model's force
-// never passed on as a step, and a device that is never pulled.
+// The virtual coupling: its gains and the device damping Colgate and Schenkel's condition asks of
+// them, free motion exactly free, a stiff model felt through the coupling's spring in series, a
+// step in the model's force never passed on as a step, and a device that is never pulled.
 #include "safety/virtual_coupling.hpp"
 
 #include <gtest/gtest.h>
@@ -28,14 +28,16 @@ Vec3d hold(CouplingState& s, const CouplingGains& g, const Wall& wall, double z_
   return f;
 }
 
-TEST(VirtualCoupling, GainsKeepTheDampingBoundAtEveryRate) {
+TEST(VirtualCoupling, GainsAreTheStableStiffnessAndTwiceItsTickInDamping) {
   for (const DeviceProfile& p : device_profiles()) {
     for (double rate : {500.0, 1000.0, 2000.0, 4000.0, 10000.0}) {
       const double t = 1.0 / rate;
       const CouplingGains g = coupling_gains(p, t);
       EXPECT_LE(g.stiffness_N_per_mm, p.max_stiffness_N_per_mm) << p.name << " " << rate;
       EXPECT_LE(g.damping_N_s_per_mm, p.damping_N_s_per_mm) << p.name << " " << rate;
-      EXPECT_GT(g.damping_N_s_per_mm, g.stiffness_N_per_mm * t / 2.0) << p.name << " " << rate;
+      // B_c = 2 K_c (T + 2 t_d)
+      const double lag = t + 2.0 * p.transport_delay_s;
+      EXPECT_NEAR(g.damping_N_s_per_mm, 2.0 * g.stiffness_N_per_mm * lag, 1e-15) << p.name;
     }
   }
   // The Touch class at 1 kHz: K_c its 0.4 N/mm, B_c = 2 K_c T.
@@ -48,6 +50,49 @@ TEST(VirtualCoupling, GainsKeepTheDampingBoundAtEveryRate) {
   const CouplingGains capped = coupling_gains(weak, 0.001);
   EXPECT_DOUBLE_EQ(capped.damping_N_s_per_mm, 0.0004);
   EXPECT_DOUBLE_EQ(capped.stiffness_N_per_mm, 0.2);
+}
+
+TEST(VirtualCoupling, ColgateSchenkelAsksMoreDampingThanTheDevicesHave) {
+  // b > K T / 2 + |B| (Colgate & Schenkel 1997) with K = K_c and B = B_c = 2 K_c T: 2.5 K_c T.
+  // Falcon class at 1 kHz, no delay: K_c = 3 N/mm = 3000 N/m, T = 1 ms: 1.5 + 6 = 7.5 N s/m.
+  DeviceProfile undelayed = device_profile("falcon");
+  undelayed.transport_delay_s = 0.0;
+  const CouplingGains falcon = coupling_gains(undelayed, 0.001);
+  EXPECT_NEAR(passive_device_damping(falcon, 0.001), 7.5e-3, 1e-15);
+  // Touch class at 10 kHz: 400 N/m × 0.1 ms × 2.5 = 0.1 N s/m.
+  const CouplingGains touch = coupling_gains(device_profile("touch"), 1e-4);
+  EXPECT_NEAR(passive_device_damping(touch, 1e-4), 1e-4, 1e-18);
+  // Two ticks of delay at 1 kHz add K_c × 2 ms = 6 N s/m for the Falcon class.
+  EXPECT_NEAR(passive_device_damping(falcon, 0.001, 2), 13.5e-3, 1e-15);
+  // The device damping the closed-loop studies assume (N s/mm; tests/bench/closed_loop.hpp) is
+  // short of it at 1 kHz on every class: the coupling is not passive without a hand.
+  const struct {
+    const char* name;
+    double b;
+  } devices[] = {
+      {"touch", 0.1e-3}, {"falcon", 0.5e-3}, {"phantom-premium", 0.2e-3}, {"omega", 1.0e-3}};
+  for (const auto& d : devices) {
+    const CouplingGains g = coupling_gains(device_profile(d.name), 0.001);
+    EXPECT_LT(d.b, passive_device_damping(g, 0.001)) << d.name;
+  }
+}
+
+TEST(VirtualCoupling, ATransportDelayWidensTheDamping) {
+  // B_c = 2 K_c (T + 2 t_d). Touch class, 1 ms of delay at 1 kHz: 2 × 0.4 × 3 ms = 0.0024 N s/mm,
+  // under its 0.004 cap: K_c stays 0.4.
+  DeviceProfile touch = device_profile("touch");
+  touch.transport_delay_s = 0.001;
+  const CouplingGains t = coupling_gains(touch, 0.001);
+  EXPECT_DOUBLE_EQ(t.stiffness_N_per_mm, 0.4);
+  EXPECT_NEAR(t.damping_N_s_per_mm, 0.0024, 1e-15);
+  // The Falcon class declares 2 ms: 2 × 3 × 5 ms = 0.03 N s/mm is over its 0.02 cap, so B_c =
+  // 0.02 and K_c = 0.02 / (2 × 5 ms) = 2 N/mm.
+  const CouplingGains f = coupling_gains(device_profile("falcon"), 0.001);
+  EXPECT_NEAR(f.damping_N_s_per_mm, 0.02, 1e-15);
+  EXPECT_NEAR(f.stiffness_N_per_mm, 2.0, 1e-12);
+  // A non-finite or negative delay counts as none.
+  touch.transport_delay_s = -1.0;
+  EXPECT_NEAR(coupling_gains(touch, 0.001).damping_N_s_per_mm, 0.0008, 1e-15);
 }
 
 TEST(VirtualCoupling, FreeMotionIsExactlyFree) {
