@@ -184,10 +184,11 @@ StartTuning tune_at_start(const Args& args, Scene& scene, Tool& tool, const Forc
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       char summary[320];
       std::snprintf(summary, sizeof summary,
-                    "of %zu candidates, tick p50 %.2f us (reference %.2f us), RMS force difference "
-                    "%.4f N of %.3f N allowed, maps %.1f MiB (reference %.1f MiB)%s",
+                    "of %zu candidates, tick p50 %.2f us (reference %.2f us), force difference "
+                    "beyond its tick's tolerance on %.2f %% of ticks (RMS %.4f N), maps %.1f MiB "
+                    "(reference %.1f MiB)%s",
                     o.results.size(), c.measured.tick_p50_us, ref.measured.tick_p50_us,
-                    c.measured.rms_error_n, o.tolerance_n,
+                    100.0 * c.measured.beyond_share, c.measured.rms_error_n,
                     static_cast<double>(c.measured.map_bytes) / 1048576.0,
                     static_cast<double>(ref.measured.map_bytes) / 1048576.0,
                     c.accepted ? "" : "; NOTHING passes at this rate: the reference");
