@@ -118,7 +118,13 @@ std::string tune_cache_key(const std::string& prep_dir, double map_spacing_mm,
                            const std::string& tool, double rate_hz, const ForceParams& p,
                            const std::string& machine) {
   Fnv h;
-  h.add("palpd-tune-v1");
+  // v2: each tick judged against the force then (docs/tuning.md); a choice cached under v1's
+  // whole-run RMS tolerance is not reused. The tolerance palpd tunes with is part of the key.
+  h.add("palpd-tune-v2");
+  const tune::Tolerance tol;
+  for (double v :
+       {tol.rel, tol.abs_n, tol.beyond_share, tol.max_factor, tol.tick_budget, tol.time_tie})
+    h.add(number(v));
   h.add_file(fs::path(prep_dir) / kSurfaceDistanceFile);
   h.add_file(fs::path(prep_dir) / kBoneDistanceFile);
   h.add(number(map_spacing_mm));  // the maps refined in memory or not (scene/scene_maps.hpp)
