@@ -45,7 +45,9 @@ print("|---|---|---|---|---|---|---|---|---|---|")
 def key(p):
     s, t, r = os.path.basename(p)[:-4].split("_")
     return (s != "torso", t, int(r))
-for path in sorted(glob.glob(os.path.join(out, "*.csv")), key=key):
+# Only the cases' CSVs (SCENE_TOOL_RATE.csv): docs/figures/tuning holds other charts' data too.
+cases = [p for p in glob.glob(os.path.join(out, "*.csv")) if len(os.path.basename(p)[:-4].split("_")) == 3]
+for path in sorted(cases, key=key):
     scene, tool, rate = os.path.basename(path)[:-4].split("_")
     rows = list(csv.DictReader(open(path)))
     ref, chosen = rows[0], next(r for r in rows if r["chosen"] == "1")
