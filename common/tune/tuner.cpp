@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -79,14 +80,92 @@ std::size_t sampler_bytes(const FieldSampler& f) {
   return f.grid().voxel_count() * (f.bytes_per_voxel() + (f.has_bone_beneath() ? 4 : 0));
 }
 
-}  // namespace
-
-double tolerance_for(const Tolerance& tol, double reference_rms_n) {
-  return std::max(tol.abs_n, tol.rel * reference_rms_n);
+// A candidate's forces against the reference's (`ref`), and its tick timed in repeats of the
+// whole set, each tick timed (medians over the repeats).
+Measured measure(const Model& model, const std::vector<NamedTrajectory>& paths, const Run& ref,
+                 const Setup& setup) {
+  const Run r = run(model, paths, true);
+  Measured m = compare_forces(r.force, ref.force, ref.normal, setup.tolerance);
+  std::vector<double> p50, p99;
+  for (int k = 0; k < setup.repeats; ++k) {
+    Run timed = run(model, paths, false, kTimedRowsPerPath);
+    p50.push_back(quantile(timed.tick_us, 0.50));
+    p99.push_back(quantile(timed.tick_us, 0.99));
+  }
+  m.tick_p50_us = median(p50);
+  m.tick_p99_us = median(p99);
+  return m;
 }
 
-std::size_t judge(std::vector<Judged>& results, const Tolerance& tol, double tolerance_n,
-                  double period_us) {
+// error / allowed; with nothing allowed (a zero floor where the reference is 0), any error is
+// infinitely many tolerances and none is 0.
+double ratio(double error, double allowed) {
+  if (allowed > 0.0) return error / allowed;
+  return error > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
+}
+
+// Why a candidate's forces are told from the reference's, or "" when they are not.
+std::string force_verdict(const Measured& m, const Tolerance& tol) {
+  char text[240];
+  if (m.beyond_share > tol.beyond_share) {
+    std::snprintf(text, sizeof text,
+                  "force error: %.1f %% of ticks beyond their tolerance (> %.1f %%)",
+                  100.0 * m.beyond_share, 100.0 * tol.beyond_share);
+  } else if (m.worst_ratio > tol.max_factor) {
+    std::snprintf(text, sizeof text,
+                  "force error: %.3f N where %.3f N allowed (reference %.3f N), > %g tolerances",
+                  m.worst_error_n, m.worst_allowed_n, m.worst_force_n, tol.max_factor);
+  } else if (m.step_ratio > 1.0) {
+    std::snprintf(text, sizeof text,
+                  "per-tick step above the reference's by %.2f tolerances of its tick (largest "
+                  "excess %.3f N)",
+                  m.step_ratio, m.step_excess_n);
+  } else {
+    return "";
+  }
+  return text;
+}
+
+}  // namespace
+
+double allowed_n(const Tolerance& tol, double reference_n) {
+  return std::max(tol.abs_n, tol.rel * reference_n);
+}
+
+Measured compare_forces(const std::vector<Vec3d>& f, const std::vector<Vec3d>& ref,
+                        const std::vector<Vec3d>& normal, const Tolerance& tol) {
+  if (f.size() != ref.size() || normal.size() != ref.size())
+    throw UsageError("tune: a candidate's forces and the reference's differ in length");
+  Measured m;
+  double e2 = 0.0, l2 = 0.0;
+  std::size_t beyond = 0;
+  for (std::size_t t = 0; t < f.size(); ++t) {
+    const Vec3d d = f[t] - ref[t];
+    const double e = norm(d);
+    const double allowed = allowed_n(tol, norm(ref[t]));
+    e2 += e * e;
+    m.max_error_n = std::max(m.max_error_n, e);
+    if (e > allowed) ++beyond;
+    if (ratio(e, allowed) > m.worst_ratio) {
+      m.worst_ratio = ratio(e, allowed);
+      m.worst_error_n = e, m.worst_allowed_n = allowed, m.worst_force_n = norm(ref[t]);
+    }
+    const Vec3d lateral = d - dot(d, normal[t]) * normal[t];  // the friction part
+    l2 += dot(lateral, lateral);
+    if (t > 0) {
+      const double excess = norm(f[t] - f[t - 1]) - norm(ref[t] - ref[t - 1]);
+      m.step_excess_n = std::max(m.step_excess_n, excess);
+      m.step_ratio = std::max(m.step_ratio, ratio(excess, allowed));
+    }
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(f.size(), 1));
+  m.rms_error_n = std::sqrt(e2 / n);
+  m.lateral_rms_error_n = std::sqrt(l2 / n);
+  m.beyond_share = static_cast<double>(beyond) / n;
+  return m;
+}
+
+std::size_t judge(std::vector<Judged>& results, const Tolerance& tol, double period_us) {
   if (results.empty()) throw UsageError("tune: no candidates");
   const double budget_us = tol.tick_budget * period_us;
   for (std::size_t i = 0; i < results.size(); ++i) {
@@ -94,20 +173,13 @@ std::size_t judge(std::vector<Judged>& results, const Tolerance& tol, double tol
     const Measured& m = j.measured;
     j.chosen = false;
     j.reference = i == 0;
+    const std::string force = i > 0 ? force_verdict(m, tol) : std::string();
     if (m.tick_p99_us > budget_us) {
       j.accepted = false;
       j.reason = format("too slow: tick p99 %.2f us > %.2f us", m.tick_p99_us, budget_us);
-    } else if (i > 0 && m.rms_error_n > tolerance_n) {
+    } else if (!force.empty()) {
       j.accepted = false;
-      j.reason = format("force error: RMS %.3f N > %.3f N", m.rms_error_n, tolerance_n);
-    } else if (i > 0 && m.max_error_n > tol.max_factor * tolerance_n) {
-      j.accepted = false;
-      j.reason = format("force error: largest %.3f N > %.3f N", m.max_error_n,
-                        tol.max_factor * tolerance_n);
-    } else if (i > 0 && m.step_excess_n > tolerance_n) {
-      j.accepted = false;
-      j.reason = format("per-tick step %.3f N above the reference's (> %.3f N)", m.step_excess_n,
-                        tolerance_n);
+      j.reason = force;
     } else {
       j.accepted = true;
       j.reason = "accepted";
@@ -246,9 +318,14 @@ Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setu
   const Model reference(samplers.front().second, reference_tool, setup.params);
   const Run ref = run(reference, paths, true);
   double sq = 0.0;
-  for (const Vec3d& f : ref.force) sq += dot(f, f);
-  out.reference_rms_force_n = std::sqrt(sq / static_cast<double>(ref.force.size()));
-  out.tolerance_n = tolerance_for(setup.tolerance, out.reference_rms_force_n);
+  std::size_t light = 0;
+  for (const Vec3d& f : ref.force) {
+    sq += dot(f, f);
+    light += setup.tolerance.rel * norm(f) < setup.tolerance.abs_n;
+  }
+  const double n_ref = static_cast<double>(std::max<std::size_t>(ref.force.size(), 1));
+  out.reference_rms_force_n = std::sqrt(sq / n_ref);
+  out.light_share = static_cast<double>(light) / n_ref;
 
   std::size_t count = tools.size() * samplers.size();
   std::size_t index = 0;
@@ -257,44 +334,15 @@ Outcome tune(const DistanceMap& surf, const DistanceMap& bone, const Setup& setu
     for (const auto& [config, fields] : samplers) {
       Judged j;
       j.candidate = {tool_name, config};
-      const Model model(fields, tool, setup.params);
-      const Run r = run(model, paths, true);
-      Measured& m = j.measured;
-      double e2 = 0.0, l2 = 0.0;
-      for (std::size_t t = 0; t < r.force.size(); ++t) {
-        const Vec3d d = r.force[t] - ref.force[t];
-        const double e = norm(d);
-        e2 += e * e;
-        m.max_error_n = std::max(m.max_error_n, e);
-        const Vec3d n = ref.normal[t];
-        const Vec3d lateral = d - dot(d, n) * n;  // the friction part, in the skin's plane
-        l2 += dot(lateral, lateral);
-        if (t > 0) {
-          const double step = norm(r.force[t] - r.force[t - 1]);
-          const double ref_step = norm(ref.force[t] - ref.force[t - 1]);
-          m.step_excess_n = std::max(m.step_excess_n, step - ref_step);
-        }
-      }
-      const double n = static_cast<double>(std::max<std::size_t>(r.force.size(), 1));
-      m.rms_error_n = std::sqrt(e2 / n);
-      m.lateral_rms_error_n = std::sqrt(l2 / n);
-      // Timing: repeats of the whole set, each tick timed; medians over the repeats.
-      std::vector<double> p50, p99;
-      for (int k = 0; k < setup.repeats; ++k) {
-        Run timed = run(model, paths, false, kTimedRowsPerPath);
-        p50.push_back(quantile(timed.tick_us, 0.50));
-        p99.push_back(quantile(timed.tick_us, 0.99));
-      }
-      m.tick_p50_us = median(p50);
-      m.tick_p99_us = median(p99);
-      m.map_bytes = sampler_bytes(*fields);
+      j.measured = measure(Model(fields, tool, setup.params), paths, ref, setup);
+      j.measured.map_bytes = sampler_bytes(*fields);
       out.results.push_back(std::move(j));
       if (progress) progress(out.results.back(), index, count);
       ++index;
       if (index < count) check_budget("measuring the candidates");
     }
   }
-  out.chosen = judge(out.results, setup.tolerance, out.tolerance_n, out.period_us);
+  out.chosen = judge(out.results, setup.tolerance, out.period_us);
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cctype>
+#include <cstring>
 #include <ctime>
 
 #include "base/errors.hpp"
@@ -14,11 +15,21 @@ std::string topic_name(const std::string& rig, const char* leaf) {
 }
 
 bool valid_rig(const std::string& rig) {
-  if (rig.empty() || rig.size() > 63) return false;
+  if (rig.empty() || rig.size() > kMaxRigBytes) return false;
   if (std::isdigit(static_cast<unsigned char>(rig[0]))) return false;
   for (const char ch : rig)
     if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) return false;
   return true;
+}
+
+bool valid_rig(const char* rig) {
+  if (rig == nullptr) return false;
+  const std::size_t n = strnlen(rig, kMaxRigBytes + 1);
+  return n <= kMaxRigBytes && valid_rig(std::string(rig, n));
+}
+
+bool same_rig(const char* received, const std::string& rig) {
+  return valid_rig(received) && rig == received;
 }
 
 void check_rig(const std::string& rig) {
@@ -31,9 +42,9 @@ std::string default_rig() {
   char host[256] = {};
   if (gethostname(host, sizeof host - 1) != 0 || host[0] == '\0') return "palp";
   std::string rig;
-  for (const char* p = host; *p && rig.size() < 63; ++p)
+  for (const char* p = host; *p && rig.size() < kMaxRigBytes; ++p)
     rig += std::isalnum(static_cast<unsigned char>(*p)) ? *p : '_';
-  if (std::isdigit(static_cast<unsigned char>(rig[0]))) rig = ("h" + rig).substr(0, 63);
+  if (std::isdigit(static_cast<unsigned char>(rig[0]))) rig = ("h" + rig).substr(0, kMaxRigBytes);
   return valid_rig(rig) ? rig : "palp";
 }
 

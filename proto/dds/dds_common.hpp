@@ -4,7 +4,9 @@
 // information kept). Participants use Cyclone's default configuration: CYCLONEDDS_URI is honoured.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,8 +31,18 @@ inline constexpr const char* kRigsTopic = "rt/palp/rigs";  // palp::dds::RigInfo
 
 // "rt/palp/<rig>/<leaf>".
 std::string topic_name(const std::string& rig, const char* leaf);
-// A rig name: 1..63 of [A-Za-z0-9_], not starting with a digit (a ROS 2 topic name token).
+// The longest rig name, bytes. The keyed types (Encoded, RigInfo) carry `rig` as an unbounded
+// string (palp_types.idl says why), so palp enforces this bound itself: palpd publishes only a
+// valid rig (check_rig at start) and subscribers drop a received sample whose rig is not valid.
+inline constexpr std::size_t kMaxRigBytes = 63;
+// A rig name: 1..kMaxRigBytes of [A-Za-z0-9_], not starting with a digit (a ROS 2 topic name
+// token).
 bool valid_rig(const std::string& rig);
+// The same for a string received from the domain (null: false): reads at most kMaxRigBytes + 1
+// bytes of it, whatever its length.
+bool valid_rig(const char* rig);
+// `received` (a sample's rig) is valid and equals `rig`; reads at most kMaxRigBytes + 1 bytes.
+bool same_rig(const char* received, const std::string& rig);
 // UsageError saying what a rig name may be, unless valid.
 void check_rig(const std::string& rig);
 // The host name with every other character made '_' (a leading digit prefixed), or "palp".
@@ -87,9 +99,13 @@ std::int64_t realtime_ns();
 builtin_interfaces_msg_dds__Time_ to_time(std::int64_t ns);
 std::int64_t from_time(const builtin_interfaces_msg_dds__Time_& t);
 
-// A copy of a DDS string (null: "").
+// A copy of a DDS string (null: ""); with `max`, of at most its first `max` bytes (reading no
+// further).
 inline std::string text(const char* s) {
   return s ? std::string(s) : std::string();
+}
+inline std::string text(const char* s, std::size_t max) {
+  return s ? std::string(s, strnlen(s, max)) : std::string();
 }
 
 // A haptic frame as a frame_batch entry (palpd), and back (subscribers): the fields both types

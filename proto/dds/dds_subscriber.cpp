@@ -86,7 +86,11 @@ std::size_t RigSubscriber::take(const Handlers& h) {
   for (const auto& [r, leaf] : encoded)
     if (r)
       n += take_all<palp_dds_Encoded>(r, [&, leaf = leaf](const palp_dds_Encoded& s) {
-        if (h.encoded) h.encoded(leaf, s);
+        // Its rig is an unbounded string on the wire: checked (and bounded) before use.
+        if (!same_rig(s.rig, options_.rig))
+          ++foreign_;
+        else if (h.encoded)
+          h.encoded(leaf, s);
       });
   if (frames_)
     n += take_all<palp_dds_HapticFrame>(frames_, [&](const palp_dds_HapticFrame& s) {
@@ -139,15 +143,16 @@ std::vector<RigSeen> list_rigs(std::uint32_t domain, double listen_s) {
   const dds_return_t n = dds_read(r, samples, infos, kBatch, kBatch);
   for (dds_return_t i = 0; i < n; ++i) {
     const auto& s = *static_cast<const palp_dds_RigInfo*>(samples[i]);
+    // The key (valid in an invalid sample too) is an unbounded string on the wire: a rig name
+    // that is not one is ignored, the other strings are cut to kMaxRigText bytes.
+    if (!valid_rig(s.rig)) continue;
     RigSeen& rig = seen[s.rig];
-    rig.alive = infos[i].instance_state == DDS_IST_ALIVE;
-    if (!infos[i].valid_data) {
-      rig.rig = s.rig;  // the key fields are valid in an invalid sample
-      continue;
-    }
     rig.rig = s.rig;
-    rig.host = text(s.host), rig.scene = text(s.scene), rig.tool = text(s.tool);
-    rig.device = text(s.device), rig.pid = s.pid, rig.rate_hz = s.rate_hz;
+    rig.alive = infos[i].instance_state == DDS_IST_ALIVE;
+    if (!infos[i].valid_data) continue;
+    rig.host = text(s.host, kMaxRigText), rig.scene = text(s.scene, kMaxRigText);
+    rig.tool = text(s.tool, kMaxRigText), rig.device = text(s.device, kMaxRigText);
+    rig.pid = s.pid, rig.rate_hz = s.rate_hz;
     rig.control = s.control, rig.started_ns = from_time(s.started);
   }
   if (n > 0) dds_return_loan(r, samples, n);

@@ -51,12 +51,15 @@ class RigSubscriber {
   std::uint32_t frame_writers() const;
   const SubscriberOptions& options() const { return options_; }
   std::uint64_t batches() const { return batches_; }  // FrameBatches taken so far
+  // Scene, stats and volume samples dropped because their rig was not options().rig (or not a
+  // valid rig name at all).
+  std::uint64_t foreign() const { return foreign_; }
 
  private:
   SubscriberOptions options_;
   Entity participant_;
   dds_entity_t waitset_ = 0;
-  std::uint64_t batches_ = 0;
+  std::uint64_t batches_ = 0, foreign_ = 0;
   dds_entity_t batch_ = 0, frames_ = 0, pose_ = 0, wrench_ = 0, scene_ = 0, stats_ = 0, volume_ = 0;
 };
 
@@ -68,8 +71,10 @@ struct RigSeen {
   bool alive = true;  // false: its palpd said goodbye (disposed) or vanished
   std::int64_t started_ns = 0;
 };
+// The longest host, scene, tool or device name list_rigs keeps (longer ones are cut).
+inline constexpr std::size_t kMaxRigText = 1024;
 // The rigs announced on `domain` within `listen_s` seconds (late joiners get them at once; the
-// wait is for discovery), by name.
+// wait is for discovery), by name; at most 64 samples, those with an invalid rig name ignored.
 std::vector<RigSeen> list_rigs(std::uint32_t domain, double listen_s);
 
 }  // namespace palp::dds

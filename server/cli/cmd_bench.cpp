@@ -14,6 +14,7 @@
 #include "base/errors.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli/config_file.hpp"
 #include "cli/model_setup.hpp"
 #include "model/force_model.hpp"
 #include "model/map_window.hpp"
@@ -27,6 +28,7 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kBenchUsage =
     R"(usage: palp bench --scene SCENE --tool TOOL --ticks N [options]
+       palp bench --config FILE [--ticks N] [options]
 
 Times the force model's tick in-process: after a warm-up, each tick is timed with steady_clock
 (the clock's own cost, printed, is included). The poses come from --trajectory, or by default
@@ -49,6 +51,9 @@ constexpr const char* kBenchOptions =
   --ticks-csv FILE        also write every timed tick as CSV (tick, pose, ns, status,
                           in_contact; status as in force_model.hpp): where the tail comes from
                           (tests/bench/tick_tail.py reads it)
+  --config FILE           TOML with scene, tool, model, scheme, storage, param (e.g. what
+                          palp tune --out writes): bench that configuration; the command line
+                          wins
   -q, --quiet             print only the JSON line
   -h, --help              show this help
 )";
@@ -190,10 +195,13 @@ std::string json_string(const std::string& text) {
 }  // namespace
 
 int cmd_bench(const Arguments& argv_in) {
-  Arguments argv = argv_in;
+  // --config FILE: the configuration `palp tune --out` chose (or a palpd config's model keys),
+  // read as palp run --config reads it; the command line wins.
+  Arguments argv = with_model_config(argv_in);
   const std::vector<std::string> assignments = take_repeated(argv, "param");
   std::vector<std::string> valued = kSceneOptions;
-  valued.insert(valued.end(), {"tool", "ticks", "warmup", "trajectory", "window-mm", "ticks-csv"});
+  valued.insert(valued.end(),
+                {"tool", "ticks", "warmup", "trajectory", "window-mm", "ticks-csv", "config"});
   const Args args(argv, {"help", "quiet"}, valued);
   if (args.has("help")) {
     std::cout << kBenchUsage << kSceneOptionsHelp << kBenchOptions;

@@ -108,18 +108,8 @@ void print_summary(const RunSummary& s, std::size_t ticks, const std::string& ou
 
 int cmd_run(const Arguments& argv_in) {
   // --config FILE: the model keys of a palpd config or a `palp tune --out` file, before the
-  // command line's options (which win); `rate` is the loop rate the file was tuned for and is
-  // not used here (a run follows the trajectory's own times).
-  Arguments argv;
-  const bool help = std::find(argv_in.begin(), argv_in.end(), "--help") != argv_in.end() ||
-                    std::find(argv_in.begin(), argv_in.end(), "-h") != argv_in.end();
-  if (const auto config = help ? std::nullopt : config_path(argv_in)) {
-    for (std::string& a : config_arguments(*config, {},
-                                           {"scene", "tool", "model", "scheme", "storage", "param",
-                                            "rate"}))
-      if (a.rfind("--rate=", 0) != 0) argv.push_back(std::move(a));
-  }
-  argv.insert(argv.end(), argv_in.begin(), argv_in.end());
+  // command line's options (which win).
+  Arguments argv = with_model_config(argv_in);
   const std::vector<std::string> assignments = take_repeated(argv, "param");
   std::vector<std::string> valued = kSceneOptions;
   valued.insert(valued.end(), {"tool", "trajectory", "out", "device-profile", "config"});

@@ -112,4 +112,17 @@ std::optional<std::string> config_path(const Arguments& argv) {
   return std::nullopt;
 }
 
+Arguments with_model_config(const Arguments& argv) {
+  const bool help = std::find(argv.begin(), argv.end(), "--help") != argv.end() ||
+                    std::find(argv.begin(), argv.end(), "-h") != argv.end();
+  const auto config = help ? std::nullopt : config_path(argv);
+  if (!config) return argv;
+  Arguments out;
+  // `rate` is the loop rate the file was tuned for: an offline run follows its own times.
+  for (std::string& a : config_arguments(*config, {}, kModelConfigKeys))
+    if (a.rfind("--rate=", 0) != 0) out.push_back(std::move(a));
+  out.insert(out.end(), argv.begin(), argv.end());
+  return out;
+}
+
 }  // namespace palp::cli

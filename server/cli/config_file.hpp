@@ -31,4 +31,14 @@ std::optional<std::string> config_value(const std::string& path, const std::stri
 // "--config FILE" / "--config=FILE" in argv, found without parsing the rest.
 std::optional<std::string> config_path(const Arguments& argv);
 
+// The model keys a command that runs the force model offline (palp run, palp bench) reads from
+// `--config FILE`: scene, tool, model, scheme, storage, param (and rate, read and not used), as a
+// `palp tune --out` file or a palpd config has them.
+inline const std::vector<std::string> kModelConfigKeys = {"scene",   "tool",  "model", "scheme",
+                                                          "storage", "param", "rate"};
+
+// `argv` with FILE's model keys (kModelConfigKeys but rate) as "--key=value" before its own
+// options, which win; `argv` unchanged without --config, or with --help / -h.
+Arguments with_model_config(const Arguments& argv);
+
 }  // namespace palp::cli

@@ -42,7 +42,7 @@ struct StartTuning {
 
 // The cache file name (hex, no directory) of a tuning of the maps in prep_dir (their bytes are
 // hashed) refined in memory to map_spacing_mm or not, for a tool, rate, parameters and machine
-// class.
+// class, and the tuner's default tolerance (with the version of how it is applied).
 std::string tune_cache_key(const std::string& prep_dir, double map_spacing_mm,
                            const std::string& tool, double rate_hz, const ForceParams& params,
                            const std::string& machine);

@@ -298,10 +298,14 @@ class DdsPublisher::Impl {
     if (rc != DDS_RETCODE_OK) write_errors_.fetch_add(1, std::memory_order_relaxed);
   }
 
+  // The rig as the keyed types carry it (an unbounded string in the IDL): config_.rig, checked
+  // by check_rig in the constructor (at most kMaxRigBytes) and not changed since.
+  char* rig_key() { return config_.rig.data(); }
+
   void write_encoded(dds_entity_t w, std::uint32_t index, std::uint32_t n, std::uint64_t version,
                      std::vector<std::uint8_t>& bytes) {
     palp_dds_Encoded e{};
-    std::snprintf(e.rig, sizeof e.rig, "%s", config_.rig.c_str());
+    e.rig = rig_key();
     e.index = index, e.count = n, e.version = version;
     e.stamp = palp::dds::to_time(palp::dds::realtime_ns());
     e.payload._length = e.payload._maximum = static_cast<std::uint32_t>(bytes.size());
@@ -339,7 +343,7 @@ class DdsPublisher::Impl {
 
   void write_rig(bool alive) {
     palp_dds_RigInfo r{};
-    std::snprintf(r.rig, sizeof r.rig, "%s", config_.rig.c_str());
+    r.rig = rig_key();
     if (!alive) {
       dds_dispose(rigs_w_, &r);
       return;

@@ -38,7 +38,7 @@ bool matched(dds_entity_t w, std::uint32_t n) {
 
 palp_dds_Encoded encoded(const char* rig, std::uint32_t index, std::vector<std::uint8_t>& bytes) {
   palp_dds_Encoded e{};
-  std::snprintf(e.rig, sizeof e.rig, "%s", rig);
+  e.rig = const_cast<char*>(rig);  // the key: an unbounded string (palp_types.idl)
   e.index = index;
   e.count = 1;
   e.version = 7;
@@ -229,7 +229,7 @@ TEST_F(DdsSubscriber, RigsAreSeparateAndListed) {
   char host[] = "bench", scene[] = "phantom:cube", tool[] = "finger:1", device[] = "sim";
   for (const char* name : {"rig_b", "rig_a"}) {
     palp_dds_RigInfo info{};
-    std::snprintf(info.rig, sizeof info.rig, "%s", name);
+    info.rig = const_cast<char*>(name);
     info.host = host, info.scene = scene, info.tool = tool, info.device = device;
     info.rate_hz = 1000, info.pid = 42;
     ASSERT_EQ(dds_write(wr, &info), DDS_RETCODE_OK);
@@ -241,6 +241,66 @@ TEST_F(DdsSubscriber, RigsAreSeparateAndListed) {
   EXPECT_EQ(rigs[1].scene, "phantom:cube");
   EXPECT_EQ(rigs[1].rate_hz, 1000);
   EXPECT_TRUE(rigs[1].alive);
+}
+
+// The keyed types carry `rig` as an unbounded string (palp_types.idl): whoever writes on the
+// domain can send any length. A subscriber uses a sample only when its rig is the one it asked
+// for, and the rig list only valid rig names (at most kMaxRigBytes), the other strings cut.
+TEST_F(DdsSubscriber, ARigThatIsNotOneIsIgnored) {
+  const std::uint32_t domain = unique_dds_domain();
+  Entity pub = make_participant(domain);
+  const dds_entity_t ws =
+      writer(pub.get(), &palp_dds_Encoded_desc, topic_name("mine", kScene), QosKind::Latched, 4);
+  const dds_entity_t wr =
+      writer(pub.get(), &palp_dds_RigInfo_desc, kRigsTopic, QosKind::Latched, 1);
+  SubscriberOptions o;
+  o.domain = domain;
+  o.rig = "mine";
+  o.frames = o.stats = false;
+  RigSubscriber sub(o);
+  ASSERT_TRUE(matched(ws, 1));
+  std::string long_rig(100000, 'm');  // "mine" is its prefix: not the same rig all the same
+  long_rig.replace(0, 4, "mine");
+  std::vector<std::uint8_t> bytes = {9};
+  for (const char* rig : {long_rig.c_str(), "other", "mine"}) {
+    palp_dds_Encoded e = encoded(rig, 0, bytes);
+    ASSERT_EQ(dds_write(ws, &e), DDS_RETCODE_OK);
+  }
+  std::vector<std::string> got;
+  Handlers h;
+  h.encoded = [&](const char*, const palp_dds_Encoded& s) {
+    got.push_back(std::string(s.rig).substr(0, 16));  // (a failure prints 16 bytes, not 100 kB)
+  };
+  for (int i = 0; i < 100 && got.empty(); ++i)
+    if (sub.wait(0.1)) sub.take(h);
+  EXPECT_EQ(got, std::vector<std::string>{"mine"});
+  EXPECT_EQ(sub.foreign(), 2u);
+
+  std::string long_host(5000, 'h');
+  char scene[] = "phantom:cube", tool[] = "finger:1", device[] = "sim";
+  for (const std::string& name : {long_rig, std::string("a-b"), std::string("ok_rig")}) {
+    palp_dds_RigInfo info{};
+    info.rig = const_cast<char*>(name.c_str());
+    info.host = long_host.data(), info.scene = scene, info.tool = tool, info.device = device;
+    ASSERT_EQ(dds_write(wr, &info), DDS_RETCODE_OK);
+  }
+  const std::vector<RigSeen> rigs = list_rigs(domain, 1.0);
+  ASSERT_EQ(rigs.size(), 1u);
+  EXPECT_EQ(rigs[0].rig, "ok_rig");
+  EXPECT_EQ(rigs[0].host.size(), kMaxRigText);
+  EXPECT_TRUE(rigs[0].host == long_host.substr(0, kMaxRigText));
+}
+
+TEST(DdsRigBound, ReceivedNamesAreReadOnlyUpToTheBound) {
+  EXPECT_FALSE(valid_rig(static_cast<const char*>(nullptr)));
+  EXPECT_TRUE(valid_rig(std::string(kMaxRigBytes, 'r').c_str()));
+  EXPECT_FALSE(valid_rig(std::string(kMaxRigBytes + 1, 'r').c_str()));
+  EXPECT_TRUE(same_rig("bed1", "bed1"));
+  EXPECT_FALSE(same_rig("bed1", "bed2"));
+  EXPECT_FALSE(same_rig(nullptr, "bed1"));
+  // Not NUL-terminated within the bound: no byte past kMaxRigBytes + 1 is read (ASan would say).
+  std::vector<char> unterminated(kMaxRigBytes + 1, 'r');
+  EXPECT_FALSE(valid_rig(unterminated.data()));
 }
 
 }  // namespace

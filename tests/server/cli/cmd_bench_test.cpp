@@ -62,10 +62,11 @@ TEST(CmdBench, WritesEveryTimedTickAsCsv) {
   // --ticks-csv: one row per timed tick, pose indices running back and forth over the path,
   // the JSON's contact mean recomputed from the rows.
   const fs::path csv = shared_cli_dir() / "bench_ticks.csv";
-  const auto r = run_palp_cli("bench --scene phantom:cube --tool finger:7 --ticks 500 --warmup 0 "
-                              "-q --ticks-csv " +
-                                  csv.string(),
-                              cache(), true);
+  const auto r = run_palp_cli(
+      "bench --scene phantom:cube --tool finger:7 --ticks 500 --warmup 0 "
+      "-q --ticks-csv " +
+          csv.string(),
+      cache(), true);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto json = nlohmann::json::parse(last_line(r.output));
   std::ifstream in(csv);
@@ -96,6 +97,45 @@ TEST(CmdBench, WritesEveryTimedTickAsCsv) {
   EXPECT_EQ(rows, 500);
   EXPECT_NEAR(contacts / rows, json["in_contact_mean"].get<double>(), 1e-3);
   EXPECT_EQ(static_cast<double>(max_ns), json["tick_ns_max"].get<double>());
+}
+
+// --config FILE: the file `palp tune --out` writes (written here by hand, with what tune would
+// choose on a small scene) is what gets timed: its scene, tool, scheme, storage and param, its
+// rate read and not used; the command line wins; a key bench has no use for is refused.
+TEST(CmdBench, BenchesTheConfigurationOfATuneFile) {
+  const fs::path dir = shared_cli_dir() / "bench_config";
+  fs::create_directories(dir);
+  const fs::path config = dir / "tuned.toml";
+  std::ofstream(config) << "# chosen: finger:7 analytic int16\n"
+                           "scene = \"phantom:cube\"\ntool = \"finger:7\"\nmodel = \"palp\"\n"
+                           "scheme = \"analytic\"\nstorage = \"int16\"\nrate = 4000\n"
+                           "param = [\"k=0.3\"]\n";
+  const auto r = run_palp_cli("bench --config " + config.string() + " --ticks 500 -q", cache(),
+                              /*stdout_only=*/true);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto json = nlohmann::json::parse(last_line(r.output));
+  EXPECT_EQ(json["scene"], "phantom:cube");
+  EXPECT_EQ(json["tool"], "finger:7");
+  EXPECT_EQ(json["contacts"], 7);
+  EXPECT_EQ(json["scheme"], "analytic");
+  EXPECT_EQ(json["storage"], "int16");
+  EXPECT_EQ(json["ticks"], 500);
+
+  const auto wins = run_palp_cli(
+      "bench --config=" + config.string() + " --storage float32 --tool finger:1 --ticks 500 -q",
+      cache(), true);
+  ASSERT_EQ(wins.exit_code, 0) << wins.output;
+  const auto j2 = nlohmann::json::parse(last_line(wins.output));
+  EXPECT_EQ(j2["storage"], "float32");
+  EXPECT_EQ(j2["scheme"], "analytic");
+  EXPECT_EQ(j2["tool"], "finger:1");
+
+  const fs::path palpd_only = dir / "palpd.toml";
+  std::ofstream(palpd_only) << "scene = \"phantom:cube\"\ntool = \"finger:7\"\nport = 7000\n";
+  const auto refused = run_palp_cli("bench --config " + palpd_only.string(), cache());
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("key 'port': unknown key"), std::string::npos) << refused.output;
+  fs::remove_all(dir);
 }
 
 TEST(CmdBench, HelpAndUsageMistakes) {

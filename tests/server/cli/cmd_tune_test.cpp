@@ -55,6 +55,21 @@ TEST(CmdTune, WritesAConfigThatPalpRunReads) {
                                 cache());
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_TRUE(fs::exists(dir / "f.csv"));
+
+  // palp bench --config times the configuration the file names.
+  const auto bench = run_palp_cli("bench --config " + out.string() + " --ticks 200 -q", cache(),
+                                  /*stdout_only=*/true);
+  ASSERT_EQ(bench.exit_code, 0) << bench.output;
+  const std::string json = palp::testing::last_line(bench.output);
+  for (const std::string key : {"scheme", "storage"}) {
+    const std::size_t in_config = config.find(key + " = \"");
+    ASSERT_NE(in_config, std::string::npos) << key;
+    const std::size_t from = in_config + key.size() + 4;
+    const std::string value = config.substr(from, config.find('"', from) - from);
+    std::string want = "\"";
+    want.append(key).append("\":\"").append(value).append("\"");
+    EXPECT_NE(json.find(want), std::string::npos) << want << " in " << json;
+  }
 }
 
 TEST(CmdTune, HelpAndUsageMistakes) {
