@@ -103,8 +103,11 @@ Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool)
     : Model(std::move(fields), tool, default_params(tool.kind)) {}
 
 State make_state(const Model& model) {
+  return make_state(model.contact_count());
+}
+
+State make_state(std::size_t n) {
   State st;
-  const std::size_t n = model.contact_count();
   st.x.assign(n, Vec3d{});
   st.s.assign(n, Vec3d{});
   st.s_prev.assign(n, Vec3d{});

@@ -241,6 +241,8 @@ struct State {
 
 // A State sized for the model, every point out of contact.
 State make_state(const Model& model);
+// A State for `contact_count` points (the tick's stages alone, in tests).
+State make_state(std::size_t contact_count);
 // Forgets all contacts and outputs (keeps the allocation).
 void reset(State& state);
 

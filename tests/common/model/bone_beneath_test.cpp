@@ -11,6 +11,7 @@
 #include "base/errors.hpp"
 #include "model/field_sampler.hpp"
 #include "prep/maps/distance_transform.hpp"
+#include "support/linear_map.hpp"
 
 namespace palp {
 namespace {
@@ -27,14 +28,7 @@ Grid grid() {
 
 // D(p) = a . p + b at every voxel centre.
 DistanceMap linear_map(Vec3d a, double b) {
-  DistanceMap m(grid(), 0.0f);
-  for (std::int64_t k = 0; k < kDims[2]; ++k)
-    for (std::int64_t j = 0; j < kDims[1]; ++j)
-      for (std::int64_t i = 0; i < kDims[0]; ++i)
-        m.at(i, j, k) = static_cast<float>(
-            dot(a, Vec3d{static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)}) +
-            b);
-  return m;
+  return test::linear_map(kDims, a, b);
 }
 
 // Bone over voxel rows z_lo..z_hi and columns x in `xs` ranges, as signed distances of the mask.

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "support/heap_allocation_counter.hpp"
+#include "support/linear_map.hpp"
 
 #include <atomic>
 #include <cmath>
@@ -36,17 +37,7 @@ constexpr Storage kStorages[] = {Storage::Float32, Storage::Int16, Storage::Inte
 
 // D(p) = a . p + b at every voxel centre.
 DistanceMap linear_map(Vec3d a, double b, Index3 dims = kDims) {
-  Grid g;
-  g.dims = dims;
-  g.spacing = {1.0, 1.0, 1.0};
-  DistanceMap m(g, 0.0f);
-  for (std::int64_t k = 0; k < dims[2]; ++k)
-    for (std::int64_t j = 0; j < dims[1]; ++j)
-      for (std::int64_t i = 0; i < dims[0]; ++i)
-        m.at(i, j, k) = static_cast<float>(
-            dot(a, Vec3d{static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)}) +
-            b);
-  return m;
+  return test::linear_map(dims, a, b);
 }
 
 DistanceMap flat_skin() {

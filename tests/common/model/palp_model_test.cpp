@@ -12,6 +12,7 @@
 #include "base/errors.hpp"
 #include "model/force_model.hpp"
 #include "prep/maps/distance_transform.hpp"
+#include "support/linear_map.hpp"
 
 namespace palp {
 namespace {
@@ -22,19 +23,7 @@ const Index3 kDims{101, 41, 41};
 
 // D(p) = a . p + b at every voxel centre, clamped to +-band (a distance map's band).
 DistanceMap linear_map(Vec3d a, double b, double band = 1e9) {
-  Grid g;
-  g.dims = kDims;
-  g.spacing = {1.0, 1.0, 1.0};
-  DistanceMap m(g, 0.0f);
-  for (std::int64_t k = 0; k < kDims[2]; ++k)
-    for (std::int64_t j = 0; j < kDims[1]; ++j)
-      for (std::int64_t i = 0; i < kDims[0]; ++i) {
-        const double v =
-            dot(a, Vec3d{static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)}) +
-            b;
-        m.at(i, j, k) = static_cast<float>(std::clamp(v, -band, band));
-      }
-  return m;
+  return test::linear_map(kDims, a, b, band);
 }
 
 DistanceMap flat_skin(double band = 1e9) {

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "model/tool.hpp"
+#include "support/linear_map.hpp"
 
 namespace palp {
 namespace {
@@ -22,41 +23,12 @@ const Index3 kDims{41, 41, 41};
 
 // D(p) = a . p + b at every voxel centre (1 mm voxels).
 DistanceMap linear_map(Vec3d a, double b) {
-  Grid g;
-  g.dims = kDims;
-  g.spacing = {1.0, 1.0, 1.0};
-  DistanceMap m(g, 0.0f);
-  for (std::int64_t k = 0; k < kDims[2]; ++k)
-    for (std::int64_t j = 0; j < kDims[1]; ++j)
-      for (std::int64_t i = 0; i < kDims[0]; ++i)
-        m.at(i, j, k) = static_cast<float>(
-            dot(a, Vec3d{static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)}) +
-            b);
-  return m;
+  return test::linear_map(kDims, a, b);
 }
 
 // Skin at z = 20.25; bone below z = top (D_bone = top - z: positive inside, normal +z).
 FieldSampler skin_over_bone(double top) {
   return FieldSampler(linear_map({0, 0, -1}, kZ0), linear_map({0, 0, -1}, top));
-}
-
-// A state for `n` points, every one out of contact.
-State state_for(std::size_t n) {
-  State st;
-  st.x.assign(n, Vec3d{});
-  st.s.assign(n, Vec3d{});
-  st.s_prev.assign(n, Vec3d{});
-  st.p.assign(n, Vec3d{});
-  st.f.assign(n, Vec3d{});
-  st.f_friction.assign(n, Vec3d{});
-  st.f_bone.assign(n, Vec3d{});
-  st.depth.assign(n, 0.0);
-  st.in_contact.assign(n, 0);
-  st.bone_anchor.assign(n, Vec3d{});
-  st.bone_normal.assign(n, Vec3d{});
-  st.bone_latch.assign(n, kBoneFree);
-  st.normal.assign(n, Vec3d{});
-  return st;
 }
 
 // Calls f(access) with the sampler's FieldAccess.
@@ -92,7 +64,7 @@ TEST(TickStages, ContactIsDSurfPositiveAndTheNormalPointsOutOfTheSkin) {
   const ForceParams prm;
   with_access(fields, [&](const auto& a) {
     TickRun run = begin_tick(prm, true, 0.5, Pose{});
-    State st = state_for(1);
+    State st = make_state(1);
     PointWork w;
     w.x = w.xc = {20, 20, kZ0 + 1.0};  // 1 mm above the skin
     sample_skin(a, run, w);
@@ -115,7 +87,7 @@ TEST(TickStages, ContactIsDSurfPositiveAndTheNormalPointsOutOfTheSkin) {
 
 TEST(TickStages, WithoutAGradientOnlyThePalpDirectionKeepsTheLastNormal) {
   const ForceParams prm;
-  State st = state_for(1);
+  State st = make_state(1);
   st.normal[0] = {0, 1, 0};
   PointWork w;
   w.skin.value = 3.0;  // no gradient
@@ -186,7 +158,7 @@ TEST(TickStages, BoneProxyRemembersLatchesAndPushesBackWithItsSpring) {
   const FieldSampler fields = skin_over_bone(10.5);
   with_access(fields, [&](const auto& a) {
     for (const BoneProxyRule rule : {kPaperBoneProxy, kPalpBoneProxy}) {
-      State st = state_for(1);
+      State st = make_state(1);
       const ProxyStep above = proxy_step(a, rule, st, 12.0, true);
       EXPECT_EQ(above.latch, kBoneAnchor);
       EXPECT_NEAR(st.bone_anchor[0].z, 10.5, 1e-6);  // the surface straight beneath
@@ -218,7 +190,7 @@ TEST(TickStages, BoneProxyCatchesAPathThroughAThinPlate) {
     }
   const FieldSampler fields(linear_map({0, 0, -1}, kZ0), std::move(plate));
   with_access(fields, [&](const auto& a) {
-    State st = state_for(1);
+    State st = make_state(1);
     EXPECT_EQ(proxy_step(a, kPalpBoneProxy, st, 12.0, true).latch, kBoneAnchor);
     const ProxyStep through = proxy_step(a, kPalpBoneProxy, st, 8.0, false);
     EXPECT_EQ(through.latch, kBoneLatched);
@@ -231,7 +203,7 @@ TEST(TickStages, TheRulesDifferOnlyWhereTheyAreDocumented) {
   // the skin normal, palp along the bone's. Bone below z = 10.5 tilted: D_bone = 10.5 - z + 0.5 x'.
   const FieldSampler fields(linear_map({0, 0, -1}, kZ0), linear_map({0.5, 0, -1}, 10.5 - 10.0));
   with_access(fields, [&](const auto& a) {
-    State paper = state_for(1), palp = state_for(1);
+    State paper = make_state(1), palp = make_state(1);
     const ProxyStep pp = proxy_step(a, kPaperBoneProxy, paper, 9.0, true);
     const ProxyStep pl = proxy_step(a, kPalpBoneProxy, palp, 9.0, true);
     ASSERT_EQ(pp.latch, kBoneLatched);
@@ -245,7 +217,7 @@ TEST(TickStages, TheRulesDifferOnlyWhereTheyAreDocumented) {
 
 TEST(TickStages, SkinLawsAndSurfacePoint) {
   ForceParams prm;
-  State st = state_for(1);
+  State st = make_state(1);
   PointWork w;
   w.skin.value = 10.0;
   w.v_s = {0, 0, 1};
@@ -311,7 +283,7 @@ TEST(TickStages, CoulombFrictionIsBoundedByMuFn) {
 TEST(TickStages, CommitDropsNonFinitePointsAndOutputsAreMeans) {
   TickRun run;
   run.xd = {0, 0, 0};
-  State st = state_for(2);
+  State st = make_state(2);
   PointWork a;
   a.x = a.xc = {1, 0, 0};
   a.f_surf = {0, 0, 2};
