@@ -494,6 +494,18 @@ Placed torso_placement() {
 // palpd's loop pressing the torso phantom through the emulated mechanism: the force the motors
 // put on the handle is the model's force through the limits; then an unplug mid-press zeroes the
 // force within one tick, and a replug reloads the firmware, asks for homing and ramps in.
+// `force` (N, Falcon frame) as the motors can render it at `position_mm`: scaled by one factor
+// where an effort would pass the documented cap, by libnifalcon's kinematics (falconref).
+Vec3d capped_by_reference(const Vec3d& force, const Vec3d& position_mm) {
+  falconref::V3 out{};
+  if (!falconref::efforts({position_mm.x * 1e-3, position_mm.y * 1e-3, position_mm.z * 1e-3},
+                          {force.x, force.y, force.z}, out, 1e30))
+    return force;
+  const double largest = std::max({std::fabs(out[0]), std::fabs(out[1]), std::fabs(out[2])});
+  const double cap = falconref::kDocumentedEffortCap;
+  return largest > cap ? force * (cap / largest) : force;
+}
+
 TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
   const Placed placed = torso_placement();
   EmulatedFalcon emu(*testbed_, fake_firmware());
@@ -545,8 +557,12 @@ TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
   double pressed = 0.0;
   Vec3d sum_commanded{}, sum_handle{};
   for (int i = 0; i < 100; ++i) {
-    const Vec3d commanded = tap.force();
-    const Vec3d at_handle = emu.snapshot().motor_force;
+    const auto snap = emu.snapshot();
+    // What the motors can render of the loop's force where the handle is: all of it, or, past
+    // the documented effort cap, all three efforts scaled by one factor (the reference's own
+    // kinematics, not palp's): the press may reach 8 N where the cap leaves less.
+    const Vec3d commanded = capped_by_reference(tap.force(), snap.position);
+    const Vec3d at_handle = snap.motor_force;
     if (norm(commanded) > 0.5) errors.push_back(norm(at_handle - commanded) / norm(commanded));
     pressed = std::max(pressed, norm(commanded));
     sum_commanded += commanded;
@@ -563,7 +579,11 @@ TEST_F(FalconTest, ClosedLoopPressesTheTorsoThenSurvivesUnplugAndReplug) {
       errors.size());
   EXPECT_GT(pressed, 1.0);
   EXPECT_LE(pressed, 8.0 + 1e-9);  // the falcon profile's limit
-  EXPECT_LT(mean_error, 0.02);     // the efforts' rounding (< 1 %) and a stall's zero sample
+  // The efforts' rounding (< 1 %), a stall's zero sample, and the press ringing through the
+  // coupling widened for the Falcon's declared 2 ms delay (force and handle read at different
+  // instants: 2-15 % apart in the mean over one second on a 2-core VM); a wrong sign, axis or
+  // Jacobian is off by 100 % or more.
+  EXPECT_LT(mean_error, 0.25);
   EXPECT_GT(emu.snapshot().motor_force.y, 0.5);  // pushed back up, toward anterior
   EXPECT_EQ(emu.snapshot().over_cap, 0u);        // no motor beyond the documented cap
 
