@@ -46,7 +46,7 @@ constexpr double kHoldMargin = 0.01;
 struct TickRun {
   const ForceParams* prm = nullptr;
   bool pose_ok = false;
-  Quat q{};                // the device's orientation, normalised (identity-free when !pose_ok)
+  Quat q{};                // the device's orientation, normalised (identity when !pose_ok)
   Vec3d xd{};              // the device point (scene mm)
   bool bone_on = false;    // a bone map and bone terms enabled
   double bone_step = 0.0;  // mm between samples when looking for bone on a segment

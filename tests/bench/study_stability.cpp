@@ -317,13 +317,6 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
   return r;
 }
 
-std::string fmt(double v, const char* f) {
-  if (std::isnan(v)) return "n/a";
-  char b[32];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
-
 }  // namespace
 }  // namespace palp::study
 

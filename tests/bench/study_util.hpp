@@ -92,6 +92,14 @@ inline double median(std::vector<double> v) {
   return percentile(std::move(v), 0.5);
 }
 
+// v printed with the printf format f (one conversion), "n/a" for NaN (a figure not measured).
+inline std::string fmt(double v, const char* f) {
+  if (std::isnan(v)) return "n/a";
+  char b[32];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
 inline double now_seconds() {
   using clock = std::chrono::steady_clock;
   return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
