@@ -5,9 +5,11 @@
 //     surf_job   skin points (CT + body -> iso-surface points on the mask's edges, subvoxel
 //                only), d_surf (body + skin points -> signed distance map, projected onto the
 //                HU iso-surface), write d_surf; the job holds the CT until its projection is done
-//     this one   HU levels, bone mask (CT + body -> bone), bone points (subvoxel only), then
-//                waits for surf_job
+//     this one   HU levels, vessels (CT + body + levels -> contrast-filled lumens, contrast
+//                phase), bone mask (CT + body - lumens -> bone), bone points (subvoxel only),
+//                then waits for surf_job
 //   d_bone       bone (+ bone points) -> signed distance map, in d_surf's buffer; write d_bone
+//   d_vessel     lumens -> signed distance map to the mask's faces, same buffer (when any)
 //   prep.json    grid, parameters, counts, timings, CPU seconds, peak memory, cache key
 // The CT copy and the masks are written on a background thread (background_writes.hpp) from the
 // moment each is final; they are waited for before d_bone. Bone segmentation runs mostly on one
@@ -39,6 +41,7 @@
 #include "prep/prep_cache.hpp"
 #include "prep/reorient.hpp"
 #include "prep/segment/components.hpp"
+#include "prep/vessel/vessel_segmentation.hpp"
 
 namespace palp {
 namespace {
@@ -155,8 +158,23 @@ struct MapRecord {
   double projection_mm = 0.0;  // subvoxel: the skin projection's reach
   IsoProjectionStats projected;
   nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
-  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0};
+  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0}, vessel_range[2] = {0, 0};
+  nlohmann::json structures = nlohmann::json::object();  // per structure beyond bone: its source
 };
+
+// prep.json's record of the lumens found in the scan.
+nlohmann::json vessel_json(const VesselResult& v) {
+  return {{"source", "auto"},
+          {"method", "contrast-filled lumens (prep/vessel/vessel_segmentation.hpp)"},
+          {"files", {kVesselFile, kVesselDistanceFile}},
+          {"voxels", v.voxels},
+          {"lumens", v.lumens},
+          {"lumen_level_hu", v.lumen_level_hu},
+          {"rejected_enclosed_by_cortex", v.rejected_shell},
+          {"rejected_not_uniform", v.rejected_spread},
+          {"rejected_brighter_at_surface", v.rejected_surface},
+          {"rejected_joined_to_no_trunk", v.rejected_thin}};
+}
 
 // A cached prep directory's prep.json -> the grids and voxel counts of `result`.
 void read_cached_result(const nlohmann::json& cached, PrepResult& result) {
@@ -214,13 +232,18 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
     // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
     json["surface_points"] = maps.point_counts;
   }
+  json["contrast_phase"] = result.contrast_phase;
+  json["structures"] = maps.structures;
   json["voxels"] = {{"total", result.grid.voxel_count()},
                     {"body", result.stats.body_voxels},
                     {"bone", result.stats.bone_voxels},
+                    {"vessel", result.vessel_voxels},
                     {"removed_non_patient", result.stats.removed_non_patient_voxels},
                     {"table", result.stats.table_voxels}};
   json["distance_range_mm"] = {{"d_surf", {maps.surf_range[0], maps.surf_range[1]}},
                                {"d_bone", {maps.bone_range[0], maps.bone_range[1]}}};
+  if (result.vessel_voxels > 0)
+    json["distance_range_mm"]["d_vessel"] = {maps.vessel_range[0], maps.vessel_range[1]};
   nlohmann::json timings = nlohmann::json::object();
   for (const auto& s : result.stages) timings[s.name] = s.seconds;
   timings["total"] = result.total_seconds;
@@ -239,6 +262,9 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
   for (const char* name :
        {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
     sizes[name] = fs::file_size(dir / name);
+  }
+  if (result.vessel_voxels > 0) {
+    for (const char* name : {kVesselFile, kVesselDistanceFile}) sizes[name] = fs::file_size(dir / name);
   }
   json["file_bytes"] = sizes;
   return json;
@@ -278,8 +304,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   const fs::path dir(out_dir);
   // A failed or interrupted run leaves no temporary file, and no output at all in a directory
   // it created (which is removed).
-  PrepOutputGuard guard(
-      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile, kPrepJsonFile});
+  PrepOutputGuard guard(dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile,
+                              kCtFile, kPrepJsonFile, kVesselFile, kVesselDistanceFile});
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
@@ -298,6 +324,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   // Remove a previous prep.json first: until the new one is written the directory is not a
   // valid cache, whatever happens in between.
   fs::remove(dir / kPrepJsonFile, ec);
+  // Structures an earlier run found and this one may not.
+  for (const char* name : {kVesselFile, kVesselDistanceFile}) fs::remove(dir / name, ec);
 
   auto stage = [&](const std::string& name, auto&& work) {
     if (progress) progress(name, false, 0.0);
@@ -425,7 +453,25 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
       surface.bone_hu = result.hu_levels.levels.iso_hu;
     }
   });
-  stage("bone mask", [&] { *bone_owner = segment_bone(ct, body, segmentation, &result.stats); });
+  // Contrast-filled lumens: not bone; their own mask and map when the scan has any.
+  auto vessel_owner = std::make_shared<Mask>();
+  if (params.find_vessels) {
+    stage("vessels", [&] {
+      const HuLevels& h = result.hu_levels;
+      const double soft = h.peak_found ? h.soft_peak_hu : kNominalSoftTissueHu + h.offset_hu;
+      VesselResult v = segment_vessels(ct, body, soft, segmentation.bone_seed_hu, params.vessels);
+      result.contrast_phase = v.contrast_phase;
+      result.vessel_voxels = v.voxels;
+      if (v.voxels > 0) record.structures["vessel"] = vessel_json(v);
+      *vessel_owner = std::move(v.lumen);
+    });
+  }
+  const bool has_vessels = result.vessel_voxels > 0;
+  if (has_vessels) write_in_background("bg write vessel", kVesselFile, vessel_owner);
+  stage("bone mask", [&] {
+    *bone_owner = segment_bone(ct, body, segmentation, &result.stats,
+                               has_vessels ? vessel_owner.get() : nullptr);
+  });
   write_in_background("bg write bone", kBoneFile, bone_owner);
   if (subvoxel) {
     stage("bone points", [&] {
@@ -452,6 +498,18 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   stage("write d_bone", [&] {
     write_atomically(dir / kBoneDistanceFile, map, record.bone_range[0], record.bone_range[1]);
   });
+  if (has_vessels) {
+    stage("d_vessel", [&] {
+      signed_distance(*vessel_owner, params.distance, map);
+      if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
+      value_range(map, record.vessel_range, params.distance.threads);
+    });
+    vessel_owner.reset();
+    stage("write d_vessel", [&] {
+      write_atomically(dir / kVesselDistanceFile, map, record.vessel_range[0],
+                       record.vessel_range[1]);
+    });
+  }
 
   result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.peak_rss_bytes = peak_rss_bytes();

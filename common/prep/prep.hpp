@@ -15,6 +15,7 @@
 #include "prep/maps/map_refine.hpp"
 #include "prep/segment/hu_levels.hpp"
 #include "prep/segment/segmentation.hpp"
+#include "prep/vessel/vessel_segmentation.hpp"
 
 namespace palp {
 
@@ -44,6 +45,12 @@ struct PrepParams {
   // The bone levels (segmentation's bone_seed_hu, bone_grow_hu and the surface's bone_hu) follow
   // the scan's soft-tissue peak (prep/segment/hu_levels.hpp); false: used as given.
   bool adapt_bone_levels = true;
+  // Contrast-filled lumens found in the scan (prep/vessel/vessel_segmentation.hpp), kept out of
+  // the bone and written as vessel.nii.gz and d_vessel.nii.gz when the scan has any. Off by
+  // default until it tells a lumen from a kidney and a heart joined to the skeleton apart
+  // (docs/prep.md, "Vessels"); prep.json then says contrast_phase "unknown".
+  bool find_vessels = false;
+  VesselParams vessels;
   // On a CT coarser than this (mm, any axis), the maps lie on its grid refined to at most this
   // spacing, nodes aligned (prep/maps/map_refine.hpp); 0 = the CT's own grid.
   double map_spacing_mm = kDefaultMapSpacingMm;
@@ -78,6 +85,8 @@ struct PrepResult {
   bool reoriented = false;     // resampled onto the nearest axis-aligned frame
   std::string hu_warning;      // what the CT check found when not_hu_ok let it through
   HuLevels hu_levels;          // what the scan's histogram gave (used when adapt_bone_levels)
+  std::string contrast_phase = "unknown";  // spec "Files": none, arterial, portal-venous, ...
+  std::uint64_t vessel_voxels = 0;      // vessel.nii.gz's, when written
 };
 
 // Progress reports: a stage starting ("reading CT", ...) or finishing (with its seconds).
@@ -100,6 +109,9 @@ inline constexpr const char* kBoneFile = "bone.nii.gz";
 inline constexpr const char* kSurfaceDistanceFile = "d_surf.nii.gz";
 inline constexpr const char* kBoneDistanceFile = "d_bone.nii.gz";
 inline constexpr const char* kPrepJsonFile = "prep.json";
+// Structures beyond bone, when the scan shows them (spec "Files").
+inline constexpr const char* kVesselFile = "vessel.nii.gz";
+inline constexpr const char* kVesselDistanceFile = "d_vessel.nii.gz";
 // The CT itself (int16 HU, after reorientation: on the masks' grid, which the maps' is or refines),
 // for palpd's render volume.
 inline constexpr const char* kCtFile = "ct.nii.gz";

@@ -91,6 +91,27 @@ void hash_input(ContentHash& hash, const std::string& input) {
 
 }  // namespace
 
+namespace {
+
+nlohmann::json vessel_params_json(const PrepParams& params) {
+  if (!params.find_vessels) return "off";
+  const VesselParams& v = params.vessels;
+  return {{"min_contrast_hu", v.min_contrast_hu},
+          {"min_lumen_contrast_hu", v.min_lumen_contrast_hu},
+          {"trunk_core_mm", v.trunk_core_mm},
+          {"split_mm", v.split_mm},
+          {"pool_mm", v.pool_mm},
+          {"max_pool_margin_hu", v.max_pool_margin_hu},
+          {"cortex_margin_hu", v.cortex_margin_hu},
+          {"max_cortex_contact", v.max_cortex_contact},
+          {"max_spread_fraction", v.max_spread_fraction},
+          {"min_lumen_ml", v.min_lumen_ml},
+          {"closing_mm", v.closing_mm},
+          {"arterial_above_soft_hu", v.arterial_above_soft_hu}};
+}
+
+}  // namespace
+
 nlohmann::json params_json(const PrepParams& params) {
   const SegmentationParams& s = params.segmentation;
   return {{"body_threshold_hu", s.body_threshold_hu},
@@ -123,7 +144,8 @@ nlohmann::json params_json(const PrepParams& params) {
           {"subvoxel_band_mm", params.surface.band_mm},
           {"skin_projection_mm", params.surface.skin_projection_mm},
           {"map_spacing_mm", params.map_spacing_mm},
-          {"bone_levels", params.adapt_bone_levels ? "adapted" : "as given"}};
+          {"bone_levels", params.adapt_bone_levels ? "adapted" : "as given"},
+          {"vessels", vessel_params_json(params)}};
 }
 
 bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::json* cached) {
@@ -134,9 +156,13 @@ bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::j
   if (!json.contains("file_bytes") || !json["file_bytes"].is_object()) return false;
   for (const char* name :
        {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
+    if (!json["file_bytes"].contains(name)) return false;
+  }
+  // Every file the run wrote (the structures beyond bone too) is there at the size it wrote.
+  for (const auto& [name, bytes] : json["file_bytes"].items()) {
     std::error_code ec;
     const auto size = fs::file_size(out_dir / name, ec);
-    if (ec || !json["file_bytes"].contains(name) || json["file_bytes"][name] != size) return false;
+    if (ec || name.find('/') != std::string::npos || bytes != size) return false;
   }
   *cached = json;
   return true;

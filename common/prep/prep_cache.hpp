@@ -27,8 +27,10 @@ namespace palp {
 // resting on the cortex removed (bone_lumens.cpp); 21: filled lumens apart from the skeleton
 // removed (remove_lumen_islands: positive oral contrast, an arterial aorta away from the spine);
 // 22: superficial rods of rib width that reach only the growing level kept as ribs (bone_ribs.cpp,
-// bone_rib_depth_mm; 20 on its branch, before 21 was merged)
-inline constexpr int kPrepAlgorithmVersion = 22;
+// bone_rib_depth_mm; 20 on its branch, before 21 was merged); 23: contrast-filled lumens found
+// (prep/vessel), kept out of the bone and written as vessel.nii.gz / d_vessel.nii.gz; a body cut
+// by the scan's back edge is not a table
+inline constexpr int kPrepAlgorithmVersion = 23;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

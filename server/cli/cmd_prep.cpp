@@ -59,6 +59,12 @@ Options:
                           contrast raises organs, not fat or bone);
                           given: used as written. prep.json records both ("hu_levels")
   --min-bone-island ML    drop bone islands smaller than this (default %g)
+  --vessels auto|off      auto (experimental): find contrast-filled vessels and heart chambers
+                          in the scan, keep them out of the bone and write vessel.nii.gz and
+                          d_vessel.nii.gz when there are any; prep.json records the scan's
+                          contrast_phase (none, arterial, portal-venous). off (default): neither,
+                          contrast_phase unknown. auto still takes the torso phantom's kidneys
+                          for lumens and misses a heart joined to the skeleton (docs/prep.md)
   --not-hu-ok             prep a volume that does not look like a CT in HU (prep refuses a
                           label map, an MR or a CT saved without its rescale by default)
   -q, --quiet             print only errors
@@ -77,7 +83,7 @@ int cmd_prep(const Arguments& argv) {
   const Args args(argv, {"help", "no-cache", "quiet", "not-hu-ok"},
                   {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
                    "bone-grow", "min-bone-island", "max-table-thickness", "surface", "skin-hu",
-                   "bone-hu", "bone-levels", "skin-projection", "map-spacing"});
+                   "bone-hu", "bone-levels", "skin-projection", "map-spacing", "vessels"});
   if (args.has("help")) {
     std::cout << prep_usage();
     return 0;
@@ -114,6 +120,11 @@ int cmd_prep(const Arguments& argv) {
     if (*levels != "adapt" && *levels != "given")
       throw UsageError("--bone-levels must be adapt or given, not '" + *levels + "'");
     params.adapt_bone_levels = *levels == "adapt";
+  }
+  if (const auto vessels = args.get("vessels")) {
+    if (*vessels != "auto" && *vessels != "off")
+      throw UsageError("--vessels must be auto or off, not '" + *vessels + "'");
+    params.find_vessels = *vessels == "auto";
   }
   const double threads = args.number("threads", default_thread_count());
   if (threads < 1 || threads > 1024 || threads != static_cast<unsigned>(threads)) {
@@ -179,6 +190,12 @@ int cmd_prep(const Arguments& argv) {
   std::printf("  bone      %llu voxels (%.0f ml)\n",
               static_cast<unsigned long long>(r.stats.bone_voxels),
               static_cast<double>(r.stats.bone_voxels) * voxel_ml);
+  if (r.vessel_voxels > 0)
+    std::printf("  vessels   %llu voxels (%.0f ml), contrast phase %s\n",
+                static_cast<unsigned long long>(r.vessel_voxels),
+                static_cast<double>(r.vessel_voxels) * voxel_ml, r.contrast_phase.c_str());
+  else if (!r.from_cache && params.find_vessels)
+    std::printf("  vessels   none found (contrast phase %s)\n", r.contrast_phase.c_str());
   if (!r.from_cache) {
     std::printf("  removed   %llu voxels that are not the patient (table, pad, cables)\n",
                 static_cast<unsigned long long>(r.stats.removed_non_patient_voxels));

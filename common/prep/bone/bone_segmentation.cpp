@@ -302,17 +302,25 @@ void remove_small_islands(double min_island_ml, Mask& bone) {
       bone);
 }
 
+// Clears `bone` wherever `other` is set.
+void clear_where(const Mask& other, Mask& bone) {
+  for_each_nonzero(other, [&](std::size_t n) { bone.data[n] = 0; });
+}
+
 }  // namespace
 }  // namespace segmentation
 
 Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams& params,
-                  SegmentationStats* stats) {
+                  SegmentationStats* stats, const Mask* not_bone) {
   using namespace segmentation;
   check_params(params);
   if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
     throw UsageError("segment_bone: the body mask is not on the CT's grid");
+  if (not_bone && (not_bone->grid.dims != ct.grid.dims || not_bone->size() != ct.size()))
+    throw UsageError("segment_bone: the not-bone mask is not on the CT's grid");
   const PatientAxes axes = patient_axes(ct.grid);
   Mask bone = bone_candidates(ct, body, params);          // seeds and growable voxels
+  if (not_bone) clear_where(*not_bone, bone);             // lumens: neither seed nor grow
   clear_skin(body, params.bone_skin_clearance_mm, bone);  // none on the skin (kernel overshoot)
   // Region growing from the seeds; ribs blurred under the seed level kept without one.
   keep_seeded_regions(bone, [&](const RunTable& runs, const RunLabels& labels,
@@ -330,6 +338,10 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   fill_notches(body, params.bone_notch_faces, bone);        // notches narrower than a voxel
   remove_small_islands(params.min_bone_island_ml, bone);    // islands
   remove_compact_islands(params, bone);                     // calculi, calcified nodes
+  if (not_bone) {
+    clear_where(*not_bone, bone);  // marrow rules never fill a lumen back
+    remove_small_islands(params.min_bone_island_ml, bone);
+  }
   if (stats) stats->bone_voxels = count_nonzero(bone);
   return bone;
 }

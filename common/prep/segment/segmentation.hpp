@@ -122,9 +122,11 @@ Mask segment_body(const CtVolume& ct, const SegmentationParams& params,
                   SegmentationStats* stats = nullptr);
 
 // Threshold + region growing inside `body`, marrow filled, small islands removed. 0/1.
-// Throws UsageError for unusable parameters or when `body` is not on the CT's grid.
+// `not_bone` (optional, same grid): voxels known to be something else — contrast-filled lumens
+// (prep/vessel/vessel_segmentation.hpp) — that neither seed nor grow bone, nor are filled later.
+// Throws UsageError for unusable parameters or when a mask is not on the CT's grid.
 Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams& params,
-                  SegmentationStats* stats = nullptr);
+                  SegmentationStats* stats = nullptr, const Mask* not_bone = nullptr);
 
 // The index axes of a grid in patient terms, from its world direction (LPS).
 struct PatientAxes {

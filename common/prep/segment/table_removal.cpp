@@ -57,7 +57,11 @@ void read_columns(const Plane& p, const std::uint8_t* mask, const TableLimits& l
   const auto close = [&](std::int64_t u, std::int64_t v0, std::int64_t v1) {
     if (s.blocked[u]) return;
     const bool outside_in_front = v1 == p.nv || s.air.cells[u + p.nu * v1];
-    if (v1 - v0 > lim.max_thickness || !outside_in_front) {
+    // A run from the scan's back edge is the patient cut by the field of view (a crop through the
+    // trunk, a lung cut open at the side in front of it), not a table: the table lies inside the
+    // field of view below the patient, with air, a pad or a board's thin shell behind it.
+    const bool cut_by_edge = v0 == 0;
+    if (v1 - v0 > lim.max_thickness || !outside_in_front || cut_by_edge) {
       s.blocked[u] = 1;
       s.thick[u] = {u, v0, v1};
     } else {

@@ -1,0 +1,331 @@
+// Contrast-filled vessels (see vessel_segmentation.hpp). Data flow:
+//   smooth      CT -> 3x3x3 mean HU (int16, two buffers)
+//   candidates  smoothed HU, body, cortex -> candidate mask; cortex and the voxels beside it -> near
+//   parts       candidates -> 6-connected parts; per part: voxels, HU sum and square sum, boundary
+//               faces, faces beside cortex
+//   keep        parts -> lumen mask (size, cortex contact, uniformity)
+//   close       lumen -> closed lumen, then one voxel of the wall's partial volume
+//   phase       the largest lumen's level -> contrast_phase
+#include "prep/vessel/vessel_segmentation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "base/parallel.hpp"
+#include "prep/maps/distance_transform.hpp"
+#include "prep/segment/components.hpp"
+
+namespace palp {
+namespace {
+
+using segmentation::any_face_neighbour;
+using segmentation::extract_runs;
+using segmentation::label_runs;
+using segmentation::RunLabels;
+using segmentation::RunTable;
+
+// One pass of a 3-voxel box mean along `axis` (the border voxel repeated), rounded.
+void box_pass(const Grid& g, int axis, const std::vector<std::int16_t>& in,
+              std::vector<std::int16_t>& out) {
+  const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? g.dims[0] : g.dims[0] * g.dims[1];
+  const std::int64_t n_axis = g.dims[axis];
+  const std::int64_t nx = g.dims[0], ny = g.dims[1];
+  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j)
+        for (std::int64_t i = 0; i < nx; ++i) {
+          const std::int64_t at[3] = {i, j, k};
+          const auto n = static_cast<std::int64_t>(g.linear(i, j, k));
+          const std::int64_t lo = at[axis] > 0 ? n - stride : n;
+          const std::int64_t hi = at[axis] + 1 < n_axis ? n + stride : n;
+          const int sum = in[lo] + in[n] + in[hi];
+          out[n] = static_cast<std::int16_t>(sum >= 0 ? (sum + 1) / 3 : -((-sum + 1) / 3));
+        }
+  });
+}
+
+std::vector<std::int16_t> smoothed_hu(const CtVolume& ct) {
+  std::vector<std::int16_t> a(ct.size()), b(ct.size());
+  box_pass(ct.grid, 0, ct.data, a);
+  box_pass(ct.grid, 1, a, b);
+  box_pass(ct.grid, 2, b, a);
+  return a;
+}
+
+struct PartStats {
+  std::int64_t voxels = 0;
+  double sum = 0.0, sum_sq = 0.0;
+  std::int64_t faces = 0, cortex_faces = 0;
+  // The stored HU of its surface voxels (a face on a non-candidate) and of the others.
+  double surface_sum = 0.0, inner_sum = 0.0;
+  std::int64_t surface_voxels = 0, inner_voxels = 0;
+  float depth = 0.0f;  // the largest distance (mm) from a voxel of it to a non-candidate
+  double mean() const { return sum / static_cast<double>(voxels); }
+  double spread() const {
+    const double m = mean();
+    return std::sqrt(std::max(0.0, sum_sq / static_cast<double>(voxels) - m * m));
+  }
+};
+
+// Per part: its size, HU moments and boundary faces (those beside a non-candidate), and of them
+// the faces beside `near` (the cortex and the voxels beside it).
+std::vector<PartStats> part_stats(const CtVolume& ct, const RunTable& runs,
+                                  const RunLabels& labels, const Mask& candidates,
+                                  const Mask& near, const std::vector<std::int16_t>& hu,
+                                  const DistanceMap& depth) {
+  const Grid& g = ct.grid;
+  std::vector<PartStats> stats(labels.voxels.size());
+  const std::int64_t nx = g.dims[0];
+  const std::int64_t step[3] = {1, nx, nx * g.dims[1]};
+  for (std::int64_t row = 0; row + 1 < static_cast<std::int64_t>(runs.row_start.size()); ++row) {
+    const std::int64_t j = row % g.dims[1], k = row / g.dims[1];
+    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
+      PartStats& s = stats[static_cast<std::size_t>(labels.of_run[r])];
+      for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i) {
+        const auto n = static_cast<std::int64_t>(g.linear(i, j, k));
+        const double v = hu[n];
+        ++s.voxels;
+        s.depth = std::max(s.depth, depth.data[n]);
+        s.sum += v;
+        s.sum_sq += v * v;
+        const std::int64_t at[3] = {i, j, k};
+        const std::int64_t faces_before = s.faces;
+        for (int a = 0; a < 3; ++a)
+          for (int d = -1; d <= 1; d += 2) {
+            const std::int64_t q = at[a] + d;
+            if (q < 0 || q >= g.dims[a]) continue;  // the scan's border is not a wall
+            const std::int64_t m = n + d * step[a];
+            if (candidates.data[m]) continue;
+            ++s.faces;
+            s.cortex_faces += near.data[m] != 0;
+          }
+        const bool on_surface = s.faces > faces_before;
+        (on_surface ? s.surface_sum : s.inner_sum) += ct.data[n];
+        ++(on_surface ? s.surface_voxels : s.inner_voxels);
+      }
+    }
+  }
+  return stats;
+}
+
+// Thin bright voxels (cortex) and thick ones (a contrast-filled pool: the heart, a bright
+// aorta). Bright: at or above `cortex_hu`. Thick: within `pool_mm` of a bright voxel that lies
+// `pool_mm` deep in the bright set (its opening by a ball), and below max_hu (denser than any
+// contrast pool: cortical bone of a long bone). Cortex is only ever a few millimetres thick.
+struct BrightSplit {
+  Mask cortex;  // thin bright voxels
+  Mask pool;    // thick bright voxels below max_hu
+};
+
+BrightSplit split_bright(const CtVolume& ct, const std::vector<std::int16_t>& smoothed,
+                         int cortex_hu, int max_hu, double pool_mm) {
+  const Grid& g = ct.grid;
+  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
+  BrightSplit out{Mask(g, 0, "cortex"), Mask(g, 0, "contrast pool")};
+  Mask& bright = out.cortex;
+  for (std::size_t n = 0; n < ct.size(); ++n) bright.data[n] = ct.data[n] >= cortex_hu;
+  const DistanceMap depth = signed_distance(bright, {pool_mm + 2.0 * h_max, 0});
+  Mask core(g, 0, "contrast pool cores");
+  for (std::size_t n = 0; n < ct.size(); ++n)
+    core.data[n] = bright.data[n] && depth.data[n] + 0.5 * h_min >= pool_mm &&
+                   smoothed[n] < max_hu;
+  const DistanceMap reach = signed_distance(core, {pool_mm + 3.0 * h_max, 0});
+  for (std::size_t n = 0; n < ct.size(); ++n) {
+    const bool pool = bright.data[n] && 0.5 * h_min - reach.data[n] <= pool_mm + h_min &&
+                      smoothed[n] < max_hu;
+    out.pool.data[n] = pool;
+    if (pool) bright.data[n] = 0;
+  }
+  return out;
+}
+
+// The cortex and its face neighbours.
+Mask near_cortex(const Mask& cortex) {
+  const Grid& g = cortex.grid;
+  Mask near = cortex;
+  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
+    const std::size_t begin = g.linear(0, 0, k0), end = g.linear(0, 0, k1);
+    for (std::size_t n = begin; n < end; ++n)
+      if (!cortex.data[n])
+        near.data[n] = any_face_neighbour(g, n, [&](std::int64_t m) { return cortex.data[m]; });
+  });
+  return near;
+}
+
+// Dilation by one voxel (face neighbours) into voxels `allowed` says yes to.
+template <class Allowed>
+Mask dilate_once(const Mask& in, Allowed allowed) {
+  Mask out = in;
+  const Grid& g = in.grid;
+  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
+    const std::size_t begin = g.linear(0, 0, k0), end = g.linear(0, 0, k1);
+    for (std::size_t n = begin; n < end; ++n)
+      if (!in.data[n] && allowed(n))
+        out.data[n] = any_face_neighbour(g, n, [&](std::int64_t m) { return in.data[m]; });
+  });
+  return out;
+}
+
+// Erosion by one voxel (face neighbours; the scan's border keeps its voxels).
+Mask erode_once(const Mask& in) {
+  Mask out = in;
+  const Grid& g = in.grid;
+  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
+    const std::size_t begin = g.linear(0, 0, k0), end = g.linear(0, 0, k1);
+    for (std::size_t n = begin; n < end; ++n)
+      if (in.data[n])
+        out.data[n] = !any_face_neighbour(g, n, [&](std::int64_t m) { return !in.data[m]; });
+  });
+  return out;
+}
+
+enum class Verdict { lumen, small, thin, dim, shell, spread, surface };
+
+// Whether a part is a lumen (see the header): size, trunk, cortex contact, uniformity, surface.
+Verdict judge(const PartStats& s, double soft_peak_hu, double h_min, double ml,
+              const VesselParams& params) {
+  if (static_cast<double>(s.voxels) * ml < params.min_lumen_ml) return Verdict::small;
+  // Joined to a trunk: the aorta, a vena cava, the heart, whose core is as thick as no branch
+  // apart from them, nor costal cartilage or a tendon of the same HU, is.
+  if (s.depth + 0.5 * h_min < params.trunk_core_mm) return Verdict::thin;
+  // Contrast: the part's mean well above the soft tissue (enhancing organs, a haematoma, noise
+  // above the candidates' level stay below it).
+  if (s.mean() - soft_peak_hu < params.min_lumen_contrast_hu) return Verdict::dim;
+  const double contact =
+      s.faces > 0 ? static_cast<double>(s.cortex_faces) / static_cast<double>(s.faces) : 0.0;
+  if (contact > params.max_cortex_contact) return Verdict::shell;
+  if (s.spread() > params.max_spread_fraction * (s.mean() - soft_peak_hu)) return Verdict::spread;
+  // Bone is brightest at its surface (cortex over marrow); a lumen is uniform and its surface
+  // darker (partial volume with its wall). Parts too thin for an inside are judged without.
+  if (s.inner_voxels > 0 && s.surface_voxels > 0 &&
+      s.surface_sum / static_cast<double>(s.surface_voxels) >
+          s.inner_sum / static_cast<double>(s.inner_voxels))
+    return Verdict::surface;
+  return Verdict::lumen;
+}
+
+void count_verdict(Verdict v, VesselResult& r) {
+  switch (v) {
+    case Verdict::lumen: ++r.lumens; break;
+    case Verdict::thin: ++r.rejected_thin; break;
+    case Verdict::shell: ++r.rejected_shell; break;
+    case Verdict::spread: ++r.rejected_spread; break;
+    case Verdict::surface: ++r.rejected_surface; break;
+    case Verdict::small:
+    case Verdict::dim: break;
+  }
+}
+
+// Grows `mask` through face neighbours `allowed` says yes to, until nothing more joins.
+template <class Allowed>
+void grow_within(Mask& mask, Allowed allowed) {
+  const Grid& g = mask.grid;
+  std::vector<std::size_t> front;
+  for (std::size_t n = 0; n < mask.size(); ++n)
+    if (mask.data[n]) front.push_back(n);
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t step[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  while (!front.empty()) {
+    const auto m = static_cast<std::int64_t>(front.back());
+    front.pop_back();
+    const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
+    const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+    for (int d = 0; d < 6; ++d) {
+      if (!inside[d]) continue;
+      const auto o = static_cast<std::size_t>(m + step[d]);
+      if (mask.data[o] || !allowed(o)) continue;
+      mask.data[o] = 1;
+      front.push_back(o);
+    }
+  }
+}
+
+void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
+  if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
+    throw UsageError("segment_vessels: the body mask is not on the CT's grid");
+  if (!(p.min_contrast_hu > 0.0) || !(p.cortex_margin_hu > 0.0) || !(p.max_cortex_contact >= 0.0) ||
+      !(p.max_spread_fraction > 0.0) || !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
+      !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0))
+    throw UsageError("segment_vessels: unusable parameters");
+}
+
+}  // namespace
+
+VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_peak_hu,
+                             double bone_seed_hu, const VesselParams& params) {
+  check(ct, body, params);
+  const Grid& g = ct.grid;
+  VesselResult result;
+  result.lumen = Mask(g, 0, "vessel mask");
+  const std::vector<std::int16_t> hu = smoothed_hu(ct);  // 3x3x3 mean
+  const int cortex_hu = static_cast<int>(std::lround(bone_seed_hu + params.cortex_margin_hu));
+  const int low_hu = static_cast<int>(std::lround(soft_peak_hu + params.min_contrast_hu));
+  // candidates: contrast-level smoothed HU inside the body, not beside cortex
+  const int max_pool_hu = static_cast<int>(std::lround(bone_seed_hu + params.max_pool_margin_hu));
+  const BrightSplit bright = split_bright(ct, hu, cortex_hu, max_pool_hu, params.pool_mm);
+  const Mask near = near_cortex(bright.cortex);
+  Mask candidates(g, 0, "vessel candidates");
+  for (std::size_t n = 0; n < ct.size(); ++n)
+    candidates.data[n] = body.data[n] && !near.data[n] && ct.data[n] >= low_hu &&
+                         (hu[n] < cortex_hu || bright.pool.data[n]);
+  // open: the candidates within split_mm of a voxel split_mm deep, so that a bridge of partial
+  // volume thinner than twice that (a lumen resting on a vertebra, a rib) parts them
+  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double split = std::max(params.split_mm, h_min);
+  DistanceMap depth = signed_distance(candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0});
+  Mask cores(g, 0, "vessel cores");
+  for (std::size_t n = 0; n < cores.size(); ++n)
+    cores.data[n] = candidates.data[n] && depth.data[n] + 0.5 * h_min >= split;
+  DistanceMap reach = signed_distance(cores, {split + 3.0 * h_max, 0});
+  Mask opened(g, 0, "vessel parts");
+  for (std::size_t n = 0; n < opened.size(); ++n)
+    opened.data[n] = candidates.data[n] && 0.5 * h_min - reach.data[n] <= split + h_min;
+  // parts: 6-connected, with their size, level, spread, depth and cortex contact
+  const RunTable runs = extract_runs(opened, false);
+  const RunLabels labels = label_runs(g, runs);
+  const std::vector<PartStats> stats = part_stats(ct, runs, labels, opened, near, hu, depth);
+  const double ml = segmentation::voxel_ml(g);
+  std::vector<std::uint8_t> keep(stats.size(), 0);
+  std::size_t largest = stats.size();
+  for (std::size_t c = 0; c < stats.size(); ++c) {
+    const PartStats& s = stats[c];
+    const Verdict v = judge(s, soft_peak_hu, h_min, ml, params);
+    count_verdict(v, result);
+    if (v != Verdict::lumen) continue;
+    keep[c] = 1;
+    if (largest == stats.size() || s.voxels > stats[largest].voxels) largest = c;
+  }
+  segmentation::rewrite_runs(g, runs, labels, [&](std::int64_t c) { return keep[c]; },
+                             result.lumen);
+  // rejoin: the branches and thin pieces the opening cut, grown from the lumens through the
+  // candidates, never within a voxel of a part judged not a lumen
+  Mask other(g, 0, "not lumens");
+  segmentation::rewrite_runs(g, runs, labels, [&](std::int64_t c) { return !keep[c]; }, other);
+  other = dilate_once(other, [](std::size_t) { return true; });
+  grow_within(result.lumen, [&](std::size_t n) { return candidates.data[n] && !other.data[n]; });
+  if (largest == stats.size()) return result;  // no lumen: phase none
+  result.lumen_level_hu = stats[largest].mean();
+  // close: flap and plaque shadows inside a lumen, never into cortex
+  const auto below_cortex = [&](std::size_t n) { return body.data[n] && !bright.cortex.data[n]; };
+  const int steps = std::max(1, static_cast<int>(std::lround(params.closing_mm / h_min)));
+  Mask closed = result.lumen;
+  for (int s = 0; s < steps; ++s) closed = dilate_once(closed, below_cortex);
+  for (int s = 0; s < steps; ++s) closed = erode_once(closed);
+  for (std::size_t n = 0; n < closed.size(); ++n) closed.data[n] |= result.lumen.data[n];
+  // the wall's partial volume: one voxel halfway from the soft tissue to the lumen's level
+  const double half = 0.5 * (soft_peak_hu + result.lumen_level_hu);
+  result.lumen = dilate_once(
+      closed, [&](std::size_t n) { return below_cortex(n) && ct.data[n] >= half; });
+  result.voxels = segmentation::count_nonzero(result.lumen);
+  result.contrast_phase = result.lumen_level_hu - soft_peak_hu >= params.arterial_above_soft_hu
+                              ? "arterial"
+                              : "portal-venous";
+  return result;
+}
+
+}  // namespace palp
