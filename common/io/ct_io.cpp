@@ -296,7 +296,10 @@ std::string ct_voxel_file(const std::string& path) {
 
 CtVolume read_ct(const std::string& input) {
   const std::string phantom_prefix = "phantom:";
-  if (input.rfind(phantom_prefix, 0) == 0) return make_phantom(input.substr(phantom_prefix.size()));
+  if (input.rfind(phantom_prefix, 0) == 0) {
+    const PhantomSpec spec = parse_phantom_spec(input.substr(phantom_prefix.size()));
+    return make_phantom(spec.name, spec.options);
+  }
   if (input.empty())
     throw InputError(std::string("no CT input given (expected ") + kSupportedInputs + ")");
   struct stat info {};

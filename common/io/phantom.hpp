@@ -8,10 +8,10 @@
 //   torso  — the default scene: elliptic body (300 x 210 mm) with skin, fat and muscle, ribs with
 //            intercostal spaces over a liver, a spine (vertebral bodies with cortex and marrow,
 //            discs, arches around the canal, processes), lungs that reach the top slice, bowel
-//            gas (one pocket crosses the bottom slice), a contrast-filled aorta touching the spine,
-//            kidneys, an arm with its humerus beside the torso across a small air gap, and a CT
-//            table below: a gel pad pressed against the back, a carbon board crossing the whole
-//            width, and a cable lying on the pad. Edges carry partial-volume blending and a
+//            gas (one pocket crosses the bottom slice), a contrast-filled aorta (250 HU) touching
+//            the spine, kidneys, an arm with its humerus beside the torso across a small air gap,
+//            and a CT table below: a gel pad pressed against the back, a carbon board crossing the
+//            whole width, and a cable lying on the pad. Edges carry partial-volume blending and a
 //            deterministic +-10 HU noise. Default grid 384 x 256 x 96 at 1.25 x 1.25 x 2 mm.
 //
 // Orientation: sphere and torso are stored LPS: i = patient right -> left, j = anterior ->
@@ -21,7 +21,32 @@
 // its anterior and --side auto presses it. Every origin centres the volume on the isocentre.
 // Anatomy is defined in mm; when the grid's field of view is smaller than the default one the
 // anatomy is scaled down uniformly to fit (never up), so any dims/spacing override still shows the
-// whole phantom.
+// whole phantom. Only x and y are fitted: along z the anatomy keeps its size in mm whatever the
+// slice count or thickness, so a thin slab (e.g. dims 384x256x20) is the middle 20 slices' worth of
+// the same torso, centred on the same level, and 5 mm slices (spacing 1.25x1.25x5) show more of it.
+//
+// Torso options (PhantomOptions; default: none of them, the scene above byte for byte):
+//   contrast      none | arterial | portal-venous: draws the vessel tree at that phase's levels
+//                 instead of the lone aorta: the aorta down to its bifurcation (z = -68 mm) and
+//                 the common iliac arteries, the coeliac trunk and superior mesenteric artery
+//                 leaving it forward, the renal arteries into the kidneys; the inferior vena cava
+//                 right of the aorta, the renal veins (the left one between the aorta and the
+//                 SMA) and the portal vein up into the liver. HU (arteries / portal vein / IVC
+//                 above, below the renal veins / renal veins / liver / kidneys):
+//                   none           40 / 40 / 40, 40 / 40 / 55 / 35
+//                   arterial       400 / 90 / 85, 40 / 95 / 60 / 150
+//                   portal-venous  170 / 180 / 150, 130 / 160 / 100 / 160
+//   aorta_hu      the arteries' HU (the aorta and its branches), the rest from `contrast`
+//                 (arterial when not given): aorta 400 alone draws what contrast=arterial does.
+//   arms          0, 1 (default: the right arm) or 2 (the left one too, mirrored about the body).
+//   metal         a pair of pedicle screws (3 mm radius, 3500 HU) in the vertebra at z = 8 mm,
+//                 with deterministic metal streaks in the slices through them: bright and dark
+//                 rays of 300-800 HU from each screw, decaying with distance (about halving every
+//                 40 mm), and a dark band between the screws, on the patient's voxels only.
+// On the command line: palp phantom torso --contrast arterial --aorta-hu 400 --arms 2 --metal.
+// In a CT input or scene (parse_phantom_spec): phantom:NAME[,KEY=VALUE...] with the keys dims,
+// spacing, contrast, aorta-hu, arms, metal (metal alone means metal=1), e.g.
+// phantom:torso,contrast=arterial,arms=2 or phantom:torso,dims=384x256x20,spacing=1.25x1.25x1.5.
 #pragma once
 
 #include <optional>
@@ -32,12 +57,31 @@
 
 namespace palp {
 
+enum class PhantomContrast { none, arterial, portal_venous };
+const char* phantom_contrast_name(PhantomContrast contrast);  // "none", "arterial", "portal-venous"
+
 struct PhantomOptions {
   // Override the phantom's default grid (dims and spacing); its anatomy scales in mm, not voxels,
   // so a finer grid draws the same body at higher resolution.
   std::optional<Index3> dims;
   std::optional<Vec3> spacing;
+  // The torso's options (above); any of them on the cube or sphere is a UsageError.
+  std::optional<PhantomContrast> contrast;
+  std::optional<double> aorta_hu;  // [-1000, 3000]
+  int arms = 1;                    // 0, 1 or 2
+  bool metal = false;
 };
+
+// Sets one option from its text: dims and spacing as NXxNYxNZ, contrast, aorta-hu, arms, metal
+// (1/0, true/false, on/off, yes/no). Throws UsageError for an unknown key or a bad value.
+void set_phantom_option(PhantomOptions& options, const std::string& key, const std::string& value);
+
+// "NAME[,KEY=VALUE...]" (what follows "phantom:" in a CT input): the name and its options.
+struct PhantomSpec {
+  std::string name;
+  PhantomOptions options;
+};
+PhantomSpec parse_phantom_spec(const std::string& text);
 
 // Names accepted by make_phantom: "cube", "sphere", "torso".
 std::vector<std::string> phantom_names();
@@ -47,13 +91,21 @@ std::vector<std::string> phantom_names();
 Grid phantom_grid(const std::string& name, const PhantomOptions& options = {});
 
 // Ground truth drawn together with the CT: the patient's body (skin and everything inside it,
-// internal air included, no table/pad/cables), its bones (cortex and marrow) and the objects that
-// are not the patient (table board, pad, cable; empty for cube and sphere). A voxel belongs to a
-// structure when its centre does (partial-volume coverage >= 1/2).
+// internal air included, no table/pad/cables), its bones (cortex and marrow, and the metal
+// implant: rigid, inside a vertebra) and the objects that are not the patient (table board, pad,
+// cable; empty for cube and sphere). `vessel`: the lumens of the visibly contrast-filled vessels,
+// arteries and veins, those drawn at least 60 HU above soft tissue (>= 100 HU; so in the arterial
+// phase the arteries only, none without contrast, every drawn vessel in the portal-venous one).
+// `artery`: the arteries' lumens whatever their HU (the aorta alone without contrast options).
+// `metal`: the implant. A voxel belongs to a structure when its centre does (partial-volume
+// coverage >= 1/2) and no later-painted structure (a vertebra over the aorta's back) covers it.
 struct PhantomTruth {
   Mask body;
   Mask bone;
   Mask equipment;
+  Mask vessel;
+  Mask artery;
+  Mask metal;
 };
 
 // Throws UsageError for an unknown name. When `truth` is given it receives the true masks.

@@ -18,11 +18,20 @@ Writes a synthetic CT in Hounsfield units as NIfTI (.nii or .nii.gz).
   NAME                  cube    soft-tissue block (90 mm a side, flat faces, no bone), 1 mm grid
                         sphere  soft-tissue ball of analytic radius, 1 mm grid
                         torso   the default scene: body, ribs, liver, spine, lungs, bowel gas,
-                                an arm and a CT table with pad and cable
+                                a 250 HU aorta, kidneys, an arm and a CT table with pad and cable
 Options:
   --out FILE            output file (required)
-  --dims NXxNYxNZ       grid size in voxels (default: the phantom's own)
+  --dims NXxNYxNZ       grid size in voxels (default: the phantom's own); x and y scale the
+                        anatomy down to fit, z never does (--dims 384x256x20: a thin slab)
   --spacing SXxSYxSZ    voxel size in mm (default: the phantom's own)
+Torso only (the same in a CT input: phantom:torso,contrast=arterial,arms=2,metal):
+  --contrast PHASE      none, arterial or portal-venous: the vessel tree (aorta to its
+                        bifurcation, coeliac, SMA, renal and iliac arteries, IVC, renal and
+                        portal veins) at that phase's HU instead of the lone 250 HU aorta
+  --aorta-hu N          the aorta's and its branches' HU (with the arterial phase's veins
+                        unless --contrast says otherwise)
+  --arms N              0, 1 (default) or 2 arms beside the torso
+  --metal               a pair of pedicle screws (3500 HU) in a vertebra, with streaks
   --orientation CODE    store the voxels in another axis order, the same patient in the same
                         place: three letters naming where each index axis grows toward, e.g.
                         RAS (NIfTI's canonical order) or LPS (DICOM's; torso and sphere default)
@@ -32,7 +41,8 @@ Options:
 }  // namespace
 
 int cmd_phantom(const Arguments& argv) {
-  const Args args(argv, {"help"}, {"out", "dims", "spacing", "orientation"});
+  const Args args(argv, {"help", "metal"},
+                  {"out", "dims", "spacing", "orientation", "contrast", "aorta-hu", "arms"});
   if (args.has("help")) {
     std::cout << kPhantomUsage;
     return 0;
@@ -45,6 +55,9 @@ int cmd_phantom(const Arguments& argv) {
   if (const auto dims = args.get("dims")) options.dims = parse_triple<std::int64_t>(*dims, "dims");
   if (const auto spacing = args.get("spacing"))
     options.spacing = parse_triple<double>(*spacing, "spacing");
+  for (const char* key : {"contrast", "aorta-hu", "arms"})
+    if (const auto value = args.get(key)) set_phantom_option(options, key, *value);
+  if (args.has("metal")) options.metal = true;
   CtVolume ct = make_phantom(args.positional()[0], options);
   if (const auto code = args.get("orientation")) ct = reorder_axes(ct, *code);
   write_nifti(*out, ct);

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <string>
 
+#include "io/ct_io.hpp"
+#include "io/phantom.hpp"
 #include "support/cli_test_util.hpp"
 
 namespace palp {
@@ -56,7 +58,9 @@ TEST_F(PalpCli, UsageMistakesExitWithTwoAndOneLine) {
        {"frobnicate", "prep", "prep x", "prep x --out", "phantom cube",
         "prep phantom:cube --out d --band abc", "phantom cube --out f --dims 1x2",
         "prep phantom:cube --out d --bogus", "prep phantom:cube --out d --surface voxel",
-        "prep phantom:cube --out d --skin-hu x"}) {
+        "prep phantom:cube --out d --skin-hu x", "phantom cube --out f --metal",
+        "phantom torso --out f --contrast venous", "phantom torso --out f --arms 3",
+        "phantom torso --out f --aorta-hu hot"}) {
     const auto out = run_palp(args);
     EXPECT_EQ(out.exit_code, 2) << args << ": " << out.output;
     EXPECT_EQ(testing::count_lines(out.output), 1) << args << ": " << out.output;
@@ -102,6 +106,22 @@ TEST_F(PalpCli, PhantomThenPrepThenCachedPrep) {
   EXPECT_NE(second.output.find("cached"), std::string::npos) << second.output;
   const auto forced = run_palp(prep + " --no-cache");
   EXPECT_EQ(forced.output.find("cached"), std::string::npos) << forced.output;
+}
+
+// The torso's options on the command line draw what make_phantom draws with them.
+TEST_F(PalpCli, PhantomTorsoOptions) {
+  const fs::path ct = dir_ / "torso.nii.gz";
+  const auto made = run_palp("phantom torso --out " + ct.string() +
+                             " --dims 96x64x12 --contrast portal-venous --aorta-hu 300 --arms 2"
+                             " --metal");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  PhantomOptions o;
+  o.dims = Index3{96, 64, 12};
+  o.contrast = PhantomContrast::portal_venous;
+  o.aorta_hu = 300.0;
+  o.arms = 2;
+  o.metal = true;
+  EXPECT_TRUE(read_ct(ct.string()).data == make_phantom("torso", o).data);
 }
 
 }  // namespace

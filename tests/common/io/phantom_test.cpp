@@ -1,5 +1,7 @@
-// Tests for the synthetic CTs (common/io/phantom.cpp): names and grids, the cube's flat faces, the
-// sphere against its analytic geometry, and the torso's structures, truth masks and grid overrides.
+// Tests for the synthetic CTs (common/io/phantom.cpp, phantom_torso.cpp): names and grids, the
+// cube's flat faces, the sphere against its analytic geometry, the torso's structures, truth masks
+// and grid overrides, and its options (contrast phases, aorta HU, arms, metal, thin slabs, the
+// phantom:NAME,KEY=VALUE scene string); the default torso stays byte for byte what it was.
 #include "io/phantom.hpp"
 
 #include <gtest/gtest.h>
@@ -12,12 +14,19 @@
 #include <vector>
 
 #include "base/errors.hpp"
+#include "io/ct_io.hpp"
 
 namespace palp {
 namespace {
 
 std::int64_t count(const Mask& m) {
   return std::count_if(m.data.begin(), m.data.end(), [](std::uint8_t v) { return v != 0; });
+}
+
+std::int64_t count_both(const Mask& a, const Mask& b) {
+  std::int64_t n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) n += a.data[i] && b.data[i];
+  return n;
 }
 
 double ml(const Grid& g, std::int64_t voxels) {
@@ -167,6 +176,24 @@ TEST_F(TorsoTest, IsDeterministic) {
   EXPECT_TRUE(again.data == ct_->data);
 }
 
+// FNV-1a over the bytes of a volume's voxels.
+template <class T>
+std::uint64_t fnv1a(const Volume<T>& v) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  const auto* bytes = reinterpret_cast<const unsigned char*>(v.data.data());
+  for (std::size_t n = 0; n < v.data.size() * sizeof(T); ++n) h = (h ^ bytes[n]) * 0x100000001b3ull;
+  return h;
+}
+
+// The default torso is what tests and recorded outputs elsewhere were made on: the options added
+// later (contrast, arms, metal) leave it byte for byte as it was (hashes taken before them).
+TEST_F(TorsoTest, DefaultIsByteIdenticalToTheRecordedOne) {
+  EXPECT_EQ(fnv1a(*ct_), 0x8efb89f7be5aa73eull);
+  EXPECT_EQ(fnv1a(truth_->body), 0xe263e41aca2dcba5ull);
+  EXPECT_EQ(fnv1a(truth_->bone), 0xfeacea0351f2e599ull);
+  EXPECT_EQ(fnv1a(truth_->equipment), 0x43267f2fbb1938a5ull);
+}
+
 TEST_F(TorsoTest, HasTableBoardPadAndCableBelowThePatient) {
   const Grid& g = ct_->grid;
   const Mask& equipment = truth_->equipment;
@@ -284,6 +311,226 @@ TEST(Phantom, TorsoGridOverridesKeepTheWholeScene) {
   EXPECT_GT(count(truth.bone), 0);
   EXPECT_GT(count(truth.equipment), 0);
   EXPECT_EQ(components_in_slice(truth.body, g.dims[2] / 2), 2);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Torso options (issue 38): contrast phases, aorta HU, arms, metal, thin slabs, scene strings.
+
+struct Drawn {
+  CtVolume ct;
+  PhantomTruth truth;
+};
+
+Drawn torso_with(const PhantomOptions& o) {
+  Drawn d;
+  d.ct = make_phantom("torso", o, &d.truth);
+  return d;
+}
+
+PhantomOptions with_contrast(PhantomContrast c) {
+  PhantomOptions o;
+  o.contrast = c;
+  return o;
+}
+
+// HU of the voxels of `m`, sorted.
+std::vector<int> hu_in(const CtVolume& ct, const Mask& m) {
+  std::vector<int> out;
+  for (std::size_t n = 0; n < m.size(); ++n)
+    if (m.data[n]) out.push_back(ct.data[n]);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Every truth mask of the vessels lies in the body and outside the bone.
+void expect_vessels_in_soft_body(const PhantomTruth& t) {
+  for (std::size_t n = 0; n < t.body.size(); ++n) {
+    ASSERT_FALSE((t.vessel.data[n] || t.artery.data[n]) && !t.body.data[n]) << n;
+    ASSERT_FALSE((t.vessel.data[n] || t.artery.data[n]) && t.bone.data[n]) << n;
+  }
+}
+
+TEST_F(TorsoTest, DefaultVesselTruthIsTheContrastAortaAlone) {
+  EXPECT_TRUE(truth_->vessel.data == truth_->artery.data);
+  EXPECT_EQ(count(truth_->metal), 0);
+  const std::vector<int> hu = hu_in(*ct_, truth_->vessel);
+  ASSERT_FALSE(hu.empty());
+  EXPECT_GT(hu.front(), 130) << "even a half-covered edge voxel is above (40 + 250) / 2 - noise";
+  EXPECT_NEAR(hu[hu.size() / 2], 250, 12);
+  // a cylinder of 12 mm radius through the whole field of view, less what the spine covers
+  const double full_ml = 3.14159 * 12.0 * 12.0 * ct_->grid.extent_mm()[2] / 1000.0;
+  EXPECT_NEAR(ml(ct_->grid, count(truth_->vessel)), full_ml, 0.15 * full_ml);
+  expect_vessels_in_soft_body(*truth_);
+}
+
+TEST(PhantomContrast, ArterialPhaseLightsTheArteriesNotTheVeins) {
+  const Drawn art = torso_with(with_contrast(PhantomContrast::arterial));
+  const Drawn pv = torso_with(with_contrast(PhantomContrast::portal_venous));
+  expect_vessels_in_soft_body(art.truth);
+  // the arteries only: every contrast-truth voxel is an artery's
+  EXPECT_TRUE(art.truth.vessel.data == art.truth.artery.data);
+  const std::vector<int> hu = hu_in(art.ct, art.truth.vessel);
+  ASSERT_FALSE(hu.empty());
+  EXPECT_GT(hu.front(), 200) << "even a half-covered edge voxel is above (40 + 400) / 2 - noise";
+  EXPECT_GT(hu[hu.size() / 10], 300) << "90 % of the lumen reads above 300 HU (3 mm branches)";
+  EXPECT_NEAR(hu[hu.size() / 2], 400, 12);
+  // the aorta and more: branches leave it (the default's aorta alone is ~ 70 ml)
+  EXPECT_GT(ml(art.ct.grid, count(art.truth.artery)), 75.0);
+  // The veins (the portal-venous phase's contrast truth less its arteries) are drawn in the
+  // arterial phase too, below 100 HU and outside its contrast truth.
+  Mask veins(pv.ct.grid, 0);
+  for (std::size_t n = 0; n < veins.size(); ++n)
+    veins.data[n] = pv.truth.vessel.data[n] && !pv.truth.artery.data[n];
+  EXPECT_GT(ml(veins.grid, count(veins)), 20.0);
+  EXPECT_EQ(count_both(veins, art.truth.vessel), 0);
+  const std::vector<int> vein_hu = hu_in(art.ct, veins);
+  EXPECT_LT(vein_hu[vein_hu.size() / 2], 100);
+  EXPECT_GT(vein_hu[vein_hu.size() * 9 / 10], 70) << "the veins above the renals: 85-95 HU";
+}
+
+TEST(PhantomContrast, PortalVenousPhaseLightsArteriesAndVeins) {
+  const Drawn pv = torso_with(with_contrast(PhantomContrast::portal_venous));
+  expect_vessels_in_soft_body(pv.truth);
+  const std::vector<int> hu = hu_in(pv.ct, pv.truth.vessel);
+  ASSERT_FALSE(hu.empty());
+  EXPECT_GT(hu.front(), 70) << "half-covered edge voxels of the 130 HU infrarenal IVC";
+  EXPECT_GT(hu[hu.size() / 2], 140);
+  EXPECT_GT(count(pv.truth.vessel), count(pv.truth.artery) * 3 / 2) << "veins are contrast too";
+  for (std::size_t n = 0; n < pv.truth.artery.size(); ++n)
+    ASSERT_FALSE(pv.truth.artery.data[n] && !pv.truth.vessel.data[n]) << n;
+}
+
+TEST(PhantomContrast, WithoutContrastNoVesselIsContrastTruthButTheArteriesAreDrawn) {
+  const Drawn none = torso_with(with_contrast(PhantomContrast::none));
+  EXPECT_EQ(count(none.truth.vessel), 0);
+  const std::vector<int> hu = hu_in(none.ct, none.truth.artery);
+  ASSERT_GT(ml(none.ct.grid, static_cast<std::int64_t>(hu.size())), 75.0);
+  EXPECT_NEAR(hu[hu.size() / 2], 40, 12);
+  EXPECT_LT(hu[hu.size() * 99 / 100], 200) << "nothing bright but where bone blends in";
+}
+
+TEST(PhantomContrast, AortaHuSetsTheArteriesAndDecidesWhatIsContrastTruth) {
+  PhantomOptions o;
+  o.aorta_hu = 150.0;
+  const Drawn a150 = torso_with(o);
+  const std::vector<int> hu = hu_in(a150.ct, a150.truth.vessel);
+  ASSERT_FALSE(hu.empty());
+  EXPECT_NEAR(hu[hu.size() / 2], 150, 12);
+  EXPECT_TRUE(a150.truth.vessel.data == a150.truth.artery.data) << "arterial-phase veins";
+  o.aorta_hu = 80.0;  // less than 60 HU above soft tissue: drawn, not contrast truth
+  const Drawn a80 = torso_with(o);
+  EXPECT_EQ(count(a80.truth.vessel), 0);
+  EXPECT_EQ(count(a80.truth.artery), count(a150.truth.artery));
+  // aorta 400 alone is the arterial phase
+  o.aorta_hu = 400.0;
+  EXPECT_TRUE(make_phantom("torso", o).data ==
+              make_phantom("torso", with_contrast(PhantomContrast::arterial)).data);
+}
+
+TEST(PhantomArms, TwoArmsOrNone) {
+  PhantomOptions o;
+  o.arms = 2;
+  const Drawn two = torso_with(o);
+  const Grid& g = two.ct.grid;
+  for (std::int64_t k : {std::int64_t{0}, g.dims[2] / 2, g.dims[2] - 1})
+    EXPECT_EQ(components_in_slice(two.truth.body, k), 3) << "slice " << k;
+  std::int64_t at_border = 0;
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      at_border += two.truth.body.at(0, j, k) + two.truth.body.at(g.dims[0] - 1, j, k);
+  EXPECT_EQ(at_border, 0) << "both arms fit across the field of view";
+  o.arms = 0;
+  const Drawn none = torso_with(o);
+  EXPECT_EQ(components_in_slice(none.truth.body, g.dims[2] / 2), 1);
+  EXPECT_GT(count(two.truth.bone), count(none.truth.bone));
+}
+
+TEST(PhantomMetal, ScrewsInAVertebraWithStreaksInTheirSlicesOnly) {
+  PhantomOptions o;
+  o.metal = true;
+  const Drawn metal = torso_with(o);
+  PhantomTruth plain_truth;
+  const CtVolume plain = make_phantom("torso", {}, &plain_truth);
+  const Grid& g = plain.grid;
+  const std::vector<int> hu = hu_in(metal.ct, metal.truth.metal);
+  ASSERT_GT(hu.size(), 200u);
+  EXPECT_GT(hu.front(), 1700) << "half-covered edge voxels of a 3500 HU screw";
+  EXPECT_GT(hu.back(), 3400);
+  for (std::size_t n = 0; n < g.voxel_count(); ++n)
+    ASSERT_FALSE(metal.truth.metal.data[n] && !metal.truth.bone.data[n]) << n;
+  // Streaks: far from the screws, patient voxels differ from the plain torso by hundreds of HU,
+  // both ways, in the screws' slices; slices away from them are the plain torso's.
+  std::int64_t bright = 0, dark = 0, changed_elsewhere = 0;
+  for (std::int64_t k = 0; k < g.dims[2]; ++k) {
+    const double z = static_cast<double>(k) * g.spacing[2] - g.extent_mm()[2] / 2.0;
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        const std::size_t n = g.linear(i, j, k);
+        const int diff = metal.ct.data[n] - plain.data[n];
+        if (std::abs(z - 8.0) > 6.0) {
+          changed_elsewhere += diff != 0;
+          continue;
+        }
+        if (metal.truth.metal.data[n] || !plain_truth.body.data[n]) continue;
+        bright += diff > 300, dark += diff < -300;
+      }
+  }
+  EXPECT_GT(bright, 400) << bright << " bright, " << dark << " dark";
+  EXPECT_GT(dark, 400);
+  EXPECT_EQ(changed_elsewhere, 0);
+  // outside the body the streaks change nothing
+  for (std::size_t n = 0; n < g.voxel_count(); ++n)
+    if (!plain_truth.body.data[n]) {
+      ASSERT_EQ(metal.ct.data[n], plain.data[n]) << n;
+    }
+}
+
+TEST_F(TorsoTest, ThinSlabIsTheMiddleOfTheSameTorsoNotRescaled) {
+  PhantomOptions o;
+  o.dims = Index3{384, 256, 20};
+  const Drawn slab = torso_with(o);
+  const Grid& g = slab.ct.grid;
+  const std::int64_t shift = (ct_->grid.dims[2] - g.dims[2]) / 2;  // 38 slices of 2 mm
+  int worst = 0;
+  std::int64_t truth_differs = 0;
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        worst = std::max(worst, std::abs(slab.ct.at(i, j, k) - ct_->at(i, j, k + shift)));
+        truth_differs += slab.truth.bone.at(i, j, k) != truth_->bone.at(i, j, k + shift);
+      }
+  EXPECT_LE(worst, 20) << "the same anatomy; only the noise, indexed by voxel, differs";
+  EXPECT_EQ(truth_differs, 0);
+}
+
+TEST(PhantomSpec, ParsesNameAndOptions) {
+  const PhantomSpec s = parse_phantom_spec(
+      "torso,contrast=portal-venous,aorta-hu=300,arms=2,metal,dims=10x12x14,spacing=1x1x2.5");
+  EXPECT_EQ(s.name, "torso");
+  EXPECT_EQ(s.options.contrast, PhantomContrast::portal_venous);
+  EXPECT_EQ(s.options.aorta_hu, 300.0);
+  EXPECT_EQ(s.options.arms, 2);
+  EXPECT_TRUE(s.options.metal);
+  EXPECT_EQ(s.options.dims, (Index3{10, 12, 14}));
+  EXPECT_EQ(s.options.spacing, (Vec3{1.0, 1.0, 2.5}));
+  EXPECT_EQ(parse_phantom_spec("torso").name, "torso");
+  EXPECT_FALSE(parse_phantom_spec("torso,metal=0").options.metal);
+  for (const char* bad : {"torso,contrast=venous", "torso,arms=3", "torso,aorta-hu=abc",
+                          "torso,contrast", "torso,colour=red", "cube,metal", "sphere,arms=2",
+                          "torso,dims=10x10", "torso,aorta-hu=5000"})
+    EXPECT_THROW(parse_phantom_spec(bad), UsageError) << bad;
+}
+
+TEST(PhantomSpec, ReadCtDrawsTheOptions) {
+  PhantomOptions o;
+  o.dims = Index3{96, 64, 12};
+  o.contrast = PhantomContrast::arterial;
+  o.arms = 2;
+  const CtVolume read = read_ct("phantom:torso,dims=96x64x12,contrast=arterial,arms=2");
+  EXPECT_TRUE(read.data == make_phantom("torso", o).data);
+  PhantomOptions grid_only;
+  grid_only.dims = o.dims;
+  EXPECT_TRUE(read_ct("phantom:torso,dims=96x64x12").data == make_phantom("torso", grid_only).data);
 }
 
 }  // namespace
