@@ -16,7 +16,8 @@
 //   aorta, branches   % inside prep's bone <= 5 and <= 10; aorta coverage by the vessel mask >= 0.9
 //   T12               recall of the labelled vertebra in prep's bone >= 0.9
 //
-// Usage: prep_cases [--only TEXT] [--keep DIR] [--shared-data DIR]
+// Usage: prep_cases [--only TEXT] [--keep DIR] [--shared-data DIR] [--vessels auto|off]
+//   --vessels auto      prep with its experimental vessel search on (default off, as palp prep)
 //   --only TEXT         run only the cases whose name contains TEXT
 //   --keep DIR          write each case's prep into DIR/<n> and keep it (default: a temporary
 //                       directory, removed at the end)
@@ -148,9 +149,13 @@ std::string json_string_field(const std::string& json, const std::string& key) {
   return json.substr(open + 1, close - open - 1);
 }
 
+// --vessels auto: prep looks for contrast-filled lumens (off by default, as palp prep).
+bool g_find_vessels = false;
+
 PrepOutputs run_and_read(const std::string& input, const fs::path& dir) {
   PrepParams params;
   params.use_cache = false;
+  params.find_vessels = g_find_vessels;
   const auto start = std::chrono::steady_clock::now();
   run_prep(input, dir.string(), params);
   PrepOutputs out;
@@ -342,8 +347,14 @@ Options parse_options(int argc, char** argv) {
       o.keep = argv[++i];
     } else if (arg == "--shared-data" && has_value) {
       o.shared_data = argv[++i];
+    } else if (arg == "--vessels" && has_value) {
+      const std::string v = argv[++i];
+      if (v != "auto" && v != "off") std::exit(2);
+      g_find_vessels = v == "auto";
     } else {
-      std::fprintf(stderr, "usage: prep_cases [--only TEXT] [--keep DIR] [--shared-data DIR]\n");
+      std::fprintf(stderr,
+                   "usage: prep_cases [--only TEXT] [--keep DIR] [--shared-data DIR] "
+                   "[--vessels auto|off]\n");
       std::exit(arg == "-h" || arg == "--help" ? 0 : 2);
     }
   }
