@@ -57,28 +57,34 @@ std::optional<Mat3> inverse(const Mat3& a) {
 }
 
 // The map from `from`'s voxel indices to `to`'s; std::nullopt when `to`'s axes are degenerate.
-// Within 1e-5 of the identity (and 1e-3 voxel of no shift) it is made exactly the identity.
+// Within 1e-5 of the identity and 1e-3 voxel of a whole-voxel shift (the same lattice: the CT's
+// own grid, or a box of it as 3D Slicer crops a segmentation), it is made exactly that.
 std::optional<IndexMap> index_map(const Grid& from, const Grid& to) {
   const auto to_inverse = inverse(axes(to));
   if (!to_inverse) return std::nullopt;
   const Mat3& a = *to_inverse;
   const Mat3 b = axes(from);
   IndexMap map;
-  bool identity = true;
+  bool aligned = true;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
       for (int k = 0; k < 3; ++k) map.m[r][c] += a[r][k] * b[k][c];
-      identity = identity && std::fabs(map.m[r][c] - (r == c ? 1.0 : 0.0)) < 1e-5;
+      aligned = aligned && std::fabs(map.m[r][c] - (r == c ? 1.0 : 0.0)) < 1e-5;
     }
     for (int k = 0; k < 3; ++k) map.t[r] += a[r][k] * (from.world.origin[k] - to.world.origin[k]);
-    identity = identity && std::fabs(map.t[r]) < 1e-3;
+    aligned = aligned && std::fabs(map.t[r] - std::round(map.t[r])) < 1e-3;
   }
-  if (identity) map = {{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, {0, 0, 0}};
+  if (aligned) {
+    map.m = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+    for (double& t : map.t) t = std::round(t) + 0.0;
+  }
   return map;
 }
 
-bool is_identity(const IndexMap& map) {
-  return map.m == Mat3{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}} && map.t == Vec3{0, 0, 0};
+// The same lattice: label voxels are CT voxels shifted by whole voxels.
+bool is_aligned(const IndexMap& map) {
+  return map.m == Mat3{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}} &&
+         std::all_of(map.t.begin(), map.t.end(), [](double t) { return t == std::round(t); });
 }
 
 std::int64_t nearest(double x) {
@@ -372,7 +378,7 @@ LabelCounts read_labels(const LabelVolume& v, const Grid& ct, const LabelLookup&
   LabelCounts counts;
   counts.in_file.assign(classes, 0);
   counts.on_ct.assign(classes, 0);
-  counts.resampled = !(is_identity(*map) && g.dims == ct.dims);
+  counts.resampled = !is_aligned(*map);
   std::vector<Mask*> masks(classes, nullptr);
   const SlabTarget target{v, ct, *map, lookup, masks, mask_of};
   const std::int64_t per_slab =
@@ -395,7 +401,7 @@ LabelCounts read_labels(const LabelVolume& v, const Grid& ct, const LabelLookup&
 
 bool same_grid(const Grid& a, const Grid& b) {
   const auto map = index_map(a, b);
-  return a.dims == b.dims && map && is_identity(*map);
+  return a.dims == b.dims && map && is_aligned(*map) && map->t == Vec3{0, 0, 0};
 }
 
 std::string describe_grid(const Grid& g) {

@@ -54,7 +54,7 @@ struct LabelCounts {
   std::uint64_t undefined = 0;
   std::int64_t undefined_component = 0;
   std::uint32_t undefined_value = 0;
-  bool resampled = false;  // the file's grid is not the CT's
+  bool resampled = false;  // the file's voxels are not the CT's (nor a box of them)
 };
 
 // The mask class `cls` is written to (on the CT's grid; allocated by the caller at first use).
@@ -70,7 +70,7 @@ LabelCounts read_labels(const LabelVolume& volume, const Grid& ct, const LabelLo
                         std::size_t slab_values = kSlabValues);
 
 // True when the two grids have the same dims and place their voxels at the same points (within
-// 1e-5 of a voxel per axis and 1e-3 voxel in origin): no resampling.
+// 1e-5 of a voxel per axis and 1e-3 voxel in origin).
 bool same_grid(const Grid& a, const Grid& b);
 
 // "1.5 x 1.5 x 1.5 mm (300 x 300 x 200 voxels)", for notes.

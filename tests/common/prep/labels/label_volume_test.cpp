@@ -90,6 +90,21 @@ TEST(LabelVolume, SameGridIsCopiedAndCounted) {
   EXPECT_EQ(r.masks.at(1).data, second);
 }
 
+// 3D Slicer crops a segmentation to its segments' box: the CT's lattice, shifted by whole voxels.
+TEST(LabelVolume, BoxOfTheCtGridIsPlacedWithoutResampling) {
+  TempDir dir;
+  const Grid ct = grid({4, 3, 2}, {0.5, 0.5, 2}, {10, 20, 30});
+  const Grid box = grid({2, 2, 1}, {0.5, 0.5, 2}, {11, 20.5, 32});        // from CT voxel (2, 1, 1)
+  write_bytes(dir.file("l.raw"), std::vector<std::uint8_t>{0, 1, 1, 0});  // (1,0) and (0,1)
+  const Read r =
+      read(raw_volume(dir.file("l.raw"), box, ScalarType::u8), ct, classes_by_value(1), 1);
+  EXPECT_FALSE(r.counts.resampled);
+  EXPECT_EQ(r.counts.ct_covered, 4u);
+  std::vector<std::uint8_t> expected(24, 0);
+  expected[ct.linear(3, 1, 1)] = expected[ct.linear(2, 2, 1)] = 1;
+  EXPECT_EQ(r.masks.at(0).data, expected);
+}
+
 // A 2 mm label map whose first voxel centre is at x = y = 0.5 mm: CT voxels i = 0, 1 (x = 0, 1 mm)
 // are nearest to label voxel 0 (0.5 mm), i = 2, 3 to label voxel 1 (2.5 mm); the same along j.
 TEST(LabelVolume, CoarserGridIsResampledNearestNeighbour) {
