@@ -55,7 +55,9 @@ std::vector<Segment> segments_of(const NrrdLayeredImage& header, const std::stri
     const std::string prefix = "Segment" + std::to_string(n) + "_";
     const auto name = kv.find(prefix + "Name");
     const auto id = kv.find(prefix + "ID");
-    s.name = name != kv.end() ? name->second : id != kv.end() ? id->second : prefix + "Name";
+    s.name = name != kv.end() ? name->second
+             : id != kv.end() ? id->second
+                              : "Segment" + std::to_string(n);
     s.value = integer_field(kv, prefix + "LabelValue", 1, path);
     s.layer = integer_field(kv, prefix + "Layer", header.components > 1 ? n : 0, path);
     if (s.value < 1 || s.value > static_cast<std::int64_t>(kMaxLabelValue))
