@@ -38,25 +38,33 @@ std::string joined(const std::vector<std::string>& parts, const char* separator)
 
 LabelBuilder::LabelBuilder(const Grid& ct, std::string path) : ct_(ct), path_(std::move(path)) {}
 
-std::size_t LabelBuilder::structure_of(const ClassMeaning& meaning) {
+std::size_t LabelBuilder::structure_of(const ClassMeaning& meaning, const std::string& file) {
   for (std::size_t s = 0; s < structures_.size(); ++s)
     if (structures_[s].meaning.kind == meaning.kind &&
         structures_[s].meaning.structure == meaning.structure)
       return s;
-  structures_.push_back({meaning, Mask{}, {}, {}, 0});
+  if (structures_.size() == 255)
+    throw labels_error(file, "more than 255 structures (palp keeps one byte per voxel)");
+  structures_.push_back({meaning, {}, {}});
   return structures_.size() - 1;
+}
+
+Mask& LabelBuilder::layer(std::size_t index) {
+  if (layers_.size() <= index) layers_.resize(index + 1);
+  if (layers_[index].data.empty()) layers_[index] = Mask(ct_, 0, "labels: layer");
+  return layers_[index];
 }
 
 LabelCounts LabelBuilder::add(const LabelVolume& volume, const std::vector<FileClass>& classes,
                               const LabelLookup& lookup) {
   std::vector<std::size_t> target;
-  for (const FileClass& cls : classes) target.push_back(structure_of(cls.meaning));
-  const MaskOfClass mask_of = [&](std::int32_t cls) -> Mask& {
-    Structure& s = structures_[target[static_cast<std::size_t>(cls)]];
-    if (s.mask.data.empty()) s.mask = Mask(ct_, 0, "labels: " + s.meaning.structure);
-    return s.mask;
+  for (const FileClass& cls : classes) target.push_back(structure_of(cls.meaning, volume.name));
+  const TargetOfClass target_of = [&](std::int32_t cls) {
+    const auto c = static_cast<std::size_t>(cls);
+    return ClassTarget{&layer(classes[c].layer), static_cast<std::uint8_t>(target[c] + 1)};
   };
-  const LabelCounts counts = read_labels(volume, ct_, lookup, classes.size(), mask_of);
+  const LabelCounts counts = read_labels(volume, ct_, lookup, classes.size(), target_of);
+  check_overlaps(volume, classes, counts);
   if (counts.resampled) {
     resampled_ = true;
     const std::string from = describe_grid(volume.image.grid);
@@ -72,7 +80,6 @@ LabelCounts LabelBuilder::add(const LabelVolume& volume, const std::vector<FileC
     if (counts.on_ct[i] > 0) {
       add_once(s.classes, classes[i].name);
       if (!classes[i].note.empty()) add_once(s.notes, classes[i].note);
-      s.voxels += counts.on_ct[i];
     } else if (counts.in_file[i] > 0) {
       note(classes[i].name + ": its " + std::to_string(counts.in_file[i]) + " voxels in " +
            volume.name + " all lie outside the CT: left out");
@@ -81,7 +88,72 @@ LabelCounts LabelBuilder::add(const LabelVolume& volume, const std::vector<FileC
   return counts;
 }
 
+void LabelBuilder::check_overlaps(const LabelVolume& volume, const std::vector<FileClass>& classes,
+                                  const LabelCounts& counts) const {
+  if (counts.overlaps == 0) return;
+  const std::size_t at = counts.overlap_at;
+  const auto i = static_cast<std::int64_t>(at) % ct_.dims[0];
+  const auto j = static_cast<std::int64_t>(at) / ct_.dims[0] % ct_.dims[1];
+  const auto k = static_cast<std::int64_t>(at) / ct_.dims[0] / ct_.dims[1];
+  throw labels_error(volume.name,
+                     classes[static_cast<std::size_t>(counts.overlap_class)].name + " overlaps " +
+                         structures_[counts.overlap_previous - 1u].meaning.structure + " on " +
+                         std::to_string(counts.overlaps) + " CT voxels, the first (" +
+                         std::to_string(i) + ", " + std::to_string(j) + ", " + std::to_string(k) +
+                         "): a voxel has one label");
+}
+
+// Each structure's box of CT voxels, over all layers.
+void LabelBuilder::find_boxes() {
+  for (const Mask& ids : layers_) {
+    if (ids.data.empty()) continue;
+    std::size_t at = 0;
+    for (std::int64_t k = 0; k < ct_.dims[2]; ++k)
+      for (std::int64_t j = 0; j < ct_.dims[1]; ++j)
+        for (std::int64_t i = 0; i < ct_.dims[0]; ++i, ++at) {
+          if (ids.data[at] == 0) continue;
+          Structure& s = structures_[ids.data[at] - 1u];
+          const Index3 p{i, j, k};
+          const bool first = s.hi[0] < s.lo[0];
+          for (int a = 0; a < 3; ++a) {
+            s.lo[a] = first ? p[a] : std::min(s.lo[a], p[a]);
+            s.hi[a] = first ? p[a] : std::max(s.hi[a], p[a]);
+          }
+        }
+  }
+}
+
+// Writes every structure's voxels into its mask (whose grid is the structure's box) and frees
+// the layers.
+void LabelBuilder::cut_masks() {
+  for (const Mask& ids : layers_) {
+    if (ids.data.empty()) continue;
+    std::size_t at = 0;
+    for (std::int64_t k = 0; k < ct_.dims[2]; ++k)
+      for (std::int64_t j = 0; j < ct_.dims[1]; ++j)
+        for (std::int64_t i = 0; i < ct_.dims[0]; ++i, ++at) {
+          if (ids.data[at] == 0) continue;
+          Structure& s = structures_[ids.data[at] - 1u];
+          std::uint8_t& voxel = s.mask->at(i - s.lo[0], j - s.lo[1], k - s.lo[2]);
+          s.voxels += voxel == 0 ? 1 : 0;
+          voxel = 1;
+        }
+  }
+  layers_.clear();
+}
+
 namespace {
+
+// The box [lo, hi] of `ct`'s voxels as a grid of its own, placed where those voxels are.
+Grid box_grid(const Grid& ct, const Index3& lo, const Index3& hi) {
+  Grid box = ct;
+  for (int a = 0; a < 3; ++a) box.dims[a] = hi[a] - lo[a] + 1;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      box.world.origin[r] +=
+          ct.world.direction[r * 3 + c] * ct.spacing[c] * static_cast<double>(lo[c]);
+  return box;
+}
 
 void merge_into(Mask& into, const Mask& from, const Grid& ct) {
   if (from.data.empty()) return;
@@ -92,40 +164,48 @@ void merge_into(Mask& into, const Mask& from, const Grid& ct) {
 }  // namespace
 
 LabelMaps LabelBuilder::finish() {
+  find_boxes();
   LabelMaps out;
-  nlohmann::json structures = nlohmann::json::object();
   Mask vessel_unnamed;
+  out.organs.reserve(structures_.size());  // the masks' addresses stay put
   for (Structure& s : structures_) {
-    if (s.mask.data.empty()) continue;
-    const std::string& name = s.meaning.structure;
-    structures[name] = {
-        {"kind", kind_name(s.meaning.kind)}, {"classes", s.classes}, {"voxels", s.voxels}};
+    if (s.hi[0] < s.lo[0]) continue;
     switch (s.meaning.kind) {
       case Kind::bone:
-        out.bone = std::move(s.mask);
+        s.mask = &out.bone;
         break;
       case Kind::artery:
-        out.artery = std::move(s.mask);
+        s.mask = &out.artery;
         break;
       case Kind::vein:
-        out.vein = std::move(s.mask);
+        s.mask = &out.vein;
         break;
       case Kind::vessel:
-        vessel_unnamed = std::move(s.mask);
+        s.mask = &vessel_unnamed;
         break;
       case Kind::organ:
       case Kind::muscle:
-        out.organs.push_back({name,
+        out.organs.push_back({s.meaning.structure,
                               kind_name(s.meaning.kind),
-                              std::move(s.mask),
+                              Mask(box_grid(ct_, s.lo, s.hi), 0, "labels: " + s.meaning.structure),
+                              s.lo,
                               {{"file", path_},
                                {"format", format_},
                                {"classes", s.classes},
                                {"resampled", resampled_},
                                {"note", joined(s.notes, "; ")}}});
-        break;
+        s.mask = &out.organs.back().mask;
+        continue;
     }
+    *s.mask = Mask(ct_, 0, "labels: " + s.meaning.structure);
+    s.lo = {0, 0, 0};  // the unions lie on the whole CT grid
   }
+  cut_masks();
+  nlohmann::json structures = nlohmann::json::object();
+  for (const Structure& s : structures_)
+    if (s.voxels > 0)
+      structures[s.meaning.structure] = {
+          {"kind", kind_name(s.meaning.kind)}, {"classes", s.classes}, {"voxels", s.voxels}};
   if (structures.empty()) throw labels_error(path_, "no labelled voxel lies inside the CT");
   merge_into(out.vessel, out.artery, ct_);
   merge_into(out.vessel, out.vein, ct_);
@@ -173,6 +253,22 @@ void read_nifti_labels(const std::string& path, const LabelMapOptions& options,
 }
 
 }  // namespace
+
+Mask on_ct_grid(const LabelledStructure& structure, const Grid& ct_grid) {
+  Mask out(ct_grid, 0, "labels: " + structure.name);
+  const Grid& box = structure.mask.grid;
+  const Index3& o = structure.offset;
+  for (int a = 0; a < 3; ++a)
+    if (o[a] < 0 || o[a] + box.dims[a] > ct_grid.dims[a])
+      throw UsageError("labels: " + structure.name + "'s box does not fit the CT's grid");
+  for (std::int64_t k = 0; k < box.dims[2]; ++k)
+    for (std::int64_t j = 0; j < box.dims[1]; ++j)
+      std::copy_n(
+          structure.mask.data.begin() + static_cast<std::ptrdiff_t>(box.linear(0, j, k)),
+          box.dims[0],
+          out.data.begin() + static_cast<std::ptrdiff_t>(ct_grid.linear(o[0], o[1] + j, o[2] + k)));
+  return out;
+}
 
 LabelMaps read_label_maps(const std::string& path, const Grid& ct_grid,
                           const LabelMapOptions& options) {

@@ -11,7 +11,10 @@
 // owns), values that are not whole numbers, a header that claims more data than the file holds,
 // an empty map, an empty Slicer segment and an empty file TotalSegmentator was asked for
 // (--roi_subset), and segment names that cannot become a file name. The label file is read slab
-// by slab (label_volume.hpp): memory is the masks on the CT's grid plus at most 65 MiB.
+// by slab (label_volume.hpp). Memory: while reading, one byte per CT voxel (per Slicer layer) and
+// at most 65 MiB; the result, the bone, artery, vein and vessel masks on the CT's grid and each
+// organ's mask in its own box (a whole-body TotalSegmentator output has dozens of organs and
+// muscles: a CT-sized mask each would take gigabytes).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -25,7 +28,11 @@ namespace palp {
 struct LabelledStructure {
   std::string name;  // a file name: "liver", "kidney_left", "lung_right", "tumor", ...
   std::string kind;  // "organ" or "muscle"
-  Mask mask;         // on the CT's grid, 0/1, not empty
+  // 0/1 over the structure's box of CT voxels: voxel (i, j, k) is CT voxel offset + (i, j, k).
+  // mask.grid is that box, placed in the world where those CT voxels are (the CT's spacing and
+  // direction), so written as it is it overlays the CT; on_ct_grid() makes it CT-sized.
+  Mask mask;
+  Index3 offset{0, 0, 0};
   // {"file", "format", "classes": [the file's class or segment names], "resampled", "note"}
   nlohmann::json source;
 };
@@ -49,6 +56,9 @@ inline constexpr const char* kTotalSegmentatorMap = "totalsegmentator";
 struct LabelMapOptions {
   std::string class_map;
 };
+
+// The structure's mask on the whole CT grid (one CT-sized allocation).
+Mask on_ct_grid(const LabelledStructure& structure, const Grid& ct_grid);
 
 // `path`: a .nii/.nii.gz (TotalSegmentator multi-label), a directory (TotalSegmentator's folder
 // output), or a .seg.nrrd/.nrrd/.nhdr (3D Slicer). UsageError for an unknown class_map;

@@ -18,17 +18,23 @@ namespace palp::labels {
 struct FileClass {
   std::string name;
   ClassMeaning meaning;
-  std::string note;  // for the structure's source ("not a name palp knows: ..."), or empty
+  std::string note;       // for the structure's source ("not a name palp knows: ..."), or empty
+  std::size_t layer = 0;  // a Slicer segment's layer: segments in different layers may overlap
 };
 
-// The structures one label input builds, across its files (a folder has one per class).
+// The structures one label input builds, across its files (a folder has one per class). While
+// the files are read, each CT voxel holds the id of its structure, one byte per voxel and layer;
+// finish() cuts the masks from them: bone, arteries, veins on the CT's grid, each organ in its
+// box. Memory: layers + unions + boxes, not a CT-sized mask per organ.
 class LabelBuilder {
  public:
   LabelBuilder(const Grid& ct, std::string path);
 
   void set_format(std::string format) { format_ = std::move(format); }
   // Reads `volume`; lookup class i is classes[i]. Notes a grid that is not the CT's (once per
-  // grid) and classes whose voxels all lie outside the CT (they are dropped).
+  // grid) and classes whose voxels all lie outside the CT (they are dropped). InputError when a
+  // class lands on voxels another structure holds in its layer (overlapping files of a folder),
+  // or past 255 structures.
   LabelCounts add(const LabelVolume& volume, const std::vector<FileClass>& classes,
                   const LabelLookup& lookup);
   void note(std::string text) { notes_.push_back(std::move(text)); }
@@ -38,16 +44,23 @@ class LabelBuilder {
  private:
   struct Structure {
     ClassMeaning meaning;
-    Mask mask;
-    std::vector<std::string> classes;  // the file's names, in the order met
-    std::vector<std::string> notes;    // the classes' notes, each once
-    std::uint64_t voxels = 0;          // CT voxels, counted per class (overlaps count twice)
+    std::vector<std::string> classes;    // the file's names, in the order met
+    std::vector<std::string> notes;      // the classes' notes, each once
+    Index3 lo{0, 0, 0}, hi{-1, -1, -1};  // its box of CT voxels (empty: hi < lo)
+    Mask* mask = nullptr;                // where finish() cuts it to
+    std::uint64_t voxels = 0;            // CT voxels in its mask
   };
-  std::size_t structure_of(const ClassMeaning& meaning);
+  std::size_t structure_of(const ClassMeaning& meaning, const std::string& file);
+  Mask& layer(std::size_t index);
+  void check_overlaps(const LabelVolume& volume, const std::vector<FileClass>& classes,
+                      const LabelCounts& counts) const;
+  void find_boxes();
+  void cut_masks();
 
   Grid ct_;
   std::string path_, format_;
   std::vector<Structure> structures_;
+  std::vector<Mask> layers_;  // per layer, each CT voxel's structure id (index + 1) or 0
   std::vector<std::string> notes_, resampled_grids_;
   bool resampled_ = false;
 };

@@ -87,8 +87,11 @@ bool is_aligned(const IndexMap& map) {
          std::all_of(map.t.begin(), map.t.end(), [](double t) { return t == std::round(t); });
 }
 
+// floor(x + 0.5) without a call to floor (the per-voxel loops round three times a voxel).
 std::int64_t nearest(double x) {
-  return static_cast<std::int64_t>(std::floor(x + 0.5));
+  const double y = x + 0.5;
+  const auto n = static_cast<std::int64_t>(y);
+  return n - (y < static_cast<double>(n) ? 1 : 0);
 }
 
 // The grid's voxel centres' box in the world (LPS mm), "[x0, x1] x [y0, y1] x [z0, z1] mm".
@@ -315,8 +318,8 @@ struct SlabTarget {
   const Grid& ct;
   const IndexMap& map;
   const LabelLookup& lookup;
-  std::vector<Mask*>& masks;  // per class, null until first written
-  const MaskOfClass& mask_of;
+  std::vector<ClassTarget>& targets;  // per class, no volume until first written
+  const TargetOfClass& target_of;
 };
 
 void write_voxel(const SlabTarget& t, const std::uint16_t* values, std::size_t at,
@@ -326,14 +329,47 @@ void write_voxel(const SlabTarget& t, const std::uint16_t* values, std::size_t a
     const std::int32_t cls = t.lookup.at(c, values[c]);
     if (cls < 0) continue;
     const auto index = static_cast<std::size_t>(cls);
-    if (!t.masks[index]) t.masks[index] = &t.mask_of(cls);
-    t.masks[index]->data[at] = 1;
+    if (!t.targets[index].volume) t.targets[index] = t.target_of(cls);
+    const ClassTarget& target = t.targets[index];
+    std::uint8_t& slot = target.volume->data[at];
+    if (slot != 0 && slot != target.value && counts.overlaps++ == 0) {
+      counts.overlap_at = at;
+      counts.overlap_previous = slot;
+      counts.overlap_class = cls;
+    }
+    slot = target.value;
     ++counts.on_ct[index];
+  }
+}
+
+// The same lattice (label voxel = CT voxel + a whole-voxel offset): rows copied, no rounding.
+void put_slab_aligned(const SlabTarget& t, const std::vector<std::uint16_t>& slab, std::int64_t k0,
+                      std::int64_t k1, LabelCounts& counts) {
+  const Index3& ld = t.v.image.grid.dims;
+  Index3 o;
+  for (int a = 0; a < 3; ++a) o[a] = static_cast<std::int64_t>(t.map.t[a]);
+  const auto components = static_cast<std::size_t>(t.v.components);
+  const std::int64_t i0 = std::max<std::int64_t>(0, -o[0]);
+  const std::int64_t i1 = std::min(t.ct.dims[0], ld[0] - o[0]);
+  const std::int64_t j0 = std::max<std::int64_t>(0, -o[1]);
+  const std::int64_t j1 = std::min(t.ct.dims[1], ld[1] - o[1]);
+  const std::int64_t kb = std::max<std::int64_t>(0, k0 - o[2]);
+  const std::int64_t ke = std::min(t.ct.dims[2], k1 - o[2]);
+  for (std::int64_t k = kb; k < ke; ++k) {
+    for (std::int64_t j = j0; j < j1; ++j) {
+      counts.ct_covered += static_cast<std::uint64_t>(std::max<std::int64_t>(0, i1 - i0));
+      for (std::int64_t i = i0; i < i1; ++i) {
+        const auto voxel =
+            static_cast<std::size_t>(i + o[0] + ld[0] * (j + o[1] + ld[1] * (k + o[2] - k0)));
+        write_voxel(t, slab.data() + voxel * components, t.ct.linear(i, j, k), counts);
+      }
+    }
   }
 }
 
 void put_slab(const SlabTarget& t, const std::vector<std::uint16_t>& slab, std::int64_t k0,
               std::int64_t k1, LabelCounts& counts) {
+  if (is_aligned(t.map)) return put_slab_aligned(t, slab, k0, k1, counts);
   const Index3& ld = t.v.image.grid.dims;
   const auto& m = t.map.m;
   const auto components = static_cast<std::size_t>(t.v.components);
@@ -361,7 +397,8 @@ void put_slab(const SlabTarget& t, const std::vector<std::uint16_t>& slab, std::
 }  // namespace
 
 LabelCounts read_labels(const LabelVolume& v, const Grid& ct, const LabelLookup& lookup,
-                        std::size_t classes, const MaskOfClass& mask_of, std::size_t slab_values) {
+                        std::size_t classes, const TargetOfClass& target_of,
+                        std::size_t slab_values) {
   const Grid& g = v.image.grid;
   validate_grid(g, v.name);
   const auto components = static_cast<std::uint64_t>(v.components);
@@ -379,8 +416,8 @@ LabelCounts read_labels(const LabelVolume& v, const Grid& ct, const LabelLookup&
   counts.in_file.assign(classes, 0);
   counts.on_ct.assign(classes, 0);
   counts.resampled = !is_aligned(*map);
-  std::vector<Mask*> masks(classes, nullptr);
-  const SlabTarget target{v, ct, *map, lookup, masks, mask_of};
+  std::vector<ClassTarget> targets(classes);
+  const SlabTarget target{v, ct, *map, lookup, targets, target_of};
   const std::int64_t per_slab =
       std::max<std::int64_t>(1, static_cast<std::int64_t>(slab_values / slice));
   std::vector<std::uint16_t> slab;

@@ -5,7 +5,8 @@
 // Memory: the label file is never held whole. The reader keeps one slab of label slices, at most
 // kSlabValues values (64 MiB as uint16) or one slice if a slice is larger (a slice is at most
 // kSlabValues values: larger ones are refused), and a 1 MiB buffer of stored bytes; what it writes
-// goes into masks on the CT's grid (one per structure, allocated at first use). Nothing is read
+// goes into volumes on the CT's grid the caller gives (palp: one byte per CT voxel and layer, a
+// structure's id in each; the masks are cut from them afterwards). Nothing is read
 // before the header has been checked against the file's size (raw voxels must all be in the
 // file, compressed ones within deflate's 1032:1 of it).
 #pragma once
@@ -54,19 +55,31 @@ struct LabelCounts {
   std::uint64_t undefined = 0;
   std::int64_t undefined_component = 0;
   std::uint32_t undefined_value = 0;
+  // CT voxels a class was written to that already held another value (another structure's id):
+  // how many, and the first one (its linear index, the value there, the class written).
+  std::uint64_t overlaps = 0;
+  std::size_t overlap_at = 0;
+  std::uint8_t overlap_previous = 0;
+  std::int32_t overlap_class = 0;
   bool resampled = false;  // the file's voxels are not the CT's (nor a box of them)
 };
 
-// The mask class `cls` is written to (on the CT's grid; allocated by the caller at first use).
-using MaskOfClass = std::function<Mask&(std::int32_t cls)>;
+// Where class `cls` is written: a volume on the CT's grid (allocated by the caller at first use)
+// and the value written there.
+struct ClassTarget {
+  Mask* volume = nullptr;
+  std::uint8_t value = 1;
+};
+using TargetOfClass = std::function<ClassTarget(std::int32_t cls)>;
 
-// Reads `volume`, counts every value, and sets to 1, for each CT voxel, the masks of the classes
-// its nearest label voxel holds. InputError for a lying header, a truncated file, a value that is
-// not a whole number 0..65535, a slice larger than `slab_values` values, and a file that does not
-// overlap the CT. Undefined values are only counted: the caller names them. (`slab_values` is
-// kSlabValues; tests pass less to cross slabs on small files.)
+// Reads `volume`, counts every value, and writes, for each CT voxel, the targets of the classes
+// its nearest label voxel holds (a voxel that held another value is counted as an overlap).
+// InputError for a lying header, a truncated file, a value that is not a whole number 0..65535, a
+// slice larger than `slab_values` values, and a file that does not overlap the CT. Undefined values
+// are only counted: the caller names them. (`slab_values` is kSlabValues; tests pass less to cross
+// slabs on small files.)
 LabelCounts read_labels(const LabelVolume& volume, const Grid& ct, const LabelLookup& lookup,
-                        std::size_t classes, const MaskOfClass& mask_of,
+                        std::size_t classes, const TargetOfClass& target_of,
                         std::size_t slab_values = kSlabValues);
 
 // True when the two grids have the same dims and place their voxels at the same points (within

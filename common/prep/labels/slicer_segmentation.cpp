@@ -75,7 +75,7 @@ std::vector<Segment> segments_of(const NrrdLayeredImage& header, const std::stri
 // Where a segment goes: by its name; an organ palp does not know keeps its name as a file name.
 FileClass segment_class(const Segment& s, const std::string& path) {
   const NameMeaning named = classify_name(s.name);
-  FileClass cls{s.name, named.meaning, {}};
+  FileClass cls{s.name, named.meaning, {}, static_cast<std::size_t>(s.layer)};
   if (named.known) return cls;
   const auto file = structure_file_name(s.name);
   if (!file)

@@ -105,7 +105,7 @@ TEST(LabelMaps, LargerMapCostsOneSlabNotItsSize) {
   Mask expected(ct);
   for (std::int64_t j = 0; j < 32; ++j)
     for (std::int64_t i = 0; i < 64; ++i) expected.at(i, j, 4) = 1;
-  EXPECT_EQ(maps.organs[0].mask.data, expected.data);
+  EXPECT_EQ(on_ct_grid(maps.organs[0], ct).data, expected.data);
   // One slab (64 MiB) and the 1 MiB read buffer, well under the map's 128 MiB as bytes.
   if (before > 0) {
     EXPECT_LT(gained, std::size_t{100} << 20);

@@ -58,10 +58,10 @@ Read read(const LabelVolume& v, const Grid& ct, const LabelLookup& lookup, std::
   Read out;
   out.counts = read_labels(
       v, ct, lookup, classes,
-      [&](std::int32_t cls) -> Mask& {
+      [&](std::int32_t cls) {
         auto [it, fresh] = out.masks.try_emplace(cls);
         if (fresh) it->second = Mask(ct);
-        return it->second;
+        return ClassTarget{&it->second, 1};
       },
       slab_values);
   return out;
@@ -177,6 +177,26 @@ TEST(LabelVolume, LayersHaveTheirOwnValues) {
   EXPECT_EQ(r.masks.at(0).data, (std::vector<std::uint8_t>{1, 0}));
   EXPECT_EQ(r.masks.at(1).data, (std::vector<std::uint8_t>{1, 1}));
   EXPECT_EQ(r.counts.labelled_in_file, 2u);
+}
+
+// Two classes into one volume with their own values (palp's structure ids): a voxel written by
+// both is an overlap, the first one recorded.
+TEST(LabelVolume, OverlapsInOneTargetVolumeAreCounted) {
+  TempDir dir;
+  const Grid g = grid({2, 1, 1});
+  write_bytes(dir.file("l.raw"), std::vector<std::uint8_t>{1, 1, 0, 1});  // (layer0, layer1) x 2
+  LabelLookup lookup;
+  lookup.table = {{LabelLookup::kBackground, 0}, {LabelLookup::kBackground, 1}};
+  Mask ids(g);
+  const LabelCounts counts = read_labels(
+      raw_volume(dir.file("l.raw"), g, ScalarType::u8, 2), g, lookup, 2, [&](std::int32_t cls) {
+        return ClassTarget{&ids, static_cast<std::uint8_t>(cls + 7)};
+      });
+  EXPECT_EQ(counts.overlaps, 1u);
+  EXPECT_EQ(counts.overlap_at, 0u);
+  EXPECT_EQ(counts.overlap_previous, 7);
+  EXPECT_EQ(counts.overlap_class, 1);
+  EXPECT_EQ(ids.data, (std::vector<std::uint8_t>{8, 8}));
 }
 
 TEST(LabelVolume, UndefinedValuesAreCountedNotWritten) {

@@ -133,10 +133,10 @@ TEST(SlicerSegmentation, OneLayerByName) {
   EXPECT_EQ(maps.organs[0].name, "liver");
   EXPECT_EQ(maps.organs[0].source["classes"], nlohmann::json{"Liver"});
   EXPECT_EQ(maps.organs[1].name, "lung_right");
-  EXPECT_EQ(maps.organs[1].mask.data, mask({{2, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[1], ct_grid()).data, mask({{2, 0, 0}}).data);
   EXPECT_EQ(maps.organs[2].name, "tumor_1");
   EXPECT_EQ(maps.organs[2].kind, "organ");
-  EXPECT_EQ(maps.organs[2].mask.data, mask({{4, 3, 2}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[2], ct_grid()).data, mask({{4, 3, 2}}).data);
   const std::string note =
       "segment \"Tumor 1\" is no name palp knows: kept as the organ \"tumor_1\"";
   EXPECT_EQ(maps.organs[2].source["note"], note);
@@ -156,9 +156,9 @@ TEST(SlicerSegmentation, OverlappingLayers) {
   EXPECT_EQ(maps.bone.data, mask({{1, 0, 0}}).data);
   ASSERT_EQ(maps.organs.size(), 2u);
   EXPECT_EQ(maps.organs[0].name, "liver");
-  EXPECT_EQ(maps.organs[0].mask.data, mask({{0, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[0], ct_grid()).data, mask({{0, 0, 0}}).data);
   EXPECT_EQ(maps.organs[1].name, "overlapping_sphere");
-  EXPECT_EQ(maps.organs[1].mask.data, mask({{1, 0, 0}, {2, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[1], ct_grid()).data, mask({{1, 0, 0}, {2, 0, 0}}).data);
 }
 
 // Before Slicer 4.11 a segmentation had one segment per layer, value 1, and no LabelValue/Layer.
@@ -169,9 +169,9 @@ TEST(SlicerSegmentation, OldFileOneSegmentPerLayer) {
   write_seg(dir.file("old.seg.nrrd"), {{"liver", 1, 0, false}, {"spleen", 1, 0, false}}, 2, values);
   const LabelMaps maps = read_label_maps(dir.file("old.seg.nrrd"), ct_grid());
   ASSERT_EQ(maps.organs.size(), 2u);
-  EXPECT_EQ(maps.organs[0].mask.data, mask({{0, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[0], ct_grid()).data, mask({{0, 0, 0}}).data);
   EXPECT_EQ(maps.organs[1].name, "spleen");
-  EXPECT_EQ(maps.organs[1].mask.data, mask({{0, 0, 0}, {1, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[1], ct_grid()).data, mask({{0, 0, 0}, {1, 0, 0}}).data);
 }
 
 // Slicer crops a segmentation to its segments: a 2 x 1 x 1 box whose origin is two voxels along
@@ -182,7 +182,7 @@ TEST(SlicerSegmentation, CroppedBoxLandsInPlace) {
             193.09599304199222 - 2 * 3.04687595367432);
   const LabelMaps maps = read_label_maps(dir.file("c.seg.nrrd"), ct_grid());
   ASSERT_EQ(maps.organs.size(), 1u);
-  EXPECT_EQ(maps.organs[0].mask.data, mask({{2, 0, 0}, {3, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[0], ct_grid()).data, mask({{2, 0, 0}, {3, 0, 0}}).data);
   EXPECT_EQ(maps.source["resampled"], false);
   EXPECT_TRUE(maps.notes.empty());
 }

@@ -62,9 +62,15 @@ void expect_abdomen(const LabelMaps& maps) {
   EXPECT_EQ(maps.organs[0].kind, "muscle");
   EXPECT_EQ(maps.organs[1].name, "liver");
   EXPECT_EQ(maps.organs[1].kind, "organ");
-  EXPECT_EQ(maps.organs[1].mask.data, mask(kCt, {{0, 0, 0}, {1, 0, 0}}).data);
+  // The liver's box: CT voxels (0..1, 0, 0), placed where they are (1.5 mm voxels from -4, 7, 100).
+  EXPECT_EQ(maps.organs[1].offset, (Index3{0, 0, 0}));
+  EXPECT_EQ(maps.organs[1].mask.grid.dims, (Index3{2, 1, 1}));
+  EXPECT_EQ(maps.organs[0].offset, (Index3{5, 4, 3}));
+  EXPECT_EQ(maps.organs[0].mask.grid.world.origin, (Vec3{-4 + 7.5, 7 + 6, 100 + 4.5}));
+  EXPECT_EQ(maps.organs[0].mask.data, std::vector<std::uint8_t>{1});
+  EXPECT_EQ(on_ct_grid(maps.organs[1], kCt).data, mask(kCt, {{0, 0, 0}, {1, 0, 0}}).data);
   EXPECT_EQ(maps.organs[2].name, "lung_left");
-  EXPECT_EQ(maps.organs[2].mask.data, mask(kCt, {{0, 2, 0}, {1, 2, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[2], kCt).data, mask(kCt, {{0, 2, 0}, {1, 2, 0}}).data);
   EXPECT_EQ(maps.organs[2].source["classes"],
             (nlohmann::json{"lung_upper_lobe_left", "lung_lower_lobe_left"}));
   EXPECT_EQ(maps.source["structures"]["bone"]["classes"],
@@ -104,7 +110,7 @@ TEST(TotalSegmentatorMultilabel, OwnNumberingIsReadByName) {
                                    caret_label_table({{1, "liver"}, {2, "aorta"}}));
   const LabelMaps maps = read_label_maps(dir.file("seg.nii"), kCt, {kTotalSegmentatorMap});
   ASSERT_EQ(maps.organs.size(), 1u);
-  EXPECT_EQ(maps.organs[0].mask.data, mask(kCt, {{0, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[0], kCt).data, mask(kCt, {{0, 0, 0}}).data);
   EXPECT_EQ(maps.artery.data, mask(kCt, {{1, 0, 0}}).data);
   ASSERT_EQ(maps.notes.size(), 1u);
   EXPECT_NE(maps.notes[0].find("numbers the classes otherwise than TotalSegmentator v2.2"),
@@ -149,7 +155,7 @@ TEST(TotalSegmentatorMultilabel, OtherGridIsResampledWithANote) {
   ASSERT_EQ(maps.organs.size(), 1u);
   // CT x index i at 1.5 i mm is nearest to label a = i / 2 (ties up): a = 1 for i = 1, 2.
   // Along y, b = 0 for j = 0 only (j = 1 is at 0.5: ties to 1); along z likewise c = 0 for k = 0.
-  EXPECT_EQ(maps.organs[0].mask.data, mask(kCt, {{1, 0, 0}, {2, 0, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[0], kCt).data, mask(kCt, {{1, 0, 0}, {2, 0, 0}}).data);
   EXPECT_EQ(maps.organs[0].source["resampled"], true);
   ASSERT_EQ(maps.notes.size(), 1u);
   EXPECT_EQ(maps.notes[0], dir.file("fast.nii.gz") +
@@ -182,7 +188,7 @@ TEST(TotalSegmentatorFolder, OneMaskPerClass) {
   EXPECT_EQ(maps.vessel.data, mask(kCt, {{2, 0, 0}, {3, 0, 0}}).data);
   ASSERT_EQ(maps.organs.size(), 3u);
   EXPECT_EQ(maps.organs[2].name, "lung_left");
-  EXPECT_EQ(maps.organs[2].mask.data, mask(kCt, {{0, 2, 0}, {1, 2, 0}}).data);
+  EXPECT_EQ(on_ct_grid(maps.organs[2], kCt).data, mask(kCt, {{0, 2, 0}, {1, 2, 0}}).data);
   EXPECT_EQ(maps.notes,
             std::vector<std::string>{"ignored what is not a <class>.nii.gz: statistics.json"});
 }
