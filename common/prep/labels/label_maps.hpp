@@ -10,7 +10,8 @@
 // label table and no class map given, a name outside the total task, a value no class or segment
 // owns), values that are not whole numbers, a header that claims more data than the file holds,
 // an empty map, an empty Slicer segment and an empty file TotalSegmentator was asked for
-// (--roi_subset), and segment names that cannot become a file name. The label file is read slab
+// (--roi_subset), files of a folder that label one voxel twice, and segment names that cannot
+// become a file name. The label file is read slab
 // by slab (label_volume.hpp). Memory: while reading, one byte per CT voxel (per Slicer layer) and
 // at most 65 MiB; the result, the bone, artery, vein and vessel masks on the CT's grid and each
 // organ's mask in its own box (a whole-body TotalSegmentator output has dozens of organs and

@@ -228,6 +228,11 @@ TEST(TotalSegmentatorFolder, Refusals) {
   EXPECT_PALP_ERROR(read_label_maps(dir.path().string(), kCt), InputError,
                     "aorta.nii.gz: holds the value 2: not a 0/1 mask");
   std::filesystem::remove(dir.file("aorta.nii.gz"));
+  // TotalSegmentator's classes never share a voxel; files that do are not its output.
+  write_class(dir, "spleen", {{2, 2, 2}, {0, 0, 0}});
+  EXPECT_PALP_ERROR(read_label_maps(dir.path().string(), kCt), InputError,
+                    "spleen.nii.gz: spleen overlaps liver on 1 CT voxels, the first (0, 0, 0)");
+  std::filesystem::remove(dir.file("spleen.nii.gz"));
   std::filesystem::remove(dir.file("liver.nii.gz"));
   testing::write_text(dir.file("notes.txt"), "");
   EXPECT_PALP_ERROR(read_label_maps(dir.path().string(), kCt), InputError,
