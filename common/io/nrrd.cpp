@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <utility>
 
 #include "base/errors.hpp"
 #include "io/header_text.hpp"
@@ -16,6 +17,7 @@ namespace ht = header_text;
 
 struct NrrdHeader {
   std::map<std::string, std::string> fields;
+  std::map<std::string, std::string> key_values;
   std::uint64_t data_offset = 0;  // first byte after the blank line (attached data)
   bool has_blank_line = false;
 };
@@ -30,6 +32,20 @@ void check_magic(std::string_view first_line, const std::string& path) {
   if (!ok)
     throw nrrd_error(path, "not a NRRD file (first line is \"" + ht::printable(first_line) +
                                "\", expected NRRD0001..NRRD0005)");
+}
+
+// A key:=value string with NRRD's two escapes decoded: "\n" (newline) and "\\" (backslash).
+std::string unescape(std::string_view text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\\' && i + 1 < text.size() && (text[i + 1] == 'n' || text[i + 1] == '\\')) {
+      out += text[i + 1] == 'n' ? '\n' : '\\';
+      ++i;
+    } else {
+      out += text[i];
+    }
+  }
+  return out;
 }
 
 // Reads the magic line and "field: value" lines up to the blank line (or the end of file).
@@ -52,8 +68,10 @@ NrrdHeader parse_lines(const std::string& path) {
     const std::size_t colon = line.find(": ");
     const std::size_t key_value = line.find(":=");
     if (key_value != std::string_view::npos &&
-        (colon == std::string_view::npos || key_value < colon))
-      continue;  // key:=value pairs carry no geometry
+        (colon == std::string_view::npos || key_value < colon)) {
+      header.key_values[unescape(line.substr(0, key_value))] = unescape(line.substr(key_value + 2));
+      continue;
+    }
     if (colon == std::string_view::npos)
       throw nrrd_error(path, "line " + std::to_string(lines.number()) + " is \"" +
                                  ht::printable(line) + "\", expected \"field: value\"");
@@ -164,18 +182,43 @@ Vector3 to_lps_signs(const NrrdFields& f) {
   throw f.error("space \"" + ht::printable(*space) + "\" is not supported");
 }
 
-Index3 sizes(const NrrdFields& f) {
+// Whether the file has a leading non-spatial axis (read_nrrd_layered_header): dimension 4 with
+// the first kind not a spatial one.
+int leading_axes(const NrrdFields& f, bool layered) {
   const std::string dimension = f.required("dimension");
-  if (ht::to_int(dimension) != 3)
-    throw f.error("dimension " + ht::printable(dimension) + " is not supported (must be 3)");
-  const std::string text = f.required("sizes");
-  const auto values = ht::integers(text, 3);
-  if (!values) throw f.error("sizes \"" + ht::printable(text) + "\" is not 3 integers");
-  return {(*values)[0], (*values)[1], (*values)[2]};
+  const auto n = ht::to_int(dimension);
+  if (layered && n == 4) {
+    if (const auto kinds = f.find({"kinds"})) {
+      const auto parts = ht::tokens(*kinds);
+      const std::string first = parts.empty() ? "" : ht::lower(parts[0]);
+      if (parts.size() != 4 || first == "domain" || first == "space")
+        throw f.error("kinds \"" + ht::printable(*kinds) +
+                      "\" (a 4-D file needs a non-spatial first axis, such as \"list\")");
+    }
+    return 1;
+  }
+  if (n != 3)
+    throw f.error("dimension " + ht::printable(dimension) + " is not supported (must be 3" +
+                  (layered ? " or 4" : "") + ")");
+  return 0;
 }
 
-// Spacing and world placement from "space directions" (+ "space origin") or "spacings".
-void geometry(const NrrdFields& f, Grid& grid) {
+// The spatial dims; `components` gets the length of the leading axis (1 without one).
+Index3 sizes(const NrrdFields& f, int leading, std::int64_t& components) {
+  const std::string text = f.required("sizes");
+  const auto count = static_cast<std::size_t>(3 + leading);
+  const auto values = ht::integers(text, count);
+  if (!values)
+    throw f.error("sizes \"" + ht::printable(text) + "\" is not " + std::to_string(count) +
+                  " integers");
+  components = leading ? (*values)[0] : 1;
+  if (components < 1) throw f.error("sizes \"" + ht::printable(text) + "\": an axis is empty");
+  return {(*values)[leading], (*values)[leading + 1], (*values)[leading + 2]};
+}
+
+// Spacing and world placement from "space directions" (+ "space origin") or "spacings"; after
+// `leading` non-spatial axes (their direction "none", their spacing absent or NaN).
+void geometry(const NrrdFields& f, Grid& grid, int leading) {
   const Vector3 sign = to_lps_signs(f);
   if (const auto origin_text = f.find({"space origin"})) {
     const auto origin = parse_vectors(*origin_text);
@@ -185,11 +228,12 @@ void geometry(const NrrdFields& f, Grid& grid) {
   }
   if (const auto directions_text = f.find({"space directions"})) {
     const auto directions = parse_vectors(*directions_text);
-    if (!directions || directions->size() != 3)
-      throw f.error("space directions \"" + ht::printable(*directions_text) +
-                    "\" is not three (x,y,z) vectors");
+    if (!directions || directions->size() != static_cast<std::size_t>(3 + leading) ||
+        (leading && (*directions)[0]))
+      throw f.error("space directions \"" + ht::printable(*directions_text) + "\" is not " +
+                    (leading ? "\"none\" and " : "") + "three (x,y,z) vectors");
     for (int c = 0; c < 3; ++c) {
-      const auto& v = (*directions)[c];
+      const auto& v = (*directions)[c + leading];
       if (!v) throw f.error("space directions: axis " + std::to_string(c) + " is \"none\"");
       const double norm = std::sqrt((*v)[0] * (*v)[0] + (*v)[1] * (*v)[1] + (*v)[2] * (*v)[2]);
       if (!(norm > 0.0)) throw f.error("space directions: axis " + std::to_string(c) + " is zero");
@@ -199,7 +243,12 @@ void geometry(const NrrdFields& f, Grid& grid) {
     return;
   }
   if (const auto spacings_text = f.find({"spacings"})) {
-    const auto spacings = ht::finite_numbers(*spacings_text, 3);
+    std::string_view text = *spacings_text;
+    if (leading) {  // the leading axis has no spacing: "nan" (or any one token) before the three
+      const auto parts = ht::tokens(text);
+      if (!parts.empty()) text = text.substr(parts[0].data() + parts[0].size() - text.data());
+    }
+    const auto spacings = ht::finite_numbers(text, 3);
     if (!spacings)
       throw f.error("spacings \"" + ht::printable(*spacings_text) + "\" is not 3 finite numbers");
     for (int a = 0; a < 3; ++a) grid.spacing[a] = std::fabs((*spacings)[a]);
@@ -273,22 +322,36 @@ void locate_voxels(const NrrdFields& f, const NrrdHeader& header, StoredVoxels& 
   }
 }
 
-}  // namespace
-
-StoredImage read_nrrd_header(const std::string& path) {
-  const NrrdHeader header = parse_lines(path);
+NrrdLayeredImage read_layered(const std::string& path, bool layered) {
+  NrrdHeader header = parse_lines(path);
   const NrrdFields f(header, path);
 
-  StoredImage image;
-  image.grid.dims = sizes(f);
-  geometry(f, image.grid);
+  NrrdLayeredImage out;
+  StoredImage& image = out.image;
+  const int leading = leading_axes(f, layered);
+  image.grid.dims = sizes(f, leading, out.components);
+  geometry(f, image.grid, leading);
   validate_grid(image.grid, path);
+  if (out.components > kMaxVoxelsPerAxis)
+    throw f.error("sizes: " + std::to_string(out.components) + " values per voxel (at most " +
+                  std::to_string(kMaxVoxelsPerAxis) + ")");
 
   StoredVoxels& voxels = image.voxels;
   voxels.type = scalar_type(f);
   voxels.big_endian = big_endian(f);
   locate_voxels(f, header, voxels);
-  return image;
+  out.key_values = std::move(header.key_values);
+  return out;
+}
+
+}  // namespace
+
+StoredImage read_nrrd_header(const std::string& path) {
+  return read_layered(path, false).image;
+}
+
+NrrdLayeredImage read_nrrd_layered_header(const std::string& path) {
+  return read_layered(path, true);
 }
 
 }  // namespace palp

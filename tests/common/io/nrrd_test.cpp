@@ -232,5 +232,56 @@ TEST(NrrdErrors, ShortAndTruncatedData) {
   EXPECT_PALP_ERROR(read_ct(dir.file("cut.nrrd")), InputError, "cut.nrrd: truncated gzip stream");
 }
 
+// read_nrrd_layered_header: the key:=value pairs and a leading "list" axis, as 3D Slicer writes a
+// segmentation whose segments overlap (sizes: layers x y z, space directions: none (...) ...).
+TEST(NrrdLayered, KeyValuesAndLeadingListAxis) {
+  TempDir dir;
+  const std::string header =
+      "NRRD0004\n"
+      "type: unsigned char\n"
+      "dimension: 4\n"
+      "space: left-posterior-superior\n"
+      "sizes: 2 3 2 1\n"
+      "space directions: none (-3,0,0) (0,-3,0) (0,0,10)\n"
+      "kinds: list domain domain domain\n"
+      "encoding: raw\n"
+      "space origin: (193,216,-340)\n"
+      "Segment0_Name:=ribs\n"
+      "Segment1_Name:=two\\nlines \\\\ here\n"
+      "Segment0_Name:=ribs again\n"
+      "\n";
+  write_header_and_data(dir.file("s.seg.nrrd"), header, std::vector<std::uint8_t>(12, 1));
+  const NrrdLayeredImage image = read_nrrd_layered_header(dir.file("s.seg.nrrd"));
+  EXPECT_EQ(image.components, 2);
+  EXPECT_EQ(image.image.grid.dims, (Index3{3, 2, 1}));
+  EXPECT_EQ(image.image.grid.spacing, (Vec3{3, 3, 10}));
+  EXPECT_EQ(image.image.grid.world.direction, (std::array<double, 9>{-1, 0, 0, 0, -1, 0, 0, 0, 1}));
+  EXPECT_EQ(image.image.grid.world.origin, (Vec3{193, 216, -340}));
+  EXPECT_EQ(image.image.voxels.type, ScalarType::u8);
+  EXPECT_EQ(image.key_values.at("Segment0_Name"), "ribs again");
+  EXPECT_EQ(image.key_values.at("Segment1_Name"), "two\nlines \\ here");
+
+  // The voxels start after the blank line; read_nrrd_header (CTs) still refuses four dimensions.
+  EXPECT_EQ(read_nrrd_layered_header(dir.file("s.seg.nrrd")).image.voxels.file_offset,
+            header.size());
+  EXPECT_PALP_ERROR(read_nrrd_header(dir.file("s.seg.nrrd")), InputError,
+                    "dimension 4 is not supported (must be 3)");
+  write_header_and_data(
+      dir.file("d.nrrd"),
+      with(header, "kinds: list domain domain domain", "kinds: domain domain domain list"),
+      std::vector<std::uint8_t>(12, 1));
+  EXPECT_PALP_ERROR(read_nrrd_layered_header(dir.file("d.nrrd")), InputError,
+                    "needs a non-spatial first axis");
+  write_header_and_data(dir.file("n.nrrd"), with(header, "none (-3,0,0)", "(1,0,0) (-3,0,0)"),
+                        std::vector<std::uint8_t>(12, 1));
+  EXPECT_PALP_ERROR(read_nrrd_layered_header(dir.file("n.nrrd")), InputError,
+                    "is not \"none\" and three (x,y,z) vectors");
+  write_header_and_data(
+      dir.file("p.nrrd"),
+      with(header, "space directions: none (-3,0,0) (0,-3,0) (0,0,10)", "spacings: nan 1.5 2 2.5"),
+      std::vector<std::uint8_t>(12, 1));
+  EXPECT_EQ(read_nrrd_layered_header(dir.file("p.nrrd")).image.grid.spacing, (Vec3{1.5, 2, 2.5}));
+}
+
 }  // namespace
 }  // namespace palp
