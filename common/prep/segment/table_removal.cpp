@@ -4,7 +4,8 @@
 // patient are candidates: thin (<= max thickness) and with outside air in front (a posterior chest
 // wall has the enclosed lung in front of it; a run that fails either test is the patient).
 // Candidates that join (8-connected) into a band wide enough are table. Where a pad touches the
-// patient, the band is followed under the patient along its interpolated top and bottom.
+// patient, the band is followed under the patient along its interpolated top and bottom, and on
+// past it through the table's own thin runs at the band's level (the pad's end beyond an arm).
 #include "prep/segment/table_removal.hpp"
 
 #include <algorithm>
@@ -157,10 +158,25 @@ std::uint64_t clear_bands(const Plane& p, std::uint8_t* mask, const TableScratch
   return cleared;
 }
 
+// A candidate of column u (one that is not a band by itself) that is the table at the band's
+// level: from the band's bottom (within the tolerance) to no higher than its top (within it);
+// -1 if none.
+std::int64_t table_piece(const TableScratch& s, std::int64_t u, std::int64_t bottom,
+                         std::int64_t top, std::int64_t tolerance) {
+  for (std::int64_t r = s.column_start[u]; r < s.column_start[u + 1]; ++r) {
+    const ColumnRun& run = s.candidates[r];
+    if (std::abs(run.v0 - bottom) <= tolerance && run.v1 <= top + tolerance) return r;
+  }
+  return -1;
+}
+
 // Under the patient, a pad that touches the back merges with the body into one thick run. From
 // each side of such a stretch of columns the band is followed inward while the column's thick run
 // starts where the interpolated band bottom is; the rows up to the interpolated band top are
-// cleared.
+// cleared. Past an arm resting on the pad near its end, the pad's end and the board beyond it are
+// too narrow to be a band of their own (the arm parts them from the table, the scan's side edge or
+// the next contact ends them): a column whose thin run lies at the band's level, from its bottom to
+// no higher than its top (each within 2 mm), is the band followed on, and is cleared too.
 std::uint64_t follow_bands_under_patient(const Plane& p, std::uint8_t* mask, const TableLimits& lim,
                                          const TableScratch& s) {
   std::uint64_t cleared = 0;
@@ -185,15 +201,22 @@ std::uint64_t follow_bands_under_patient(const Plane& p, std::uint8_t* mask, con
           std::llround(static_cast<double>(a.v1) + t * static_cast<double>(b.v1 - a.v1))};
     };
     const auto absorb = [&](std::int64_t u, ColumnRun& previous) {
-      const ColumnRun& run = s.thick[u];
       const auto [bottom, top] = slab(u);
-      if (done[u] || run.v0 < 0 || std::abs(run.v0 - bottom) > lim.tolerance) return false;
-      if (run.v1 < top || top <= run.v0) return false;
-      if (run.v0 > previous.v1 || previous.v0 > top) return false;
-      for (std::int64_t v = run.v0; v < top; ++v) mask[p.at(u, v)] = 0;
-      cleared += static_cast<std::uint64_t>(top - run.v0);
+      if (done[u]) return false;
+      ColumnRun run = s.thick[u];  // the patient on the band: cleared up to the band's top
+      if (run.v0 < 0 || std::abs(run.v0 - bottom) > lim.tolerance || run.v1 < top ||
+          top <= run.v0) {
+        const std::int64_t piece = table_piece(s, u, bottom, top, lim.tolerance);
+        if (piece < 0) return false;
+        run = s.candidates[piece];  // the table's own thin run at the band's level
+      } else {
+        run.v1 = top;
+      }
+      if (run.v0 > previous.v1 || previous.v0 > run.v1) return false;
+      for (std::int64_t v = run.v0; v < run.v1; ++v) mask[p.at(u, v)] = 0;
+      cleared += static_cast<std::uint64_t>(run.v1 - run.v0);
       done[u] = 1;
-      previous = {u, run.v0, top};
+      previous = run;
       return true;
     };
     if (from_left) {

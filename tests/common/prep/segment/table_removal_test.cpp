@@ -4,6 +4,8 @@
 // so segment_body looks for the bands from both sides.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "prep/segment/segmentation.hpp"
@@ -43,7 +45,7 @@ TEST(TableRemoval, ABackCutByTheScansEdgeIsNotATable) {
     for (std::int64_t j = 20; j < 65; ++j)
       for (std::int64_t i = 0; i < g.dims[0]; ++i)
         if (i < 35 || i >= 45) ct.at(i, j, k) = -850;  // lungs, open at the sides
-  for (std::int64_t k = 0; k < g.dims[2]; ++k)  // a vertebra in the back, at the edge
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)         // a vertebra in the back, at the edge
     for (std::int64_t j = 68; j < 80; ++j)
       for (std::int64_t i = 35; i < 45; ++i) ct.at(i, j, k) = 700;
   SegmentationStats stats;
@@ -57,6 +59,47 @@ TEST(TableRemoval, ABackCutByTheScansEdgeIsNotATable) {
       }
   EXPECT_EQ(stats.table_voxels, 0u);
   EXPECT_EQ(back_body, back);
+}
+
+// An arm resting on the pad near its end, the board running on to the scan's side edge (the torso
+// phantom with both arms): past the arm, the pad's end and the board beyond it (32 mm to the edge)
+// are too narrow to be a band by themselves, and the arm's contact parts them from the rest of the
+// table. They are the table followed past the arm; the arm, its humerus and the torso stay.
+TEST(TableRemoval, ThePadsEndBeyondAnArmRestingOnItIsTable) {
+  Grid g;
+  g.dims = {116, 64, 18};
+  g.spacing = {2.0, 2.0, 10.0};  // 232 x 128 mm, 180 mm along the body: the piece holds 60 ml
+  CtVolume ct(g, -1000, "arm on the pad's end");
+  CtVolume patient(g, 0, "truth");  // 1: body, 2: humerus
+  const auto arm = [](std::int64_t i, std::int64_t j, double r) {
+    return std::hypot(static_cast<double>(i - 96), static_cast<double>(j) - 35.0) <= r;
+  };
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        std::int16_t hu = -1000, truth = 0;
+        if (j >= 56 && j < 59) hu = 300;              // carbon board across the whole width
+        if (j >= 50 && j < 56 && i < 106) hu = -100;  // gel pad, ending 20 mm short of the edge
+        if (j >= 15 && j < 50 && i >= 25 && i < 60) hu = 40, truth = 1;  // torso on the pad
+        if (arm(i, j, 14.5)) hu = 40, truth = 1;      // the arm (58 mm) resting on the pad
+        if (arm(i, j + 2, 5.0)) hu = 900, truth = 2;  // its humerus
+        ct.at(i, j, k) = hu;
+        patient.at(i, j, k) = truth;
+      }
+  const Mask body = segment_body(ct, SegmentationParams{});
+  const Mask bone = segment_bone(ct, body, SegmentationParams{});
+  std::int64_t table_kept = 0, patient_lost = 0, humerus = 0, humerus_bone = 0, other_bone = 0;
+  for (std::size_t n = 0; n < body.data.size(); ++n) {
+    table_kept += ct.data[n] > -500 && patient.data[n] == 0 && body.data[n];
+    patient_lost += patient.data[n] != 0 && !body.data[n];
+    humerus += patient.data[n] == 2;
+    humerus_bone += patient.data[n] == 2 && bone.data[n];
+    other_bone += patient.data[n] != 2 && bone.data[n];
+  }
+  EXPECT_EQ(table_kept, 0);
+  EXPECT_EQ(patient_lost, 0);
+  EXPECT_EQ(humerus_bone, humerus);
+  EXPECT_EQ(other_bone, 0);
 }
 
 }  // namespace
