@@ -46,10 +46,9 @@ struct PrepParams {
   // the scan's soft-tissue peak (prep/segment/hu_levels.hpp); false: used as given.
   bool adapt_bone_levels = true;
   // Contrast-filled lumens found in the scan (prep/vessel/vessel_segmentation.hpp), kept out of
-  // the bone and written as vessel.nii.gz and d_vessel.nii.gz when the scan has any. Off by
-  // default until it tells a lumen from a kidney and a heart joined to the skeleton apart
-  // (docs/prep.md, "Vessels"); prep.json then says contrast_phase "unknown".
-  bool find_vessels = false;
+  // the bone and written as vessel.nii.gz and d_vessel.nii.gz when the scan has any; false:
+  // prep.json says contrast_phase "unknown" (docs/anatomy.md for what it finds and misses).
+  bool find_vessels = true;
   VesselParams vessels;
   // On a CT coarser than this (mm, any axis), the maps lie on its grid refined to at most this
   // spacing, nodes aligned (prep/maps/map_refine.hpp); 0 = the CT's own grid.

@@ -29,7 +29,8 @@ namespace palp {
 // 22: superficial rods of rib width that reach only the growing level kept as ribs (bone_ribs.cpp,
 // bone_rib_depth_mm; 20 on its branch, before 21 was merged); 23: contrast-filled lumens found
 // (prep/vessel), kept out of the bone and written as vessel.nii.gz / d_vessel.nii.gz; a body cut
-// by the scan's back edge is not a table; 24: the table followed past an arm resting on the pad's
+// by the scan's back edge is not a table; the vessel search's cortex is a bright ridge and lumens
+// as bright as no cancellous bone need no shell test; bone islands mostly on a lumen removed; 24: the table followed past an arm resting on the pad's
 // end
 inline constexpr int kPrepAlgorithmVersion = 24;
 

@@ -59,14 +59,12 @@ Options:
                           contrast raises organs, not fat or bone);
                           given: used as written. prep.json records both ("hu_levels")
   --min-bone-island ML    drop bone islands smaller than this (default %g)
-  --vessels auto|off      auto (experimental): find contrast-filled vessels and heart chambers
-                          in the scan, keep them out of the bone and write vessel.nii.gz and
+  --vessels auto|off      auto (default): find contrast-filled vessels and heart chambers in the
+                          scan, keep them out of the bone and write vessel.nii.gz and
                           d_vessel.nii.gz when there are any; prep.json records the scan's
-                          contrast_phase (none, arterial, portal-venous). off (default): neither,
-                          contrast_phase unknown. auto still takes the torso phantom's kidneys
-                          for lumens and misses a heart joined to the skeleton (docs/prep.md)
-  --not-hu-ok             prep a volume that does not look like a CT in HU (prep refuses a
-                          label map, an MR or a CT saved without its rescale by default)
+                          contrast_phase (none, arterial, portal-venous). An organ enhancing as
+                          uniformly (kidneys, spleen) is taken with them (docs/anatomy.md).
+                          off: neither, contrast_phase unknown
   -q, --quiet             print only errors
   -h, --help              show this help
 )",

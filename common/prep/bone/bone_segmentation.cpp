@@ -302,6 +302,39 @@ void remove_small_islands(double min_island_ml, Mask& bone) {
       bone);
 }
 
+// Bone islands whose surface lies mostly on a lumen: a flap, a calcified wall, the partial volume
+// of the lumen's edge or the heart's trabeculae, none of them a bone to feel. An island's surface
+// faces (on a non-bone voxel inside the grid) are counted, and those on `lumen`; the island goes
+// when at least half are. The skeleton, resting on a vessel along a strip, keeps its bone.
+void remove_islands_on_lumens(const Mask& lumen, Mask& bone) {
+  const Grid& g = bone.grid;
+  const RunTable runs = extract_runs(bone, false);
+  const RunLabels labels = label_runs(g, runs);
+  std::vector<std::int64_t> faces(labels.voxels.size(), 0), on_lumen(labels.voxels.size(), 0);
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  for (std::size_t r = 0; r < runs.runs.size(); ++r) {
+    const auto row = static_cast<std::int64_t>(
+        std::upper_bound(runs.row_start.begin(), runs.row_start.end(),
+                         static_cast<std::int64_t>(r)) -
+        runs.row_start.begin() - 1);
+    const std::int64_t j = row % ny, k = row / ny;
+    const auto c = static_cast<std::size_t>(labels.of_run[r]);
+    for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i) {
+      const auto n = static_cast<std::int64_t>(g.linear(i, j, k));
+      const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+      for (int d = 0; d < 6; ++d) {
+        if (!inside[d] || bone.data[n + steps[d]]) continue;
+        ++faces[c];
+        on_lumen[c] += lumen.data[n + steps[d]] != 0;
+      }
+    }
+  }
+  rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return 2 * on_lumen[c] < faces[c] || faces[c] == 0; },
+      bone);
+}
+
 // Clears `bone` wherever `other` is set.
 void clear_where(const Mask& other, Mask& bone) {
   for_each_nonzero(other, [&](std::size_t n) { bone.data[n] = 0; });
@@ -340,6 +373,7 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   remove_compact_islands(params, bone);                     // calculi, calcified nodes
   if (not_bone) {
     clear_where(*not_bone, bone);  // marrow rules never fill a lumen back
+    remove_islands_on_lumens(*not_bone, bone);  // flaps, walls, trabeculae of a lumen
     remove_small_islands(params.min_bone_island_ml, bone);
   }
   if (stats) stats->bone_voxels = count_nonzero(bone);

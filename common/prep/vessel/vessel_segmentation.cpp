@@ -1,11 +1,15 @@
 // Contrast-filled vessels (see vessel_segmentation.hpp). Data flow:
 //   smooth      CT -> 3x3x3 mean HU (int16, two buffers)
-//   candidates  smoothed HU, body, cortex -> candidate mask; cortex and the voxels beside it -> near
-//   parts       candidates -> 6-connected parts; per part: voxels, HU sum and square sum, boundary
-//               faces, faces beside cortex
-//   keep        parts -> lumen mask (size, cortex contact, uniformity)
-//   close       lumen -> closed lumen, then one voxel of the wall's partial volume
-//   phase       the largest lumen's level -> contrast_phase
+//   cortex      CT -> bright ridges (cortex, trabeculae); near = cortex and its face neighbours
+//   candidates  CT, smoothed HU, body, near -> contrast-level voxels away from cortex
+//   open        candidates -> cores (split_mm deep) -> the voxels within split_mm of a core
+//   parts       opened -> 6-connected parts; per part: voxels, HU moments, depth, boundary faces,
+//               faces on near, surface and inner HU
+//   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface)
+//   rejoin      lumens -> grown through candidates the opening cut, away from rejected parts
+//               and from cortex (branches)
+//   close       lumens -> closed by closing_mm, then one voxel of the wall's partial volume
+//   phase       the brightest lumen's level -> contrast_phase
 #include "prep/vessel/vessel_segmentation.hpp"
 
 #include <algorithm>
@@ -54,6 +58,16 @@ std::vector<std::int16_t> smoothed_hu(const CtVolume& ct) {
   box_pass(ct.grid, 2, b, a);
   return a;
 }
+
+// One of each pair of opposite directions to the 26 neighbours.
+constexpr int kDirections[13][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, 1, 0},  {1, -1, 0},
+                                    {1, 0, 1},  {1, 0, -1}, {0, 1, 1},  {0, 1, -1}, {1, 1, 1},
+                                    {1, 1, -1}, {1, -1, 1}, {1, -1, -1}};
+
+// Rays (of 26) along which a voxel inside a thick bright body stays bright two voxels deep, at
+// least: half of them, into the body. A shell is bright along its plane's 8 and a few more where
+// it curves or thickens.
+constexpr int kThickBodyRays = 13;
 
 struct PartStats {
   std::int64_t voxels = 0;
@@ -111,36 +125,46 @@ std::vector<PartStats> part_stats(const CtVolume& ct, const RunTable& runs,
   return stats;
 }
 
-// Thin bright voxels (cortex) and thick ones (a contrast-filled pool: the heart, a bright
-// aorta). Bright: at or above `cortex_hu`. Thick: within `pool_mm` of a bright voxel that lies
-// `pool_mm` deep in the bright set (its opening by a ball), and below max_hu (denser than any
-// contrast pool: cortical bone of a long bone). Cortex is only ever a few millimetres thick.
-struct BrightSplit {
-  Mask cortex;  // thin bright voxels
-  Mask pool;    // thick bright voxels below max_hu
-};
-
-BrightSplit split_bright(const CtVolume& ct, const std::vector<std::int16_t>& smoothed,
-                         int cortex_hu, int max_hu, double pool_mm) {
+// Cortex: a bright ridge. A voxel at or above `level_hu` whose neighbours one and two voxels
+// away, averaged, lie below it by `drop` of its height above the soft tissue on BOTH sides along
+// one of the 13 directions through it: a shell up to three voxels thick with something darker on
+// either side (marrow inside, soft tissue outside), or a trabecula. A lumen's edge is a step, not
+// a ridge: bright on the inside, dark only outside; a pool of contrast, however bright, is flat.
+Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double drop) {
   const Grid& g = ct.grid;
-  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
-  const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
-  BrightSplit out{Mask(g, 0, "cortex"), Mask(g, 0, "contrast pool")};
-  Mask& bright = out.cortex;
-  for (std::size_t n = 0; n < ct.size(); ++n) bright.data[n] = ct.data[n] >= cortex_hu;
-  const DistanceMap depth = signed_distance(bright, {pool_mm + 2.0 * h_max, 0});
-  Mask core(g, 0, "contrast pool cores");
-  for (std::size_t n = 0; n < ct.size(); ++n)
-    core.data[n] = bright.data[n] && depth.data[n] + 0.5 * h_min >= pool_mm &&
-                   smoothed[n] < max_hu;
-  const DistanceMap reach = signed_distance(core, {pool_mm + 3.0 * h_max, 0});
-  for (std::size_t n = 0; n < ct.size(); ++n) {
-    const bool pool = bright.data[n] && 0.5 * h_min - reach.data[n] <= pool_mm + h_min &&
-                      smoothed[n] < max_hu;
-    out.pool.data[n] = pool;
-    if (pool) bright.data[n] = 0;
-  }
-  return out;
+  Mask cortex(g, 0, "cortex");
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j)
+        for (std::int64_t i = 0; i < nx; ++i) {
+          const double v = ct.at(i, j, k);
+          if (v < level_hu) continue;
+          const double below = v - drop * (v - soft_hu);
+          const auto side = [&](int di, int dj, int dk) {  // mean of 1 and 2 voxels away
+            double sum = 0.0;
+            for (int s = 1; s <= 2; ++s) {
+              const std::int64_t a = std::clamp<std::int64_t>(i + s * di, 0, nx - 1);
+              const std::int64_t b = std::clamp<std::int64_t>(j + s * dj, 0, ny - 1);
+              const std::int64_t c = std::clamp<std::int64_t>(k + s * dk, 0, nz - 1);
+              sum += ct.at(a, b, c);
+            }
+            return 0.5 * sum;
+          };
+          bool ridge = false;
+          int bright_rays = 0;  // of the 26: rays along which it stays bright two voxels deep
+          for (int d = 0; d < 13; ++d) {
+            const int di = kDirections[d][0], dj = kDirections[d][1], dk = kDirections[d][2];
+            const double ahead = side(di, dj, dk), behind = side(-di, -dj, -dk);
+            ridge = ridge || (ahead < below && behind < below);
+            bright_rays += (ahead >= below) + (behind >= below);
+          }
+          // A corner of a thick bright body is dark on both sides along a tangent too, but
+          // bright along half the rays or more, into it; a shell only along its own plane.
+          cortex.at(i, j, k) = ridge && bright_rays < kThickBodyRays;
+        }
+  });
+  return cortex;
 }
 
 // The cortex and its face neighbours.
@@ -197,7 +221,11 @@ Verdict judge(const PartStats& s, double soft_peak_hu, double h_min, double ml,
   if (s.mean() - soft_peak_hu < params.min_lumen_contrast_hu) return Verdict::dim;
   const double contact =
       s.faces > 0 ? static_cast<double>(s.cortex_faces) / static_cast<double>(s.faces) : 0.0;
-  if (contact > params.max_cortex_contact) return Verdict::shell;
+  // Cancellous bone inside its cortex never averages this bright: a part that does is contrast,
+  // whatever it rests on (a dissection's flap, the heart's trabeculae and the spine it touches
+  // count as cortex contact).
+  const bool clearly_contrast = s.mean() - soft_peak_hu >= params.clear_contrast_hu;
+  if (contact > params.max_cortex_contact && !clearly_contrast) return Verdict::shell;
   if (s.spread() > params.max_spread_fraction * (s.mean() - soft_peak_hu)) return Verdict::spread;
   // Bone is brightest at its surface (cortex over marrow); a lumen is uniform and its surface
   // darker (partial volume with its wall). Parts too thin for an inside are judged without.
@@ -247,7 +275,7 @@ void grow_within(Mask& mask, Allowed allowed) {
 void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
   if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
     throw UsageError("segment_vessels: the body mask is not on the CT's grid");
-  if (!(p.min_contrast_hu > 0.0) || !(p.cortex_margin_hu > 0.0) || !(p.max_cortex_contact >= 0.0) ||
+  if (!(p.min_contrast_hu > 0.0) || !(p.ridge_drop > 0.0 && p.ridge_drop < 1.0) || !(p.max_cortex_contact >= 0.0) ||
       !(p.max_spread_fraction > 0.0) || !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
       !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0))
     throw UsageError("segment_vessels: unusable parameters");
@@ -262,16 +290,15 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   VesselResult result;
   result.lumen = Mask(g, 0, "vessel mask");
   const std::vector<std::int16_t> hu = smoothed_hu(ct);  // 3x3x3 mean
-  const int cortex_hu = static_cast<int>(std::lround(bone_seed_hu + params.cortex_margin_hu));
   const int low_hu = static_cast<int>(std::lround(soft_peak_hu + params.min_contrast_hu));
   // candidates: contrast-level smoothed HU inside the body, not beside cortex
   const int max_pool_hu = static_cast<int>(std::lround(bone_seed_hu + params.max_pool_margin_hu));
-  const BrightSplit bright = split_bright(ct, hu, cortex_hu, max_pool_hu, params.pool_mm);
-  const Mask near = near_cortex(bright.cortex);
+  const Mask cortex = ridge_cortex(ct, bone_seed_hu, soft_peak_hu, params.ridge_drop);
+  const Mask near = near_cortex(cortex);
   Mask candidates(g, 0, "vessel candidates");
   for (std::size_t n = 0; n < ct.size(); ++n)
     candidates.data[n] = body.data[n] && !near.data[n] && ct.data[n] >= low_hu &&
-                         (hu[n] < cortex_hu || bright.pool.data[n]);
+                         hu[n] < max_pool_hu;
   // open: the candidates within split_mm of a voxel split_mm deep, so that a bridge of partial
   // volume thinner than twice that (a lumen resting on a vertebra, a rib) parts them
   const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
@@ -291,14 +318,14 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   const std::vector<PartStats> stats = part_stats(ct, runs, labels, opened, near, hu, depth);
   const double ml = segmentation::voxel_ml(g);
   std::vector<std::uint8_t> keep(stats.size(), 0);
-  std::size_t largest = stats.size();
+  std::size_t brightest = stats.size();  // the phase's lumen: an organ never outshines it
   for (std::size_t c = 0; c < stats.size(); ++c) {
     const PartStats& s = stats[c];
     const Verdict v = judge(s, soft_peak_hu, h_min, ml, params);
     count_verdict(v, result);
     if (v != Verdict::lumen) continue;
     keep[c] = 1;
-    if (largest == stats.size() || s.voxels > stats[largest].voxels) largest = c;
+    if (brightest == stats.size() || s.mean() > stats[brightest].mean()) brightest = c;
   }
   segmentation::rewrite_runs(g, runs, labels, [&](std::int64_t c) { return keep[c]; },
                              result.lumen);
@@ -307,20 +334,27 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   Mask other(g, 0, "not lumens");
   segmentation::rewrite_runs(g, runs, labels, [&](std::int64_t c) { return !keep[c]; }, other);
   other = dilate_once(other, [](std::size_t) { return true; });
-  grow_within(result.lumen, [&](std::size_t n) { return candidates.data[n] && !other.data[n]; });
-  if (largest == stats.size()) return result;  // no lumen: phase none
-  result.lumen_level_hu = stats[largest].mean();
+  // ... nor within two voxels of cortex: cancellous bone's thin pieces lie between trabeculae
+  const Mask near_two = dilate_once(near, [](std::size_t) { return true; });
+  grow_within(result.lumen, [&](std::size_t n) {
+    return candidates.data[n] && !other.data[n] && !near_two.data[n];
+  });
+  if (brightest == stats.size()) return result;  // no lumen: phase none
+  result.lumen_level_hu = stats[brightest].mean();
   // close: flap and plaque shadows inside a lumen, never into cortex
-  const auto below_cortex = [&](std::size_t n) { return body.data[n] && !bright.cortex.data[n]; };
+  const auto below_cortex = [&](std::size_t n) {
+    return body.data[n] && !cortex.data[n] && hu[n] < max_pool_hu;
+  };
   const int steps = std::max(1, static_cast<int>(std::lround(params.closing_mm / h_min)));
   Mask closed = result.lumen;
   for (int s = 0; s < steps; ++s) closed = dilate_once(closed, below_cortex);
   for (int s = 0; s < steps; ++s) closed = erode_once(closed);
   for (std::size_t n = 0; n < closed.size(); ++n) closed.data[n] |= result.lumen.data[n];
-  // the wall's partial volume: one voxel halfway from the soft tissue to the lumen's level
-  const double half = 0.5 * (soft_peak_hu + result.lumen_level_hu);
-  result.lumen = dilate_once(
-      closed, [&](std::size_t n) { return below_cortex(n) && ct.data[n] >= half; });
+  // the wall's partial volume: one voxel of contrast level beside the lumen, not by cortex (a
+  // lumen's edge blurred into its wall, which bone's growing level would otherwise take)
+  result.lumen = dilate_once(closed, [&](std::size_t n) {
+    return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu;
+  });
   result.voxels = segmentation::count_nonzero(result.lumen);
   result.contrast_phase = result.lumen_level_hu - soft_peak_hu >= params.arterial_above_soft_hu
                               ? "arterial"

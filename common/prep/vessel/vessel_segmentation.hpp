@@ -2,24 +2,35 @@
 // and the contrast phase the scan was taken in (spec "Files": vessel.nii.gz, contrast_phase).
 //
 // Method, every level from the scan itself or in millimetres:
-//   levels     the soft-tissue peak S of the scan's own histogram (hu_levels.hpp) and the cortex
-//              level (bone seed + 400 HU: only cortical bone reaches it; bone_lumens.hpp)
-//   smoothing  the HU averaged over each voxel's 3x3x3 neighbourhood (noise of a thin slice)
-//   candidates body voxels whose smoothed HU lies at least min_contrast_hu above S and below the
-//              cortex level, farther than one voxel from any voxel at the cortex level
-//   lumens     the candidates' 6-connected parts that hold at least min_lumen_ml, touch the cortex
-//              (the voxels beside it) along at most max_cortex_contact of their boundary faces —
-//              bone's marrow and cancellous bone lie inside a cortical shell, a lumen rests on bone
-//              along a strip of its wall at most — and are uniform: the spread of their smoothed HU
-//              (standard deviation) at most max_spread_fraction of their level above S (a lumen
-//              is blood and contrast mixed, cancellous bone a lattice of bone and fat)
-//   closing    the lumens closed by closing_mm (a dissection's flap, a calcified plaque's shadow
-//              inside a lumen), then grown by one voxel into voxels below the cortex level whose
-//              HU passes halfway from S to the lumen's level (the wall's partial volume)
-//   phase      from the level of the largest lumen above S: `none` without a lumen, `arterial` at
-//              arterial_above_soft_hu or more, `portal-venous` below. A delayed phase (arteries
-//              and veins both barely enhanced) reads `portal-venous` or `none`: this cannot tell it
-//              (docs/prep.md, "Vessels").
+//   levels     the soft-tissue peak S of the scan's own histogram (hu_levels.hpp) and the bone
+//              seed level in use (which follows S)
+//   cortex     bright ridges: voxels at or above the seed level with darker voxels (one and two
+//              away, averaged, ridge_drop of their height above S lower) on BOTH sides along one
+//              of the 13 directions: a shell up to three voxels thick (cortex over marrow, under
+//              soft tissue) or a trabecula. A lumen's edge is a step and a pool of contrast is
+//              flat, however bright: neither is a ridge
+//   candidates body voxels min_contrast_hu above S, smoothed below the seed level +
+//              max_pool_margin_hu (dense cortex), not a ridge nor beside one
+//   parts      the candidates opened by split_mm (a bridge of partial volume thinner than twice
+//              that parts a lumen from bone), 6-connected
+//   lumens     parts of min_lumen_ml that hold a voxel trunk_core_mm deep (the aorta, a vena
+//              cava, the heart: joined to a trunk), average min_lumen_contrast_hu above S, touch
+//              cortex along at most max_cortex_contact of their boundary faces (marrow lies in
+//              its cortex; a lumen rests on bone along a strip) unless they average
+//              clear_contrast_hu above S (cancellous bone never does; a dissection's flap and the
+//              heart's trabeculae count as contact), spread (HU standard deviation) at most
+//              max_spread_fraction of their height above S, and are not brighter at their
+//              surface than inside (bone is, cortex over marrow; a lumen's edge is darker)
+//   rejoin     the lumens grown through the candidates the opening cut (branches), never
+//              within a voxel of a rejected part nor within two of cortex
+//   closing    closed by closing_mm (a flap's shadow), then one voxel of contrast level beside
+//              them and not by cortex (the wall's partial volume)
+//   phase      from the brightest lumen's level above S (an enhancing organ never outshines
+//              the arteries): `none` without a lumen, `arterial` at arterial_above_soft_hu or
+//              more, `portal-venous` below. A delayed phase reads `portal-venous` or `none`.
+// Measured on the phantom's cases and the shared CTs in docs/anatomy.md, where it falls short:
+// an organ enhancing to a lumen's level and as uniform (the phantom's kidneys) is taken with
+// the lumens, and a dissected aorta's false lumen, fenced by its flap, is often not.
 #pragma once
 
 #include <cstdint>
@@ -34,11 +45,12 @@ struct VesselParams {
   double min_lumen_contrast_hu = 90.0;  // a lumen's mean smoothed HU above the peak
   double trunk_core_mm = 6.0;        // a lumen holds a voxel this deep: joined to a trunk
   double split_mm = 2.0;             // bridges thinner than twice this part a lumen from bone
-  double cortex_margin_hu = 400.0;   // bright level = bone seed level + this: cortex or pool
-  double pool_mm = 3.0;              // bright regions this thick are contrast, not cortex
-  double max_pool_margin_hu = 1000.0;  // ... when below bone seed + this (dense cortex is above)
-  double max_cortex_contact = 0.15;  // share of a lumen's boundary faces beside cortex
-  double max_spread_fraction = 0.35; // HU standard deviation / (level - soft-tissue peak)
+  double ridge_drop = 0.35;          // cortex: a ridge, this share of its height above S lower
+                                     // on both sides (bone_seed level and up)
+  double max_pool_margin_hu = 1000.0;  // lumens below bone seed + this (dense cortex is above)
+  double max_cortex_contact = 0.3;   // share of a lumen's boundary faces beside cortex
+  double max_spread_fraction = 0.5;  // HU standard deviation / (level - soft-tissue peak)
+  double clear_contrast_hu = 250.0;  // a part this far above S on average is contrast
   double min_lumen_ml = 0.3;         // smaller parts are noise, calcifications, partial volume
   double closing_mm = 2.0;           // flap and plaque shadows filled inside a lumen
   double arterial_above_soft_hu = 170.0;  // the phase's level: aorta of an arterial phase
@@ -47,7 +59,7 @@ struct VesselParams {
 struct VesselResult {
   Mask lumen;                          // 0/1, CT grid
   std::string contrast_phase = "none"; // none | arterial | portal-venous | unknown
-  double lumen_level_hu = 0.0;         // median smoothed HU of the largest lumen (0: none)
+  double lumen_level_hu = 0.0;         // mean smoothed HU of the brightest lumen (0: none)
   int lumens = 0;                      // parts kept
   int rejected_shell = 0;              // parts dropped as enclosed by cortex
   int rejected_spread = 0;             // parts dropped as not uniform

@@ -339,6 +339,37 @@ TEST(SegmentBone, ALeakIsDroppedWithItsContactEvenWithoutEdgeTrim) {
   EXPECT_EQ(count(segment(broad, no_trim).bone), 34 * 20 * 40);
 }
 
+TEST(SegmentBone, LumensAreNotBoneNorAFlapInsideThem) {
+  // A lumen (prep/vessel: not_bone) of seed-level contrast crossed by a flap of 600 HU that the
+  // lumen's mask leaves out (a dissection's flap, a calcified septum, the heart's trabeculae), and
+  // a bone block apart. The lumen's voxels are never bone; the flap, its surface all on the
+  // lumen, goes with it; the block stays whole.
+  CtVolume ct = bone_scene();
+  box(ct, {20, 40, 10}, {40, 60, 50}, 800);  // a bone block
+  box(ct, {60, 30, 10}, {90, 70, 50}, 400);  // a lumen
+  box(ct, {60, 50, 10}, {90, 51, 50}, 600);  // the flap
+  Mask lumen(ct.grid, 0, "lumen");
+  for (std::int64_t k = 10; k < 50; ++k)
+    for (std::int64_t j = 30; j < 70; ++j)
+      for (std::int64_t i = 60; i < 90; ++i) lumen.at(i, j, k) = j != 50;
+  const Mask body = segment_body(ct, {});
+  const Mask bone = segment_bone(ct, body, {}, nullptr, &lumen);
+  std::int64_t block = 0, flap = 0, elsewhere = 0;
+  for (std::int64_t k = 0; k < 60; ++k)
+    for (std::int64_t j = 0; j < 100; ++j)
+      for (std::int64_t i = 0; i < 100; ++i) {
+        if (!bone.at(i, j, k)) continue;
+        const bool in_block = i >= 20 && i < 40 && j >= 40 && j < 60 && k >= 10 && k < 50;
+        const bool in_flap = i >= 60 && i < 90 && j == 50 && k >= 10 && k < 50;
+        (in_block ? block : in_flap ? flap : elsewhere) += 1;
+      }
+  EXPECT_EQ(block, 20 * 20 * 40);
+  EXPECT_EQ(flap, 0);
+  EXPECT_EQ(elsewhere, 0);
+  // Without the lumen the contrast is bone (or the scene tests nothing).
+  EXPECT_GT(count(segment_bone(ct, body, {})), 20 * 20 * 40 + 1000);
+}
+
 TEST(SegmentBone, DropsSmallIslandsAndStaysInsideTheBody) {
   CtVolume ct = bone_scene();
   box(ct, {20, 20, 20}, {40, 40, 40}, 800);  // 8 ml of bone
