@@ -29,8 +29,10 @@ namespace palp {
 // 22: superficial rods of rib width that reach only the growing level kept as ribs (bone_ribs.cpp,
 // bone_rib_depth_mm; 20 on its branch, before 21 was merged); 23: contrast-filled lumens found
 // (prep/vessel), kept out of the bone and written as vessel.nii.gz / d_vessel.nii.gz; a body cut
-// by the scan's back edge is not a table
-inline constexpr int kPrepAlgorithmVersion = 23;
+// by the scan's back edge is not a table; 24: a lab's label map (--labels) gives the bone, the
+// vessels and a <name>.nii.gz + d_<name>.nii.gz per organ or muscle, its bytes in the key;
+// prep.json's structures record every structure's source and voxels
+inline constexpr int kPrepAlgorithmVersion = 24;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);
