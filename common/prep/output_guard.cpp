@@ -1,9 +1,9 @@
 // PrepOutputGuard (see output_guard.hpp). Each guard's paths live in fixed-size buffers filled
-// before the guard is published (an atomic pointer), so the signal handler reads them without
-// locks or allocation, and lists the directory with the raw getdents64 call (opendir may
-// allocate). A signal that lands on a worker thread is forwarded to the thread running prep: the
-// handler then interrupts the only thread that renames files, so no rename can follow the
-// cleanup.
+// before the guard is published (an atomic pointer), names added later each before the count that
+// covers it (an atomic int), so the signal handler reads them without locks or allocation, and
+// lists the directory with the raw getdents64 call (opendir may allocate). A signal that lands on a
+// worker thread is forwarded to the thread running prep: the handler then interrupts the only
+// thread that renames files, so no rename can follow the cleanup.
 #include "prep/output_guard.hpp"
 
 #include <fcntl.h>
@@ -23,7 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kMaxNames = 16;
+// prep's own outputs and two files per labelled structure (a label map has at most 255).
+constexpr int kMaxNames = 528;
 constexpr int kMaxDirs = 16;
 constexpr std::size_t kMaxPath = 4096;
 constexpr std::size_t kMaxName = 256;
@@ -33,7 +34,9 @@ constexpr std::size_t kMaxName = 256;
 struct PrepOutputGuard::Paths {
   char dir[kMaxPath];
   char names[kMaxNames][kMaxName];
-  int names_count = 0;
+  // Names added while the guard is published (add_names) are written before the count grows, so
+  // the handler sees only whole names.
+  std::atomic<int> names_count{0};
   char created_dirs[kMaxDirs][kMaxPath];  // the output directory first, then its new parents
   int created_dirs_count = 0;
   pthread_t owner;
@@ -46,6 +49,7 @@ using Paths = PrepOutputGuard::Paths;
 // The guard the signal handler cleans up after (null: none).
 std::atomic<Paths*> g_active{nullptr};
 static_assert(std::atomic<Paths*>::is_always_lock_free);
+static_assert(std::atomic<int>::is_always_lock_free);
 
 void copy_text(char* to, const std::string& from, std::size_t capacity) {
   if (from.size() >= capacity) throw Error(from + ": path too long for prep's output");
@@ -59,7 +63,8 @@ bool starts_with(const char* text, const char* prefix) {
 // Whether prep wrote the entry `name`: an output's temporary always, the output itself only in a
 // directory this run created.
 bool is_ours(const Paths& paths, const char* name) {
-  for (int i = 0; i < paths.names_count; ++i) {
+  const int count = paths.names_count.load(std::memory_order_acquire);
+  for (int i = 0; i < count; ++i) {
     const char* output = paths.names[i];
     if (!starts_with(name, output)) continue;
     const char* rest = name + std::strlen(output);
@@ -117,7 +122,6 @@ extern "C" void on_interrupt(int signal_number) {
 
 PrepOutputGuard::PrepOutputGuard(const fs::path& dir, const std::vector<std::string>& names)
     : paths_(std::make_unique<Paths>()) {
-  if (names.size() > kMaxNames) throw Error("prep output guard: too many outputs");
   Paths& paths = *paths_;
   std::error_code ec;
   fs::path start = fs::absolute(dir, ec).lexically_normal();
@@ -128,7 +132,7 @@ PrepOutputGuard::PrepOutputGuard(const fs::path& dir, const std::vector<std::str
     if (fs::exists(p, ec) || p == p.parent_path()) break;
     copy_text(paths.created_dirs[paths.created_dirs_count++], p.string(), kMaxPath);
   }
-  for (const auto& name : names) copy_text(paths.names[paths.names_count++], name, kMaxName);
+  add_names(names);
   paths.owner = pthread_self();
   Paths* none = nullptr;
   g_active.compare_exchange_strong(none, paths_.get());
@@ -137,6 +141,17 @@ PrepOutputGuard::PrepOutputGuard(const fs::path& dir, const std::vector<std::str
 PrepOutputGuard::~PrepOutputGuard() {
   release();
   if (!committed_) remove_unfinished(*paths_);
+}
+
+void PrepOutputGuard::add_names(const std::vector<std::string>& names) {
+  Paths& paths = *paths_;
+  int count = paths.names_count.load(std::memory_order_relaxed);
+  if (names.size() > static_cast<std::size_t>(kMaxNames - count))
+    throw Error("prep output guard: too many outputs");
+  for (const auto& name : names) {
+    copy_text(paths.names[count], name, kMaxName);
+    paths.names_count.store(++count, std::memory_order_release);
+  }
 }
 
 void PrepOutputGuard::release() {

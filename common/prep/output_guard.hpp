@@ -25,6 +25,10 @@ class PrepOutputGuard {
   PrepOutputGuard(const PrepOutputGuard&) = delete;
   PrepOutputGuard& operator=(const PrepOutputGuard&) = delete;
 
+  // More outputs, named once known (the structures of a label map). Safe while a signal may
+  // arrive: the handler sees each name whole or not at all. Error beyond 528 names in all.
+  void add_names(const std::vector<std::string>& names);
+
   // Prep finished (or found its result cached): nothing is removed.
   void commit();
 

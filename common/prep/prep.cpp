@@ -1,5 +1,6 @@
 // Preprocessing pipeline (see prep.hpp). Stages and their data flow:
 //   read CT      input file / DICOM dir / phantom -> CtVolume (HU)
+//   read labels  a lab's label map (--labels) -> bone, vessel, organs' boxes on the CT's grid
 //   body mask    CT -> body (patient only, internal air filled)
 //   then two threads at once:
 //     surf_job   skin points (CT + body -> iso-surface points on the mask's edges, subvoxel
@@ -10,6 +11,9 @@
 //                then waits for surf_job
 //   d_bone       bone (+ bone points) -> signed distance map, in d_surf's buffer; write d_bone
 //   d_vessel     lumens -> signed distance map to the mask's faces, same buffer (when any)
+//   structures   each labelled organ / muscle -> <name>.nii.gz, d_<name>.nii.gz, one at a time
+//                (prep_structures.hpp); labelled bone replaces the bone mask, labelled vessels
+//                the vessel search
 //   prep.json    grid, parameters, counts, timings, CPU seconds, peak memory, cache key
 // The CT copy and the masks are written on a background thread (background_writes.hpp) from the
 // moment each is final; they are waited for before d_bone. Bone segmentation runs mostly on one
@@ -33,12 +37,14 @@
 #include "io/gzip.hpp"
 #include "prep/background_writes.hpp"
 #include "prep/ct_check.hpp"
+#include "prep/labels/label_maps.hpp"
 #include "prep/maps/distance_transform.hpp"
 #include "prep/maps/iso_projection.hpp"
 #include "prep/maps/map_refine.hpp"
 #include "prep/maps/subvoxel_distance.hpp"
 #include "prep/output_guard.hpp"
 #include "prep/prep_cache.hpp"
+#include "prep/prep_structures.hpp"
 #include "prep/reorient.hpp"
 #include "prep/segment/components.hpp"
 #include "prep/vessel/vessel_segmentation.hpp"
@@ -67,18 +73,6 @@ double subvoxel_band_mm(const SurfaceParams& surface, const Grid& grid) {
 double skin_projection_mm(const SurfaceParams& surface, const Grid& grid) {
   if (surface.skin_projection_mm >= 0.0) return surface.skin_projection_mm;
   return 3.0 * grid.max_spacing();
-}
-
-// Writes to a temporary name and renames, so an interrupted run never leaves a half file
-// under the final name.
-// `extra`: what else write_nifti takes (a map's value range, found already).
-template <class V, class... Extra>
-void write_atomically(const fs::path& path, const V& volume, const Extra&... extra) {
-  const fs::path partial = path.string() + ".partial.nii.gz";
-  write_nifti(partial.string(), volume, extra...);
-  std::error_code ec;
-  fs::rename(partial, path, ec);
-  if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
 }
 
 // The same for a copy of the file `from` (a new file, so the umask's permissions, not the
@@ -110,44 +104,6 @@ double process_cpu_seconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-// The smallest and largest value of a map, in parallel (the maps hold 10^8 voxels).
-void value_range(const DistanceMap& map, float range[2], unsigned threads) {
-  const auto n = static_cast<std::int64_t>(map.data.size());
-  constexpr std::int64_t kGrain = std::int64_t{1} << 20;
-  std::vector<std::pair<float, float>> parts(static_cast<std::size_t>((n + kGrain - 1) / kGrain));
-  parallel_for_chunks(
-      n, kGrain,
-      [&](std::int64_t begin, std::int64_t end) {
-        // Independent minima and maxima per lane, so the loop vectorizes (minmax_element does not).
-        constexpr std::int64_t kLanes = 16;
-        const float* v = map.data.data();
-        float lo[kLanes], hi[kLanes];
-        std::fill_n(lo, kLanes, v[begin]);
-        std::fill_n(hi, kLanes, v[begin]);
-        std::int64_t i = begin;
-        for (; i + kLanes <= end; i += kLanes)
-          for (std::int64_t l = 0; l < kLanes; ++l) {
-            lo[l] = v[i + l] < lo[l] ? v[i + l] : lo[l];
-            hi[l] = hi[l] < v[i + l] ? v[i + l] : hi[l];
-          }
-        for (; i < end; ++i) {
-          lo[0] = std::min(lo[0], v[i]);
-          hi[0] = std::max(hi[0], v[i]);
-        }
-        parts[static_cast<std::size_t>(begin / kGrain)] = {*std::min_element(lo, lo + kLanes),
-                                                           *std::max_element(hi, hi + kLanes)};
-      },
-      threads);
-  range[0] = range[1] = 0.0f;
-  if (parts.empty()) return;
-  range[0] = parts[0].first;
-  range[1] = parts[0].second;
-  for (const auto& [lo, hi] : parts) {
-    range[0] = std::min(range[0], lo);
-    range[1] = std::max(range[1], hi);
-  }
-}
-
 using segmentation::count_nonzero;
 
 // What prep.json says of the maps besides the result: the surface method's facts and the maps'
@@ -159,12 +115,14 @@ struct MapRecord {
   IsoProjectionStats projected;
   nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
   float surf_range[2] = {0, 0}, bone_range[2] = {0, 0}, vessel_range[2] = {0, 0};
-  nlohmann::json structures = nlohmann::json::object();  // per structure beyond bone: its source
+  nlohmann::json structures = nlohmann::json::object();  // per structure: its source, voxels
+  std::vector<std::string> structure_files;              // a label map's organs' and muscles' files
 };
 
 // prep.json's record of the lumens found in the scan.
 nlohmann::json vessel_json(const VesselResult& v) {
-  return {{"source", "auto"},
+  return {{"kind", "vessel"},
+          {"source", "auto"},
           {"method", "contrast-filled lumens (prep/vessel/vessel_segmentation.hpp)"},
           {"files", {kVesselFile, kVesselDistanceFile}},
           {"voxels", v.voxels},
@@ -188,6 +146,8 @@ void read_cached_result(const nlohmann::json& cached, PrepResult& result) {
   }
   result.stats.body_voxels = cached["voxels"]["body"].get<std::uint64_t>();
   result.stats.bone_voxels = cached["voxels"]["bone"].get<std::uint64_t>();
+  result.vessel_voxels = cached["voxels"].value("vessel", std::uint64_t{0});
+  result.structures = structure_summaries(cached.value("structures", nlohmann::json()));
 }
 
 // prep.json: the grids, parameters and levels used, counts, timings, CPU seconds, peak memory,
@@ -264,8 +224,10 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
     sizes[name] = fs::file_size(dir / name);
   }
   if (result.vessel_voxels > 0) {
-    for (const char* name : {kVesselFile, kVesselDistanceFile}) sizes[name] = fs::file_size(dir / name);
+    for (const char* name : {kVesselFile, kVesselDistanceFile})
+      sizes[name] = fs::file_size(dir / name);
   }
+  for (const std::string& name : maps.structure_files) sizes[name] = fs::file_size(dir / name);
   json["file_bytes"] = sizes;
   return json;
 }
@@ -321,6 +283,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     guard.commit();
     return result;
   }
+  // The files an earlier prep recorded, removed once this run's inputs are accepted (below).
+  const std::vector<std::string> previous = recorded_outputs(dir);
   // Remove a previous prep.json first: until the new one is written the directory is not a
   // valid cache, whatever happens in between.
   fs::remove(dir / kPrepJsonFile, ec);
@@ -374,6 +338,16 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     result.reoriented = true;
   }
   result.grid = ct.grid;
+  // A lab's label map, on the CT's grid, before anything is written (a refused one leaves nothing).
+  LabelMaps labels;
+  if (!params.labels_path.empty()) {
+    stage("read labels",
+          [&] { labels = read_label_maps(params.labels_path, ct.grid, {params.labels_map}); });
+    labels.artery = Mask{};  // the split's classes and voxels are in labels.source
+    labels.vein = Mask{};
+    guard.add_names(structure_files(labels.organs));
+  }
+  remove_stale_outputs(dir, previous, input, params.labels_path);
   if (input_serves_as_ct_copy(input, result.reoriented)) {
     writes.add("bg write CT",
                [from = fs::path(input), path = dir / kCtFile] { copy_atomically(from, path); });
@@ -455,7 +429,11 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   });
   // Contrast-filled lumens: not bone; their own mask and map when the scan has any.
   auto vessel_owner = std::make_shared<Mask>();
-  if (params.find_vessels) {
+  if (!labels.vessel.data.empty()) {  // labelled vessels replace the search
+    result.vessel_voxels = count_nonzero(labels.vessel);
+    record.structures["vessel"] = labelled_vessel_json(labels, result.vessel_voxels);
+    *vessel_owner = std::move(labels.vessel);
+  } else if (params.find_vessels) {
     stage("vessels", [&] {
       const HuLevels& h = result.hu_levels;
       const double soft = h.peak_found ? h.soft_peak_hu : kNominalSoftTissueHu + h.offset_hu;
@@ -468,10 +446,15 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   }
   const bool has_vessels = result.vessel_voxels > 0;
   if (has_vessels) write_in_background("bg write vessel", kVesselFile, vessel_owner);
-  stage("bone mask", [&] {
-    *bone_owner = segment_bone(ct, body, segmentation, &result.stats,
-                               has_vessels ? vessel_owner.get() : nullptr);
-  });
+  const bool labelled_bone = !labels.bone.data.empty();
+  if (labelled_bone) {  // the union of the label map's bone classes, as it is
+    *bone_owner = std::move(labels.bone);
+  } else {
+    stage("bone mask", [&] {
+      *bone_owner = segment_bone(ct, body, segmentation, &result.stats,
+                                 has_vessels ? vessel_owner.get() : nullptr);
+    });
+  }
   write_in_background("bg write bone", kBoneFile, bone_owner);
   if (subvoxel) {
     stage("bone points", [&] {
@@ -481,6 +464,9 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   ct_owner.reset();
   result.stats.body_voxels = count_nonzero(body);
   result.stats.bone_voxels = count_nonzero(bone);
+  record.structures["bone"] = labelled_bone ? labelled_bone_json(labels, result.stats.bone_voxels)
+                                            : auto_structure_json("bone", result.stats.bone_voxels,
+                                                                  {kBoneFile, kBoneDistanceFile});
   std::vector<BackgroundWrites::Done> written;
   stage("wait d_surf", [&] { written = surf_job.wait(); });
   report_background(written);
@@ -510,6 +496,13 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
                        record.vessel_range[1]);
     });
   }
+  if (!labels.organs.empty()) {  // one at a time: a CT-sized mask and the maps' buffer
+    stage("structures", [&] {
+      write_labelled_structures(labels.organs, result.grid, params.distance, refine, dir, map,
+                                record.structures, record.structure_files);
+    });
+  }
+  result.structures = structure_summaries(record.structures);
 
   result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.peak_rss_bytes = peak_rss_bytes();

@@ -3,8 +3,11 @@
 // on the input grid voxel for voxel (spec "Files"; on a CT coarser than map_spacing_mm the two
 // maps lie on its aligned refinement, map_refine.hpp). Results are cached by input content and
 // parameters: a second run on the same input into the same directory only verifies the cache.
+// With a lab's label map (labels_path), its bone, vessels and organs replace what prep segments,
+// each organ or muscle written as <name>.nii.gz + d_<name>.nii.gz (prep_structures.hpp).
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <utility>
@@ -50,6 +53,13 @@ struct PrepParams {
   // prep.json says contrast_phase "unknown" (docs/anatomy.md for what it finds and misses).
   bool find_vessels = true;
   VesselParams vessels;
+  // A lab's label map of the CT (prep/labels/label_maps.hpp: TotalSegmentator's total output, a
+  // 3D Slicer .seg.nrrd); empty = none. Its bone classes replace the bone palp segments from the
+  // HU, its vessels the vessel search; each organ or muscle becomes <name>.nii.gz and
+  // d_<name>.nii.gz. labels_map: the class map of a file that names no classes ("" or
+  // kTotalSegmentatorMap, "totalsegmentator").
+  std::string labels_path;
+  std::string labels_map;
   // On a CT coarser than this (mm, any axis), the maps lie on its grid refined to at most this
   // spacing, nodes aligned (prep/maps/map_refine.hpp); 0 = the CT's own grid.
   double map_spacing_mm = kDefaultMapSpacingMm;
@@ -66,6 +76,15 @@ struct StageTiming {
   // CPU seconds of the whole process (every thread, a background write included) during the
   // stage: steadier than the wall clock on a shared machine. 0 for background writes.
   double cpu_seconds = 0.0;
+};
+
+// A structure prep wrote besides the body (bone, vessel, a labelled organ or muscle), for the
+// summary: from prep.json's "structures".
+struct PrepStructure {
+  std::string name;  // "bone", "vessel", "liver", ...
+  std::string kind;  // "bone", "vessel", "organ", "muscle"
+  std::uint64_t voxels = 0;
+  std::string source;  // "auto", or "labels FILE (its classes)"
 };
 
 struct PrepResult {
@@ -85,13 +104,16 @@ struct PrepResult {
   std::string hu_warning;      // what the CT check found when not_hu_ok let it through
   HuLevels hu_levels;          // what the scan's histogram gave (used when adapt_bone_levels)
   std::string contrast_phase = "unknown";  // spec "Files": none, arterial, portal-venous, ...
-  std::uint64_t vessel_voxels = 0;      // vessel.nii.gz's, when written
+  std::uint64_t vessel_voxels = 0;         // vessel.nii.gz's, when written
+  std::vector<PrepStructure> structures;   // bone, vessel when written, then the rest by name
 };
 
 // Progress reports: a stage starting ("reading CT", ...) or finishing (with its seconds).
 using PrepProgress = std::function<void(const std::string& stage, bool finished, double seconds)>;
 
 // Runs the pipeline; throws palp::Error subclasses on bad input or I/O failure. Creates out_dir.
+// With labels_path, the label map is read onto the CT's grid before anything is written (a map
+// refused: its one-line InputError, nothing written).
 // Before segmenting: an input that does not look like a CT in HU is refused (InputError, unless
 // not_hu_ok), and an oblique one is resampled onto the nearest axis-aligned frame
 // (prep/reorient.hpp), the maps then lying on that grid.
@@ -99,7 +121,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
                     const PrepProgress& progress = {});
 
 // The cache key of an input under given parameters (hex): hashes the input's bytes (every file
-// of a DICOM directory, in name order), or the phantom's name, and every parameter.
+// of a DICOM directory, in name order), or the phantom's name, the label map's bytes (every file
+// of a folder, in name order) and every parameter. InputError when the label map is missing.
 std::string prep_cache_key(const std::string& input, const PrepParams& params);
 
 // File names inside a prep directory.

@@ -2,6 +2,7 @@
 #include "prep/prep_cache.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
 #include "io/gzip.hpp"
+#include "io/nrrd.hpp"
 
 namespace palp {
 namespace {
@@ -89,9 +91,46 @@ void hash_input(ContentHash& hash, const std::string& input) {
   if (voxel_file != input) hash.add_file(voxel_file);
 }
 
+// A label map's bytes: the file (and a detached .nhdr's data file), or every regular file of a
+// TotalSegmentator folder in name order. A missing one is refused as the label reader would.
+void hash_labels(ContentHash& hash, const std::string& labels) {
+  const fs::path path(labels);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError("labels: " + labels + ": no such file or directory");
+  if (fs::is_directory(path, ec)) {
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(path, ec))
+      if (std::error_code entry_ec; entry.is_regular_file(entry_ec)) files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    for (const auto& file : files) {
+      hash.add(file.filename().string());
+      hash.add_file(file);
+    }
+    return;
+  }
+  try {
+    require_regular_file(labels);
+    hash.add_file(path);
+    std::string name = path.filename().string();
+    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (name.ends_with(".nhdr")) {
+      const std::string data = read_nrrd_layered_header(labels).image.voxels.path;
+      if (data != labels) hash.add_file(data);
+    }
+  } catch (const InputError& e) {
+    throw InputError(std::string("labels: ") + e.what());
+  }
+}
+
 }  // namespace
 
 namespace {
+
+nlohmann::json labels_params_json(const PrepParams& params) {
+  if (params.labels_path.empty()) return "none";
+  return {{"path", params.labels_path},
+          {"map", params.labels_map.empty() ? "by the file's names" : params.labels_map}};
+}
 
 nlohmann::json vessel_params_json(const PrepParams& params) {
   if (!params.find_vessels) return "off";
@@ -145,7 +184,8 @@ nlohmann::json params_json(const PrepParams& params) {
           {"skin_projection_mm", params.surface.skin_projection_mm},
           {"map_spacing_mm", params.map_spacing_mm},
           {"bone_levels", params.adapt_bone_levels ? "adapted" : "as given"},
-          {"vessels", vessel_params_json(params)}};
+          {"vessels", vessel_params_json(params)},
+          {"labels", labels_params_json(params)}};
 }
 
 bool cache_is_valid(const fs::path& out_dir, const std::string& key, nlohmann::json* cached) {
@@ -173,6 +213,10 @@ std::string prep_cache_key(const std::string& input, const PrepParams& params) {
   hash.add("palp-prep-v" + std::to_string(kPrepAlgorithmVersion));
   hash.add(params_json(params).dump());
   hash_input(hash, input);
+  if (!params.labels_path.empty()) {
+    hash.add("labels");
+    hash_labels(hash, params.labels_path);
+  }
   return hash.hex();
 }
 

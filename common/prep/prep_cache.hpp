@@ -30,9 +30,11 @@ namespace palp {
 // bone_rib_depth_mm; 20 on its branch, before 21 was merged); 23: contrast-filled lumens found
 // (prep/vessel), kept out of the bone and written as vessel.nii.gz / d_vessel.nii.gz; a body cut
 // by the scan's back edge is not a table; the vessel search's cortex is a bright ridge and lumens
-// as bright as no cancellous bone need no shell test; bone islands mostly on a lumen removed; 24: the table followed past an arm resting on the pad's
-// end
-inline constexpr int kPrepAlgorithmVersion = 24;
+// as bright as no cancellous bone need no shell test; bone islands mostly on a lumen removed; 24:
+// the table followed past an arm resting on the pad's end; 25: a lab's label map (--labels)
+// gives the bone, the vessels and a <name>.nii.gz + d_<name>.nii.gz per organ or muscle, its
+// bytes in the key; prep.json's structures record every structure's source and voxels
+inline constexpr int kPrepAlgorithmVersion = 25;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

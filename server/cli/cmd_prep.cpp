@@ -6,6 +6,7 @@
 #include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "prep/labels/label_maps.hpp"
 #include "prep/prep.hpp"
 
 namespace palp::cli {
@@ -16,21 +17,24 @@ std::string prep_usage() {
   const SegmentationParams seg;
   const DistanceParams dist;
   const SurfaceParams surface;
-  char text[6144];
+  char text[8192];
   std::snprintf(text, sizeof text, R"(usage: palp prep INPUT --out DIR [options]
 
 Segments body and bone and computes the signed distance maps the force model samples.
 INPUT: a .nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr file, a DICOM series directory, or phantom:NAME.
 Writes body.nii.gz, bone.nii.gz, d_surf.nii.gz, d_bone.nii.gz and prep.json into DIR.
+With --labels, a lab's label map of the same CT gives the bone (the union of its bone classes),
+vessel.nii.gz + d_vessel.nii.gz from its arteries and veins, and <name>.nii.gz + d_<name>.nii.gz
+per organ or muscle (uint8 0/1, float32 mm positive inside) on the CT's grid (docs/labels.md).
 The input is checked first: air near -1000 HU and soft tissue near 0..100 HU must be present
 and the body must leave air around it. Patient directions come from the file's direction
 matrix; an oblique volume (gantry tilt) is resampled onto the nearest axis-aligned frame.
 What prep reads: INPUT; for a .mhd or .nhdr header also the data file it names, which may be
 an absolute path or lead out of the header's directory with ../ (both are legal in these
 formats: check a header from elsewhere before prepping it); for a directory, every regular file
-in it and in its immediate subdirectories. Only regular files are read (a device, FIFO or socket
-is refused), and nothing is allocated for a header's sizes before the bytes behind them exist
-(docs/security.md).
+in it and in its immediate subdirectories; with --labels, SEG (a folder: every regular file in
+it). Only regular files are read (a device, FIFO or socket is refused), and nothing is allocated
+for a header's sizes before the bytes behind them exist (docs/security.md).
 Failed or interrupted (Ctrl-C, SIGTERM), prep removes its temporary files, and when it created
 DIR, what it wrote there and DIR itself.
 Options:
@@ -59,6 +63,12 @@ Options:
                           contrast raises organs, not fat or bone);
                           given: used as written. prep.json records both ("hu_levels")
   --min-bone-island ML    drop bone islands smaller than this (default %g)
+  --labels SEG            a label map of INPUT: TotalSegmentator's total task (its multi-label
+                          .nii/.nii.gz, or its folder of one <class>.nii.gz per class) or a 3D
+                          Slicer segmentation (.seg.nrrd); its structures replace prep's own,
+                          and prep.json records each one's source. Its bytes are in the cache key
+  --labels-map totalsegmentator  read a label file that names no classes (a multi-label NIfTI
+                          without TotalSegmentator's label table) as the total task's (v2)
   --vessels auto|off      auto (default): find contrast-filled vessels and heart chambers in the
                           scan, keep them out of the bone and write vessel.nii.gz and
                           d_vessel.nii.gz when there are any; prep.json records the scan's
@@ -78,10 +88,11 @@ Options:
 }  // namespace
 
 int cmd_prep(const Arguments& argv) {
-  const Args args(argv, {"help", "no-cache", "quiet", "not-hu-ok"},
-                  {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed",
-                   "bone-grow", "min-bone-island", "max-table-thickness", "surface", "skin-hu",
-                   "bone-hu", "bone-levels", "skin-projection", "map-spacing", "vessels"});
+  const Args args(
+      argv, {"help", "no-cache", "quiet", "not-hu-ok"},
+      {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed", "bone-grow",
+       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu", "bone-levels",
+       "skin-projection", "map-spacing", "vessels", "labels", "labels-map"});
   if (args.has("help")) {
     std::cout << prep_usage();
     return 0;
@@ -123,6 +134,17 @@ int cmd_prep(const Arguments& argv) {
     if (*vessels != "auto" && *vessels != "off")
       throw UsageError("--vessels must be auto or off, not '" + *vessels + "'");
     params.find_vessels = *vessels == "auto";
+  }
+  if (const auto labels = args.get("labels")) {
+    if (labels->empty()) throw UsageError("--labels needs a label map");
+    params.labels_path = *labels;
+  }
+  if (const auto map = args.get("labels-map")) {
+    if (*map != kTotalSegmentatorMap)
+      throw UsageError("--labels-map: unknown class map \"" + *map +
+                       "\" (known: totalsegmentator)");
+    if (params.labels_path.empty()) throw UsageError("--labels-map needs --labels SEG");
+    params.labels_map = *map;
   }
   const double threads = args.number("threads", default_thread_count());
   if (threads < 1 || threads > 1024 || threads != static_cast<unsigned>(threads)) {
@@ -185,14 +207,16 @@ int cmd_prep(const Arguments& argv) {
   std::printf("  body      %llu voxels (%.0f ml)\n",
               static_cast<unsigned long long>(r.stats.body_voxels),
               static_cast<double>(r.stats.body_voxels) * voxel_ml);
-  std::printf("  bone      %llu voxels (%.0f ml)\n",
-              static_cast<unsigned long long>(r.stats.bone_voxels),
-              static_cast<double>(r.stats.bone_voxels) * voxel_ml);
-  if (r.vessel_voxels > 0)
-    std::printf("  vessels   %llu voxels (%.0f ml), contrast phase %s\n",
-                static_cast<unsigned long long>(r.vessel_voxels),
-                static_cast<double>(r.vessel_voxels) * voxel_ml, r.contrast_phase.c_str());
-  else if (!r.from_cache && params.find_vessels)
+  // A line per structure: bone, vessel, a label map's organs and muscles, with its source.
+  for (const PrepStructure& s : r.structures) {
+    std::printf("  %-9s %llu voxels (%.0f ml), %s", s.name.c_str(),
+                static_cast<unsigned long long>(s.voxels), static_cast<double>(s.voxels) * voxel_ml,
+                s.source.c_str());
+    if (s.name == "vessel" && s.source == "auto" && !r.from_cache)
+      std::printf(", contrast phase %s", r.contrast_phase.c_str());
+    std::printf("\n");
+  }
+  if (r.vessel_voxels == 0 && !r.from_cache && params.find_vessels)
     std::printf("  vessels   none found (contrast phase %s)\n", r.contrast_phase.c_str());
   if (!r.from_cache) {
     std::printf("  removed   %llu voxels that are not the patient (table, pad, cables)\n",

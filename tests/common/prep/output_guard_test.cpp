@@ -7,6 +7,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
+
+#include "base/errors.hpp"
 
 namespace palp {
 namespace {
@@ -80,6 +84,36 @@ TEST_F(OutputGuardTest, CommittedRunKeepsEverything) {
     guard.commit();
   }
   EXPECT_TRUE(fs::exists(out / "m"));
+}
+
+// The names of a label map's structures are known only once it is read.
+TEST_F(OutputGuardTest, NamesAddedLaterAreCleanedUpToo) {
+  const fs::path out = dir_ / "new";
+  {
+    PrepOutputGuard guard(out, {"m"});
+    fs::create_directories(out);
+    touch(out / "m");
+    std::vector<std::string> names;
+    for (int i = 0; i < 300; ++i)
+      names.push_back(std::string("s").append(std::to_string(i)) + ".nii.gz");
+    guard.add_names(names);
+    touch(out / "s0.nii.gz");
+    touch(out / "s299.nii.gz.partial.nii.gz");
+  }
+  EXPECT_FALSE(fs::exists(out));
+  const fs::path existing = dir_ / "existing";
+  fs::create_directories(existing);
+  touch(existing / "liver.nii.gz");
+  {
+    PrepOutputGuard guard(existing, {"m"});
+    guard.add_names({"liver.nii.gz"});
+    touch(existing / "liver.nii.gz.partial.nii.gz");
+  }
+  EXPECT_TRUE(fs::exists(existing / "liver.nii.gz"));
+  EXPECT_FALSE(fs::exists(existing / "liver.nii.gz.partial.nii.gz"));
+  PrepOutputGuard guard(existing, {});
+  EXPECT_THROW(guard.add_names(std::vector<std::string>(600, "x")), Error);
+  guard.commit();
 }
 
 TEST_F(OutputGuardTest, TrailingSeparatorNamesTheSameDirectory) {

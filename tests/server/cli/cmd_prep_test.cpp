@@ -1,6 +1,7 @@
 // palp prep interrupted: SIGINT or SIGTERM while a map is being written leaves no temporary file
 // and, when prep created the output directory, no directory; the process still ends by the
 // signal (a shell sees 130 / 143). The same for a scene that palp bench preps into its cache.
+// palp prep --labels: a structure per line with its source; a label map refused in one line.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -13,7 +14,9 @@
 #include <thread>
 #include <vector>
 
+#include "io/ct_io.hpp"
 #include "support/cli_test_util.hpp"
+#include "support/label_files.hpp"
 
 namespace palp {
 namespace {
@@ -104,6 +107,67 @@ TEST_P(PrepInterrupt, SceneCachePrepLeavesNothingInTheCache) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Signals, PrepInterrupt, ::testing::Values(SIGINT, SIGTERM));
+
+// A 40^3 sphere of 2 mm voxels, and TotalSegmentator's multi-label file of it without its label
+// table: liver (5) on 10^3 voxels (8 ml), vertebrae_L1 (31) on 4^3.
+TEST(PrepLabelsCli, PrintsAStructurePerLineWithItsSource) {
+  const testing::TempDir tmp;
+  const fs::path& dir_ = tmp.path();
+  const fs::path ct = dir_ / "ct.nii.gz";
+  const auto made = testing::run_palp_cli(
+      "phantom sphere --out " + ct.string() + " --dims 40x40x40 --spacing 2x2x2", dir_ / "cache");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const Grid grid = read_ct(ct.string()).grid;
+  std::vector<std::uint8_t> values(grid.voxel_count(), 0);
+  for (std::int64_t k = 0; k < 10; ++k)
+    for (std::int64_t j = 0; j < 10; ++j)
+      for (std::int64_t i = 0; i < 10; ++i) {
+        values[grid.linear(i + 5, j + 5, k + 5)] = 5;
+        if (i < 4 && j < 4 && k < 4) values[grid.linear(i + 25, j + 25, k + 25)] = 31;
+      }
+  const fs::path seg = dir_ / "seg.nii.gz";
+  testing::write_label_nifti(seg.string(), grid, values);
+  const std::string prep = "prep " + ct.string() + " --labels " + seg.string() +
+                           " --labels-map totalsegmentator --out " + (dir_ / "out").string();
+  const auto first = testing::run_palp_cli(prep, dir_ / "cache", /*stdout_only=*/true);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("  bone      64 voxels (1 ml), labels " + seg.string() +
+                              " (vertebrae_L1)\n"),
+            std::string::npos)
+      << first.output;
+  EXPECT_NE(
+      first.output.find("  liver     1000 voxels (8 ml), labels " + seg.string() + " (liver)\n"),
+      std::string::npos)
+      << first.output;
+  for (const char* file : {"liver.nii.gz", "d_liver.nii.gz", "bone.nii.gz", "prep.json"})
+    EXPECT_TRUE(fs::exists(dir_ / "out" / file)) << file;
+  const auto second = testing::run_palp_cli(prep, dir_ / "cache", /*stdout_only=*/true);
+  EXPECT_NE(second.output.find("(cached"), std::string::npos) << second.output;
+  EXPECT_NE(second.output.find("  liver     1000 voxels (8 ml), labels "), std::string::npos)
+      << second.output;
+}
+
+TEST(PrepLabelsCli, RefusalsAreOneLine) {
+  const testing::TempDir tmp;
+  const fs::path& dir_ = tmp.path();
+  const fs::path out = dir_ / "out";
+  const fs::path gone = dir_ / "gone.nii.gz";
+  const auto missing = testing::run_palp_cli(
+      "prep phantom:sphere --labels " + gone.string() + " --out " + out.string(), dir_ / "cache");
+  EXPECT_EQ(missing.exit_code, 1) << missing.output;
+  EXPECT_EQ(testing::last_line(missing.output),
+            "palp: error: labels: " + gone.string() + ": no such file or directory");
+  EXPECT_FALSE(fs::exists(out));
+  const auto unknown = testing::run_palp_cli(
+      "prep phantom:sphere --labels x.nii.gz --labels-map totalsegmentator-v1 --out d",
+      dir_ / "cache");
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.output;
+  EXPECT_EQ(testing::count_lines(unknown.output), 1) << unknown.output;
+  const auto alone = testing::run_palp_cli(
+      "prep phantom:sphere --labels-map totalsegmentator --out d", dir_ / "cache");
+  EXPECT_EQ(alone.exit_code, 2) << alone.output;
+  EXPECT_NE(alone.output.find("--labels-map needs --labels SEG"), std::string::npos);
+}
 
 }  // namespace
 }  // namespace palp
