@@ -17,7 +17,7 @@
 //   T12               recall of the labelled vertebra in prep's bone >= 0.9
 //
 // Usage: prep_cases [--only TEXT] [--keep DIR] [--shared-data DIR] [--vessels auto|off]
-//   --vessels auto      prep with its experimental vessel search on (default off, as palp prep)
+//   --vessels off       prep without its vessel search (default auto, as palp prep)
 //   --only TEXT         run only the cases whose name contains TEXT
 //   --keep DIR          write each case's prep into DIR/<n> and keep it (default: a temporary
 //                       directory, removed at the end)
@@ -149,8 +149,8 @@ std::string json_string_field(const std::string& json, const std::string& key) {
   return json.substr(open + 1, close - open - 1);
 }
 
-// --vessels auto: prep looks for contrast-filled lumens (off by default, as palp prep).
-bool g_find_vessels = false;
+// --vessels off: prep does not look for contrast-filled lumens (on by default, as palp prep).
+bool g_find_vessels = true;
 
 PrepOutputs run_and_read(const std::string& input, const fs::path& dir) {
   PrepParams params;
