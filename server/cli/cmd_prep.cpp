@@ -75,6 +75,8 @@ Options:
                           contrast_phase (none, arterial, portal-venous). An organ enhancing as
                           uniformly (kidneys, spleen) is taken with them (docs/anatomy.md).
                           off: neither, contrast_phase unknown
+  --not-hu-ok             prep a volume that does not look like a CT in HU (prep refuses a
+                          label map, an MR or a CT saved without its rescale by default)
   -q, --quiet             print only errors
   -h, --help              show this help
 )",
