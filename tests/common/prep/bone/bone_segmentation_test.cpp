@@ -70,7 +70,7 @@ bool load_shared_ct(SharedCt& d) {
   // (prep/segment/hu_levels.hpp).
   d.levels = estimate_hu_levels(d.ct, d.body);
   d.superficial = testing::superficial_bone(d.truth_bone, d.body);
-  // PALP_BONE_METAL_MARGIN_MM=X: another margin (docs/prep.md lists 30, 50 and 80 mm).
+  // PALP_BONE_METAL_MARGIN_MM=X: another margin (docs/notebook/prep.md lists 30, 50 and 80 mm).
   const char* margin = std::getenv("PALP_BONE_METAL_MARGIN_MM");
   d.metal_margin_mm = margin ? std::atof(margin) : kMetalMarginMm;
   d.away_from_metal = far_from_metal(d.ct, d.metal_margin_mm);
@@ -147,7 +147,7 @@ TEST(BoneSegmentation, AgainstExpertLabelsOfTheSharedCt) {
   EXPECT_GE(m.precision, 0.89);  // over-segmentation (vessels, calcifications, table) stays rare
 }
 
-// The variants of docs/prep.md's table, one row each (PALP_BONE_VARIANTS=1; they take a few
+// The variants of docs/notebook/prep.md's table, one row each (PALP_BONE_VARIANTS=1; they take a few
 // seconds, so the suite skips them).
 TEST(BoneSegmentation, VariantsTable) {
   if (std::getenv("PALP_BONE_VARIANTS") == nullptr) GTEST_SKIP() << "set PALP_BONE_VARIANTS=1";
