@@ -4,7 +4,7 @@
 #   1. palp prep CT --surface mask | subvoxel (the CT's own 3 mm grid, as the spec's files are)
 #   2. the slide: finger:1 at 20 mm/s (1 kHz) along the anterior abdomen, 100 mm, its pad at a
 #      constant global distance (2, 4, 6 mm) below the trilinear CT's -500 HU iso-surface, written
-#      by study_force_model (PALP_SMOOTH_TRAJ_DIR; docs/force_model.md "The path at a constant
+#      by study_force_model (PALP_SMOOTH_TRAJ_DIR; docs/notebook/force_model.md "The path at a constant
 #      true depth")
 #   3. palp run --tool finger:1 --param bone_enabled=0 on each prep directory with each model:
 #      paper; palp on the maps as prepped (--map-spacing 0); palp as it runs by default (a coarse
