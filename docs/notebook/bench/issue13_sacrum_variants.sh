@@ -1,11 +1,13 @@
 #!/bin/bash
-# The sacrum variants of docs/prep.md ("The sacrum's marrow: variants measured, none adopted").
-# Scratch code, not the method: run from the root of a scratch checkout of commit 51aaf12 (the
+# The sacrum variants of docs/notebook/prep.md ("The sacrum's marrow: variants measured, none adopted").
+# Historical scratch code, not the method (kept beside the notebook entry it measured): run from the root of a scratch checkout of commit 51aaf12 (the
 # patch's paths are common/prep's before its files moved into bone/, segment/ and maps/) with
-# docs/bench/issue13_sacrum_variants.patch applied and built
-#   git apply docs/bench/issue13_sacrum_variants.patch
+# docs/notebook/bench/issue13_sacrum_variants.patch applied and built
+# (at commit 51aaf12 this patch and script lay in docs/bench/; from a later checkout, copy them into
+# the scratch checkout's docs/notebook/bench/ first)
+#   git apply docs/notebook/bench/issue13_sacrum_variants.patch
 #   cmake --build build --target bone_segmentation_test bone_mask_timing
-#   docs/bench/issue13_sacrum_variants.sh
+#   docs/notebook/bench/issue13_sacrum_variants.sh
 # The patch reads each variant's settings from environment variables (PALP_PLATE: plate radius
 # mm; PALP_PLATE_N: lines the plate rule needs; PALP_AXIS_R: the axis line's own radius mm;
 # PALP_TUBE: also both sagittal diagonals; PALP_CANAL: not where only the axial plane voted;
