@@ -172,6 +172,7 @@ nlohmann::json params_json(const PrepParams& params) {
           {"bone_edge_fraction", s.bone_edge_fraction},
           {"bone_notch_faces", s.bone_notch_faces},
           {"bone_max_cavity_ml", s.bone_max_cavity_ml},
+          {"bone_marrow_behind_lumens", s.bone_marrow_behind_lumens},
           {"min_bone_island_ml", s.min_bone_island_ml},
           {"bone_calculus_max_length_mm", s.bone_calculus_max_length_mm},
           {"bone_rib_depth_mm", s.bone_rib_depth_mm},

@@ -314,10 +314,10 @@ void remove_islands_on_lumens(const Mask& lumen, Mask& bone) {
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
   for (std::size_t r = 0; r < runs.runs.size(); ++r) {
-    const auto row = static_cast<std::int64_t>(
-        std::upper_bound(runs.row_start.begin(), runs.row_start.end(),
-                         static_cast<std::int64_t>(r)) -
-        runs.row_start.begin() - 1);
+    const auto row =
+        static_cast<std::int64_t>(std::upper_bound(runs.row_start.begin(), runs.row_start.end(),
+                                                   static_cast<std::int64_t>(r)) -
+                                  runs.row_start.begin() - 1);
     const std::int64_t j = row % ny, k = row / ny;
     const auto c = static_cast<std::size_t>(labels.of_run[r]);
     for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i) {
@@ -333,6 +333,30 @@ void remove_islands_on_lumens(const Mask& lumen, Mask& bone) {
   rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return 2 * on_lumen[c] < faces[c] || faces[c] == 0; },
       bone);
+}
+
+// Where a lumen rests on bone whose cortex the scan blurs, the lumen's voxels beside the bone
+// take the cortex's place and the marrow behind them is open, so the marrow rules left it out.
+// With the lumen's voxels beside bone counted as its shell, the marrow rules run again; what they
+// fill, less the lumen, is bone.
+void close_marrow_behind_lumens(const PatientAxes& axes, const SegmentationParams& params,
+                                const Mask& body, const Mask& lumen, Mask& bone) {
+  const Grid& g = bone.grid;
+  Mask shell = bone;
+  for_each_nonzero(lumen, [&](std::size_t n) {
+    if (any_face_neighbour(g, n, [&](std::int64_t m) { return bone.data[m] != 0; }))
+      shell.data[n] = 1;
+  });
+  fill_marrow_by_votes(axes, params, shell);
+  fill_between_cortices(axes, params, body, shell);
+  fill_enclosed_cavities(params.bone_max_cavity_ml, shell);
+  // What the second pass adds beside the lumen is the lumen's edge, not marrow.
+  for_each_nonzero(shell, [&](std::size_t n) {
+    if (!bone.data[n] && !lumen.data[n] &&
+        any_face_neighbour(g, n, [&](std::int64_t m) { return lumen.data[m] != 0; }))
+      shell.data[n] = 0;
+  });
+  bone = std::move(shell);
 }
 
 // Clears `bone` wherever `other` is set.
@@ -372,7 +396,9 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   remove_small_islands(params.min_bone_island_ml, bone);    // islands
   remove_compact_islands(params, bone);                     // calculi, calcified nodes
   if (not_bone) {
-    clear_where(*not_bone, bone);  // marrow rules never fill a lumen back
+    if (params.bone_marrow_behind_lumens)  // a lumen on a cortex the scan blurs
+      close_marrow_behind_lumens(axes, params, body, *not_bone, bone);
+    clear_where(*not_bone, bone);               // marrow rules never fill a lumen back
     remove_islands_on_lumens(*not_bone, bone);  // flaps, walls, trabeculae of a lumen
     remove_small_islands(params.min_bone_island_ml, bone);
   }

@@ -83,6 +83,10 @@ struct SegmentationParams {
   // the bone's partial volume and is filled, until none is left. 4 (more faces on bone than off),
   // 5 or 6; 0: off. A canal, foramen, disc or joint two voxels across never has four bone faces.
   int bone_notch_faces = 4;
+  // Marrow behind a lumen (segment_bone's not_bone) resting on a cortex the scan blurs: the
+  // marrow rules run a second time with the lumen's voxels beside bone counted as its shell;
+  // what they add beside the lumen stays the lumen's edge (bone_segmentation.cpp).
+  bool bone_marrow_behind_lumens = true;
   // Regions outside the bone that the bone encloses in 3D and that hold at most this are filled.
   double bone_max_cavity_ml = 30.0;
   // Bone islands smaller than this are removed.

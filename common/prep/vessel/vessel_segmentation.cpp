@@ -86,10 +86,9 @@ struct PartStats {
 
 // Per part: its size, HU moments and boundary faces (those beside a non-candidate), and of them
 // the faces beside `near` (the cortex and the voxels beside it).
-std::vector<PartStats> part_stats(const CtVolume& ct, const RunTable& runs,
-                                  const RunLabels& labels, const Mask& candidates,
-                                  const Mask& near, const std::vector<std::int16_t>& hu,
-                                  const DistanceMap& depth) {
+std::vector<PartStats> part_stats(const CtVolume& ct, const RunTable& runs, const RunLabels& labels,
+                                  const Mask& candidates, const Mask& near,
+                                  const std::vector<std::int16_t>& hu, const DistanceMap& depth) {
   const Grid& g = ct.grid;
   std::vector<PartStats> stats(labels.voxels.size());
   const std::int64_t nx = g.dims[0];
@@ -238,13 +237,24 @@ Verdict judge(const PartStats& s, double soft_peak_hu, double h_min, double ml,
 
 void count_verdict(Verdict v, VesselResult& r) {
   switch (v) {
-    case Verdict::lumen: ++r.lumens; break;
-    case Verdict::thin: ++r.rejected_thin; break;
-    case Verdict::shell: ++r.rejected_shell; break;
-    case Verdict::spread: ++r.rejected_spread; break;
-    case Verdict::surface: ++r.rejected_surface; break;
+    case Verdict::lumen:
+      ++r.lumens;
+      break;
+    case Verdict::thin:
+      ++r.rejected_thin;
+      break;
+    case Verdict::shell:
+      ++r.rejected_shell;
+      break;
+    case Verdict::spread:
+      ++r.rejected_spread;
+      break;
+    case Verdict::surface:
+      ++r.rejected_surface;
+      break;
     case Verdict::small:
-    case Verdict::dim: break;
+    case Verdict::dim:
+      break;
   }
 }
 
@@ -272,11 +282,73 @@ void grow_within(Mask& mask, Allowed allowed) {
   }
 }
 
+// A lumen resting on bone whose cortex the scan blurs takes the bone's nearest marrow with it
+// (the opening cannot part them along a broad contact). Its voxels below the half level from the
+// soft tissue to the lumen's own level (the lumen's edge: partial volume) within two voxels of
+// cortex are the bone's, not the lumen's.
+void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
+                    const std::vector<PartStats>& stats, const std::vector<std::uint8_t>& keep,
+                    const std::vector<std::int16_t>& hu, const Mask& near, double soft_hu,
+                    Mask& lumen) {
+  const Grid& g = lumen.grid;
+  const Mask near_two = dilate_once(near, [](std::size_t) { return true; });
+  const std::int64_t ny = g.dims[1];
+  for (std::int64_t row = 0; row + 1 < static_cast<std::int64_t>(runs.row_start.size()); ++row) {
+    const std::int64_t j = row % ny, k = row / ny;
+    for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
+      const auto c = static_cast<std::size_t>(labels.of_run[r]);
+      if (!keep[c]) continue;
+      const double half = 0.5 * (soft_hu + stats[c].mean());
+      for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i) {
+        const std::size_t n = g.linear(i, j, k);
+        if (near_two.data[n] && hu[n] < half) lumen.data[n] = 0;
+      }
+    }
+  }
+}
+
+// A voxel with the lumen on four or more of its six faces is the lumen's: a flap's bright sliver
+// or a corner of its edge, read as a ridge. Cortex beside a lumen has its bone behind it (at most
+// three faces on the lumen). Repeated until none is left.
+void fill_lumen_notches(const Mask& body, const std::vector<std::int16_t>& hu, int max_hu,
+                        Mask& lumen) {
+  const Grid& g = lumen.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t step[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  const auto faces_on_lumen = [&](std::size_t n) {
+    const auto m = static_cast<std::int64_t>(n);
+    const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
+    const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+    int on = 0;
+    for (int d = 0; d < 6; ++d)
+      on += inside[d] && lumen.data[static_cast<std::size_t>(m + step[d])];
+    return on;
+  };
+  std::vector<std::size_t> todo;
+  for (std::size_t n = 0; n < lumen.size(); ++n)
+    if (!lumen.data[n] && body.data[n] && hu[n] < max_hu && faces_on_lumen(n) >= 4)
+      todo.push_back(n);
+  while (!todo.empty()) {
+    const std::size_t n = todo.back();
+    todo.pop_back();
+    if (lumen.data[n] || faces_on_lumen(n) < 4) continue;
+    lumen.data[n] = 1;
+    const auto m = static_cast<std::int64_t>(n);
+    for (int d = 0; d < 6; ++d) {
+      const std::int64_t o = m + step[d];
+      if (o < 0 || o >= static_cast<std::int64_t>(lumen.size())) continue;
+      const auto q = static_cast<std::size_t>(o);
+      if (!lumen.data[q] && body.data[q] && hu[q] < max_hu) todo.push_back(q);
+    }
+  }
+}
+
 void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
   if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
     throw UsageError("segment_vessels: the body mask is not on the CT's grid");
-  if (!(p.min_contrast_hu > 0.0) || !(p.ridge_drop > 0.0 && p.ridge_drop < 1.0) || !(p.max_cortex_contact >= 0.0) ||
-      !(p.max_spread_fraction > 0.0) || !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
+  if (!(p.min_contrast_hu > 0.0) || !(p.ridge_drop > 0.0 && p.ridge_drop < 1.0) ||
+      !(p.max_cortex_contact >= 0.0) || !(p.max_spread_fraction > 0.0) ||
+      !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
       !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0))
     throw UsageError("segment_vessels: unusable parameters");
 }
@@ -297,14 +369,15 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   const Mask near = near_cortex(cortex);
   Mask candidates(g, 0, "vessel candidates");
   for (std::size_t n = 0; n < ct.size(); ++n)
-    candidates.data[n] = body.data[n] && !near.data[n] && ct.data[n] >= low_hu &&
-                         hu[n] < max_pool_hu;
+    candidates.data[n] =
+        body.data[n] && !near.data[n] && ct.data[n] >= low_hu && hu[n] < max_pool_hu;
   // open: the candidates within split_mm of a voxel split_mm deep, so that a bridge of partial
   // volume thinner than twice that (a lumen resting on a vertebra, a rib) parts them
   const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double split = std::max(params.split_mm, h_min);
-  DistanceMap depth = signed_distance(candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0});
+  DistanceMap depth =
+      signed_distance(candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0});
   Mask cores(g, 0, "vessel cores");
   for (std::size_t n = 0; n < cores.size(); ++n)
     cores.data[n] = candidates.data[n] && depth.data[n] + 0.5 * h_min >= split;
@@ -327,12 +400,14 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
     keep[c] = 1;
     if (brightest == stats.size() || s.mean() > stats[brightest].mean()) brightest = c;
   }
-  segmentation::rewrite_runs(g, runs, labels, [&](std::int64_t c) { return keep[c]; },
-                             result.lumen);
+  segmentation::rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return keep[c]; }, result.lumen);
+  trim_by_cortex(runs, labels, stats, keep, hu, near, soft_peak_hu, result.lumen);
   // rejoin: the branches and thin pieces the opening cut, grown from the lumens through the
   // candidates, never within a voxel of a part judged not a lumen
   Mask other(g, 0, "not lumens");
-  segmentation::rewrite_runs(g, runs, labels, [&](std::int64_t c) { return !keep[c]; }, other);
+  segmentation::rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return !keep[c]; }, other);
   other = dilate_once(other, [](std::size_t) { return true; });
   // ... nor within two voxels of cortex: cancellous bone's thin pieces lie between trabeculae
   const Mask near_two = dilate_once(near, [](std::size_t) { return true; });
@@ -347,7 +422,8 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   };
   const int steps = std::max(1, static_cast<int>(std::lround(params.closing_mm / h_min)));
   Mask closed = result.lumen;
-  for (int s = 0; s < steps; ++s) closed = dilate_once(closed, below_cortex);
+  const auto off_cortex = [&](std::size_t n) { return below_cortex(n) && !near.data[n]; };
+  for (int s = 0; s < steps; ++s) closed = dilate_once(closed, off_cortex);
   for (int s = 0; s < steps; ++s) closed = erode_once(closed);
   for (std::size_t n = 0; n < closed.size(); ++n) closed.data[n] |= result.lumen.data[n];
   // the wall's partial volume: one voxel of contrast level beside the lumen, not by cortex (a
@@ -355,6 +431,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   result.lumen = dilate_once(closed, [&](std::size_t n) {
     return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu;
   });
+  fill_lumen_notches(body, hu, max_pool_hu, result.lumen);
   result.voxels = segmentation::count_nonzero(result.lumen);
   result.contrast_phase = result.lumen_level_hu - soft_peak_hu >= params.arterial_above_soft_hu
                               ? "arterial"

@@ -41,30 +41,30 @@
 namespace palp {
 
 struct VesselParams {
-  double min_contrast_hu = 60.0;     // a lumen voxel's HU above the soft-tissue peak
-  double min_lumen_contrast_hu = 90.0;  // a lumen's mean smoothed HU above the peak
-  double trunk_core_mm = 6.0;        // a lumen holds a voxel this deep: joined to a trunk
-  double split_mm = 2.0;             // bridges thinner than twice this part a lumen from bone
-  double ridge_drop = 0.35;          // cortex: a ridge, this share of its height above S lower
-                                     // on both sides (bone_seed level and up)
-  double max_pool_margin_hu = 1000.0;  // lumens below bone seed + this (dense cortex is above)
-  double max_cortex_contact = 0.3;   // share of a lumen's boundary faces beside cortex
-  double max_spread_fraction = 0.5;  // HU standard deviation / (level - soft-tissue peak)
-  double clear_contrast_hu = 250.0;  // a part this far above S on average is contrast
-  double min_lumen_ml = 0.3;         // smaller parts are noise, calcifications, partial volume
-  double closing_mm = 2.0;           // flap and plaque shadows filled inside a lumen
+  double min_contrast_hu = 60.0;          // a lumen voxel's HU above the soft-tissue peak
+  double min_lumen_contrast_hu = 90.0;    // a lumen's mean smoothed HU above the peak
+  double trunk_core_mm = 6.0;             // a lumen holds a voxel this deep: joined to a trunk
+  double split_mm = 2.0;                  // bridges thinner than twice this part a lumen from bone
+  double ridge_drop = 0.35;               // cortex: a ridge, this share of its height above S lower
+                                          // on both sides (bone_seed level and up)
+  double max_pool_margin_hu = 1000.0;     // lumens below bone seed + this (dense cortex is above)
+  double max_cortex_contact = 0.3;        // share of a lumen's boundary faces beside cortex
+  double max_spread_fraction = 0.5;       // HU standard deviation / (level - soft-tissue peak)
+  double clear_contrast_hu = 250.0;       // a part this far above S on average is contrast
+  double min_lumen_ml = 0.3;              // smaller parts are noise, calcifications, partial volume
+  double closing_mm = 2.0;                // flap and plaque shadows filled inside a lumen
   double arterial_above_soft_hu = 170.0;  // the phase's level: aorta of an arterial phase
 };
 
 struct VesselResult {
-  Mask lumen;                          // 0/1, CT grid
-  std::string contrast_phase = "none"; // none | arterial | portal-venous | unknown
-  double lumen_level_hu = 0.0;         // mean smoothed HU of the brightest lumen (0: none)
-  int lumens = 0;                      // parts kept
-  int rejected_shell = 0;              // parts dropped as enclosed by cortex
-  int rejected_spread = 0;             // parts dropped as not uniform
-  int rejected_surface = 0;            // parts dropped as brighter at their surface (bone)
-  int rejected_thin = 0;               // parts dropped as joined to no trunk
+  Mask lumen;                           // 0/1, CT grid
+  std::string contrast_phase = "none";  // none | arterial | portal-venous | unknown
+  double lumen_level_hu = 0.0;          // mean smoothed HU of the brightest lumen (0: none)
+  int lumens = 0;                       // parts kept
+  int rejected_shell = 0;               // parts dropped as enclosed by cortex
+  int rejected_spread = 0;              // parts dropped as not uniform
+  int rejected_surface = 0;             // parts dropped as brighter at their surface (bone)
+  int rejected_thin = 0;                // parts dropped as joined to no trunk
   std::uint64_t voxels = 0;
 };
 
