@@ -107,6 +107,15 @@ class Device {
   virtual DeviceState state() const noexcept { return DeviceState::Present; }
   // Whether the device renders the force it is written (false: a pose source only).
   virtual bool renders_force() const noexcept { return true; }
+  // Whether it pushes on a hand from a frame of its own (usb-haptic, falcon): palpd always
+  // limits its force and places it on the patient; the others move in the scene frame.
+  virtual bool drives_a_hand() const noexcept { return false; }
+  // The device profile its make is known to have ("": none; a hand-driving device then gets
+  // the most conservative class).
+  virtual std::string_view own_profile() const noexcept { return {}; }
+  // Whether it takes a home pose on the patient (palpd --home, --home-clearance) while moving
+  // in the scene frame (spacemouse).
+  virtual bool takes_home() const noexcept { return false; }
   // Real time (atomic loads): what the device itself declares about its force, stiffness and
   // damping (0: not declared). The loop's limits are lowered to these, never raised.
   virtual DeclaredLimits declared_limits() const noexcept { return {}; }

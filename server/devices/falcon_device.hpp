@@ -66,6 +66,8 @@ class FalconDevice final : public Device {
   void set_report_at_stop(bool report) { report_at_stop_ = report; }
 
   std::string_view kind() const noexcept override { return "falcon"; }
+  bool drives_a_hand() const noexcept override { return true; }
+  std::string_view own_profile() const noexcept override { return "falcon"; }
   DeviceStatus configure(const DeviceConfig& config) override;  // Error without firmware
   DeviceStatus activate() override;  // Ok also when no Falcon is plugged in yet
   DeviceStatus read(std::int64_t now_ns, DeviceSample& sample) noexcept override;

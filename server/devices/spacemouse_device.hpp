@@ -166,6 +166,7 @@ class SpaceMouseDevice final : public Device {
   ~SpaceMouseDevice() override;
 
   std::string_view kind() const noexcept override { return "spacemouse"; }
+  bool takes_home() const noexcept override { return true; }
   bool renders_force() const noexcept override { return false; }
   DeviceStatus configure(const DeviceConfig& config) override;
   DeviceStatus activate() override;  // Ok also when no SpaceMouse is plugged in yet

@@ -37,6 +37,7 @@ class UsbHapticDevice final : public Device {
   ~UsbHapticDevice() override;
 
   std::string_view kind() const noexcept override { return "usb-haptic"; }
+  bool drives_a_hand() const noexcept override { return true; }
   DeviceStatus configure(const DeviceConfig& config) override;
   DeviceStatus activate() override;  // Ok also when the device is not plugged in yet
   DeviceStatus read(std::int64_t now_ns, DeviceSample& sample) noexcept override;
