@@ -3,7 +3,7 @@
 //   cortex      CT -> bright ridges (cortex, trabeculae); near = cortex and its face neighbours
 //   candidates  CT, smoothed HU, body, near -> contrast-level voxels away from cortex
 //   open        candidates -> cores (split_mm deep) -> the voxels within split_mm of a core
-//   parts       opened -> 6-connected parts; per part: voxels, HU moments, depth, boundary faces,
+//   parts       opened -> 6-connected parts; per part: voxels, HU moments, trunk, boundary faces,
 //               faces on near, surface and inner HU
 //   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface)
 //   rejoin      lumens -> grown through candidates the opening cut, away from rejected parts
@@ -69,6 +69,9 @@ constexpr int kDirections[13][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, 1, 0
 // it curves or thickens.
 constexpr int kThickBodyRays = 13;
 
+// cores' value for a voxel trunk_core_mm deep in the candidates (1: split_mm deep).
+constexpr std::uint8_t kTrunkCore = 2;
+
 struct PartStats {
   std::int64_t voxels = 0;
   double sum = 0.0, sum_sq = 0.0;
@@ -76,7 +79,7 @@ struct PartStats {
   // The stored HU of its surface voxels (a face on a non-candidate) and of the others.
   double surface_sum = 0.0, inner_sum = 0.0;
   std::int64_t surface_voxels = 0, inner_voxels = 0;
-  float depth = 0.0f;  // the largest distance (mm) from a voxel of it to a non-candidate
+  bool trunk = false;  // holds a voxel trunk_core_mm deep in the candidates
   double mean() const { return sum / static_cast<double>(voxels); }
   double spread() const {
     const double m = mean();
@@ -88,7 +91,7 @@ struct PartStats {
 // the faces beside `near` (the cortex and the voxels beside it).
 std::vector<PartStats> part_stats(const CtVolume& ct, const RunTable& runs, const RunLabels& labels,
                                   const Mask& candidates, const Mask& near,
-                                  const std::vector<std::int16_t>& hu, const DistanceMap& depth) {
+                                  const std::vector<std::int16_t>& hu, const Mask& depth_class) {
   const Grid& g = ct.grid;
   std::vector<PartStats> stats(labels.voxels.size());
   const std::int64_t nx = g.dims[0];
@@ -101,7 +104,7 @@ std::vector<PartStats> part_stats(const CtVolume& ct, const RunTable& runs, cons
         const auto n = static_cast<std::int64_t>(g.linear(i, j, k));
         const double v = hu[n];
         ++s.voxels;
-        s.depth = std::max(s.depth, depth.data[n]);
+        s.trunk = s.trunk || depth_class.data[n] == kTrunkCore;
         s.sum += v;
         s.sum_sq += v * v;
         const std::int64_t at[3] = {i, j, k};
@@ -214,7 +217,7 @@ Verdict judge(const PartStats& s, double soft_peak_hu, double h_min, double ml,
   if (static_cast<double>(s.voxels) * ml < params.min_lumen_ml) return Verdict::small;
   // Joined to a trunk: the aorta, a vena cava, the heart, whose core is as thick as no branch
   // apart from them, nor costal cartilage or a tendon of the same HU, is.
-  if (s.depth + 0.5 * h_min < params.trunk_core_mm) return Verdict::thin;
+  if (!s.trunk) return Verdict::thin;
   // Contrast: the part's mean well above the soft tissue (enhancing organs, a haematoma, noise
   // above the candidates' level stay below it).
   if (s.mean() - soft_peak_hu < params.min_lumen_contrast_hu) return Verdict::dim;
@@ -376,19 +379,27 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double split = std::max(params.split_mm, h_min);
+  // cores: 1 split_mm deep in the candidates, kTrunkCore trunk_core_mm deep (one float map,
+  // its buffer reused for the reach from the cores)
   DistanceMap depth =
       signed_distance(candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0});
   Mask cores(g, 0, "vessel cores");
-  for (std::size_t n = 0; n < cores.size(); ++n)
-    cores.data[n] = candidates.data[n] && depth.data[n] + 0.5 * h_min >= split;
-  DistanceMap reach = signed_distance(cores, {split + 3.0 * h_max, 0});
+  for (std::size_t n = 0; n < cores.size(); ++n) {
+    const double d = depth.data[n] + 0.5 * h_min;
+    cores.data[n] = !candidates.data[n]         ? 0
+                    : d >= params.trunk_core_mm ? kTrunkCore
+                    : d >= split                ? 1
+                                                : 0;
+  }
+  signed_distance(cores, {split + 3.0 * h_max, 0}, depth);
   Mask opened(g, 0, "vessel parts");
   for (std::size_t n = 0; n < opened.size(); ++n)
-    opened.data[n] = candidates.data[n] && 0.5 * h_min - reach.data[n] <= split + h_min;
-  // parts: 6-connected, with their size, level, spread, depth and cortex contact
+    opened.data[n] = candidates.data[n] && 0.5 * h_min - depth.data[n] <= split + h_min;
+  depth = DistanceMap{};
+  // parts: 6-connected, with their size, level, spread, trunk core and cortex contact
   const RunTable runs = extract_runs(opened, false);
   const RunLabels labels = label_runs(g, runs);
-  const std::vector<PartStats> stats = part_stats(ct, runs, labels, opened, near, hu, depth);
+  const std::vector<PartStats> stats = part_stats(ct, runs, labels, opened, near, hu, cores);
   const double ml = segmentation::voxel_ml(g);
   std::vector<std::uint8_t> keep(stats.size(), 0);
   std::size_t brightest = stats.size();  // the phase's lumen: an organ never outshines it
