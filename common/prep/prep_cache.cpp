@@ -62,6 +62,20 @@ class ContentHash {
   std::uint64_t state_ = 0xcbf29ce484222325ull;
 };
 
+// Every regular file of a directory (a DICOM series, a TotalSegmentator folder), in name order,
+// name and bytes: as the readers do, what is not a regular file (a symlink loop too) is skipped.
+void hash_directory_files(ContentHash& hash, const fs::path& dir) {
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (std::error_code entry_ec; entry.is_regular_file(entry_ec)) files.push_back(entry.path());
+  std::sort(files.begin(), files.end());
+  for (const auto& file : files) {
+    hash.add(file.filename().string());
+    hash.add_file(file);
+  }
+}
+
 void hash_input(ContentHash& hash, const std::string& input) {
   if (input.rfind("phantom:", 0) == 0) {
     hash.add(input);
@@ -70,16 +84,7 @@ void hash_input(ContentHash& hash, const std::string& input) {
   const fs::path path(input);
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
-    std::vector<fs::path> files;
-    for (const auto& entry : fs::directory_iterator(path, ec)) {
-      // as the DICOM reader does: what is not a regular file (a symlink loop too) is skipped
-      if (std::error_code entry_ec; entry.is_regular_file(entry_ec)) files.push_back(entry.path());
-    }
-    std::sort(files.begin(), files.end());
-    for (const auto& file : files) {
-      hash.add(file.filename().string());
-      hash.add_file(file);
-    }
+    hash_directory_files(hash, path);
     return;
   }
   // "no such file or directory", "a loop of symbolic links" (not "no such file": fs::exists
@@ -98,14 +103,7 @@ void hash_labels(ContentHash& hash, const std::string& labels) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError("labels: " + labels + ": no such file or directory");
   if (fs::is_directory(path, ec)) {
-    std::vector<fs::path> files;
-    for (const auto& entry : fs::directory_iterator(path, ec))
-      if (std::error_code entry_ec; entry.is_regular_file(entry_ec)) files.push_back(entry.path());
-    std::sort(files.begin(), files.end());
-    for (const auto& file : files) {
-      hash.add(file.filename().string());
-      hash.add_file(file);
-    }
+    hash_directory_files(hash, path);
     return;
   }
   try {

@@ -105,40 +105,24 @@ void LabelBuilder::check_overlaps(const LabelVolume& volume, const std::vector<F
 
 // Each structure's box of CT voxels, over all layers.
 void LabelBuilder::find_boxes() {
-  for (const Mask& ids : layers_) {
-    if (ids.data.empty()) continue;
-    std::size_t at = 0;
-    for (std::int64_t k = 0; k < ct_.dims[2]; ++k)
-      for (std::int64_t j = 0; j < ct_.dims[1]; ++j)
-        for (std::int64_t i = 0; i < ct_.dims[0]; ++i, ++at) {
-          if (ids.data[at] == 0) continue;
-          Structure& s = structures_[ids.data[at] - 1u];
-          const Index3 p{i, j, k};
-          const bool first = s.hi[0] < s.lo[0];
-          for (int a = 0; a < 3; ++a) {
-            s.lo[a] = first ? p[a] : std::min(s.lo[a], p[a]);
-            s.hi[a] = first ? p[a] : std::max(s.hi[a], p[a]);
-          }
-        }
-  }
+  for_each_labelled_voxel([&](Structure& s, std::int64_t i, std::int64_t j, std::int64_t k) {
+    const Index3 p{i, j, k};
+    const bool first = s.hi[0] < s.lo[0];
+    for (int a = 0; a < 3; ++a) {
+      s.lo[a] = first ? p[a] : std::min(s.lo[a], p[a]);
+      s.hi[a] = first ? p[a] : std::max(s.hi[a], p[a]);
+    }
+  });
 }
 
 // Writes every structure's voxels into its mask (whose grid is the structure's box) and frees
 // the layers.
 void LabelBuilder::cut_masks() {
-  for (const Mask& ids : layers_) {
-    if (ids.data.empty()) continue;
-    std::size_t at = 0;
-    for (std::int64_t k = 0; k < ct_.dims[2]; ++k)
-      for (std::int64_t j = 0; j < ct_.dims[1]; ++j)
-        for (std::int64_t i = 0; i < ct_.dims[0]; ++i, ++at) {
-          if (ids.data[at] == 0) continue;
-          Structure& s = structures_[ids.data[at] - 1u];
-          std::uint8_t& voxel = s.mask->at(i - s.lo[0], j - s.lo[1], k - s.lo[2]);
-          s.voxels += voxel == 0 ? 1 : 0;
-          voxel = 1;
-        }
-  }
+  for_each_labelled_voxel([&](Structure& s, std::int64_t i, std::int64_t j, std::int64_t k) {
+    std::uint8_t& voxel = s.mask->at(i - s.lo[0], j - s.lo[1], k - s.lo[2]);
+    s.voxels += voxel == 0 ? 1 : 0;
+    voxel = 1;
+  });
   layers_.clear();
 }
 

@@ -56,6 +56,18 @@ class LabelBuilder {
                       const LabelCounts& counts) const;
   void find_boxes();
   void cut_masks();
+  // Calls visit(structure, i, j, k) for every labelled CT voxel of every layer.
+  template <class Visit>
+  void for_each_labelled_voxel(Visit visit) {
+    for (const Mask& ids : layers_) {
+      if (ids.data.empty()) continue;
+      std::size_t at = 0;
+      for (std::int64_t k = 0; k < ct_.dims[2]; ++k)
+        for (std::int64_t j = 0; j < ct_.dims[1]; ++j)
+          for (std::int64_t i = 0; i < ct_.dims[0]; ++i, ++at)
+            if (ids.data[at] != 0) visit(structures_[ids.data[at] - 1u], i, j, k);
+    }
+  }
 
   Grid ct_;
   std::string path_, format_;
