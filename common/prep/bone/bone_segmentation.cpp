@@ -19,6 +19,7 @@
 #include "prep/bone/bone_marrow.hpp"
 #include "prep/bone/bone_ribs.hpp"
 #include "prep/segment/components.hpp"
+#include "prep/segment/notches.hpp"
 #include "prep/segment/segmentation_shared.hpp"
 
 namespace palp {
@@ -197,100 +198,6 @@ void refine_surface(const CtVolume& ct, double fraction, Mask& bone) {
   for (const std::size_t n : trim) bone.data[n] = 0;
 }
 
-// Notches: a body voxel outside the bone with bone on at least `faces` (4 or more) of its six faces
-// lies in a pit, a tunnel or a gap narrower than a voxel in the bone's surface. A bone's surface is
-// smooth at the scale of a 1-3 mm voxel, so such a voxel is the bone's own partial volume (or a
-// voxel the edge trim cut out of a concave surface, judged by its one or two outside neighbours),
-// not tissue; a canal, foramen, disc or joint space the scan resolves (two voxels or more across)
-// never has four bone faces. Filled until none is left: the least such closure of the mask, the
-// same in any order.
-void fill_notches(const Mask& body, int faces, Mask& bone) {
-  if (faces <= 0) return;
-  const Grid& g = bone.grid;
-  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
-  const auto open_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
-    return std::array<bool, 6>{i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
-  };
-  const auto bone_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k, std::size_t n) {
-    const std::array<bool, 6> in = open_faces(i, j, k);
-    int c = 0;
-    for (int d = 0; d < 6; ++d)
-      c += in[d] && bone.data[static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d])];
-    return c;
-  };
-  const auto is_notch = [&](std::size_t n) {
-    if (bone.data[n] || !body.data[n]) return false;
-    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
-    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
-    return bone_faces(i, jk % ny, jk / ny, n) >= faces;
-  };
-  // Each row's span of bone, [span_lo, span_hi) (empty: span_lo >= span_hi). A voxel outside the
-  // spans of its four neighbouring rows and its own row's span grown by one has no bone face,
-  // count 0 < faces: the scan below leaves it out and finds the same notches in the same order.
-  const std::int64_t rows = ny * nz;
-  std::vector<std::int64_t> span_lo(static_cast<std::size_t>(rows)),
-      span_hi(static_cast<std::size_t>(rows));
-  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t r = k0 * ny; r < k1 * ny; ++r) {
-      const std::uint8_t* row = bone.data.data() + r * nx;
-      span_lo[r] = next_byte(row, 0, nx, true);
-      span_hi[r] = span_lo[r] < nx ? last_nonzero_byte(row, nx) + 1 : 0;
-    }
-  });
-  // The notches of the mask as it is, slice by slice (each row's face counts summed from the six
-  // neighbouring rows, a loop that vectorises); then each filled voxel's neighbours again.
-  std::vector<std::vector<std::size_t>> found(static_cast<std::size_t>(nz));
-  const std::vector<std::uint8_t> none(static_cast<std::size_t>(nx), 0);
-  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
-    std::vector<std::uint8_t> counts(static_cast<std::size_t>(nx));
-    std::uint8_t* count = counts.data();
-    for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < ny; ++j) {
-        const std::int64_t r = j + ny * k;
-        std::int64_t lo = nx, hi = 0;
-        const auto widen = [&](bool exists, std::int64_t o, std::int64_t by) {
-          if (!exists || span_lo[o] >= span_hi[o]) return;
-          lo = std::min(lo, std::max<std::int64_t>(0, span_lo[o] - by));
-          hi = std::max(hi, std::min(nx, span_hi[o] + by));
-        };
-        widen(true, r, 1);
-        widen(j > 0, r - 1, 0);
-        widen(j + 1 < ny, r + 1, 0);
-        widen(k > 0, r - ny, 0);
-        widen(k + 1 < nz, r + ny, 0);
-        if (lo >= hi) continue;
-        const std::size_t first = g.linear(0, j, k);
-        const std::uint8_t* row = bone.data.data() + first;
-        const std::uint8_t* in_body = body.data.data() + first;
-        const std::uint8_t* y0 = j > 0 ? row - nx : none.data();
-        const std::uint8_t* y1 = j + 1 < ny ? row + nx : none.data();
-        const std::uint8_t* z0 = k > 0 ? row - nx * ny : none.data();
-        const std::uint8_t* z1 = k + 1 < nz ? row + nx * ny : none.data();
-        for (std::int64_t i = lo; i < hi; ++i)
-          count[i] = static_cast<std::uint8_t>(y0[i] + y1[i] + z0[i] + z1[i]);
-        for (std::int64_t i = std::max<std::int64_t>(lo, 1); i < hi; ++i) count[i] += row[i - 1];
-        for (std::int64_t i = lo; i < std::min(hi, nx - 1); ++i) count[i] += row[i + 1];
-        for (std::int64_t i = lo; i < hi; ++i)
-          if (count[i] >= faces && !row[i] && in_body[i])
-            found[static_cast<std::size_t>(k)].push_back(first + static_cast<std::size_t>(i));
-      }
-  });
-  std::vector<std::size_t> todo;
-  for (const auto& slice : found) todo.insert(todo.end(), slice.begin(), slice.end());
-  while (!todo.empty()) {
-    const std::size_t n = todo.back();
-    todo.pop_back();
-    if (!is_notch(n)) continue;
-    bone.data[n] = 1;
-    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
-    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
-    const std::array<bool, 6> in = open_faces(i, jk % ny, jk / ny);
-    for (int d = 0; d < 6; ++d)
-      if (in[d]) todo.push_back(static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d]));
-  }
-}
-
 void remove_small_islands(double min_island_ml, Mask& bone) {
   const Grid& g = bone.grid;
   const RunTable runs = extract_runs(bone, false);
@@ -367,6 +274,12 @@ void clear_where(const Mask& other, Mask& bone) {
 }  // namespace
 }  // namespace segmentation
 
+// Notches: a body voxel outside the bone with bone on at least `faces` (4 or more) of its six faces
+// lies in a pit, a tunnel or a gap narrower than a voxel in the bone's surface. A bone's surface is
+// smooth at the scale of a 1-3 mm voxel, so such a voxel is the bone's own partial volume (or a
+// voxel the edge trim cut out of a concave surface, judged by its one or two outside neighbours),
+// not tissue; a canal, foramen, disc or joint space the scan resolves (two voxels or more across)
+// never has four bone faces. Filled by prep/segment/notches.hpp.
 Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams& params,
                   SegmentationStats* stats, const Mask* not_bone) {
   using namespace segmentation;

@@ -21,6 +21,7 @@
 #include "base/parallel.hpp"
 #include "prep/maps/distance_transform.hpp"
 #include "prep/segment/components.hpp"
+#include "prep/segment/notches.hpp"
 
 namespace palp {
 namespace {
@@ -68,6 +69,9 @@ constexpr int kDirections[13][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, 1, 0
 // least: half of them, into the body. A shell is bright along its plane's 8 and a few more where
 // it curves or thickens.
 constexpr int kThickBodyRays = 13;
+
+// Faces on the lumen (of six) that make a voxel the lumen's notch.
+constexpr int kLumenNotchFaces = 4;
 
 // cores' value for a voxel trunk_core_mm deep in the candidates (1: split_mm deep).
 constexpr std::uint8_t kTrunkCore = 2;
@@ -169,19 +173,6 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
   return cortex;
 }
 
-// The cortex and its face neighbours.
-Mask near_cortex(const Mask& cortex) {
-  const Grid& g = cortex.grid;
-  Mask near = cortex;
-  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
-    const std::size_t begin = g.linear(0, 0, k0), end = g.linear(0, 0, k1);
-    for (std::size_t n = begin; n < end; ++n)
-      if (!cortex.data[n])
-        near.data[n] = any_face_neighbour(g, n, [&](std::int64_t m) { return cortex.data[m]; });
-  });
-  return near;
-}
-
 // Dilation by one voxel (face neighbours) into voxels `allowed` says yes to.
 template <class Allowed>
 Mask dilate_once(const Mask& in, Allowed allowed) {
@@ -212,8 +203,7 @@ Mask erode_once(const Mask& in) {
 enum class Verdict { lumen, small, thin, dim, shell, spread, surface };
 
 // Whether a part is a lumen (see the header): size, trunk, cortex contact, uniformity, surface.
-Verdict judge(const PartStats& s, double soft_peak_hu, double h_min, double ml,
-              const VesselParams& params) {
+Verdict judge(const PartStats& s, double soft_peak_hu, double ml, const VesselParams& params) {
   if (static_cast<double>(s.voxels) * ml < params.min_lumen_ml) return Verdict::small;
   // Joined to a trunk: the aorta, a vena cava, the heart, whose core is as thick as no branch
   // apart from them, nor costal cartilage or a tendon of the same HU, is.
@@ -291,10 +281,9 @@ void grow_within(Mask& mask, Allowed allowed) {
 // cortex are the bone's, not the lumen's.
 void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
                     const std::vector<PartStats>& stats, const std::vector<std::uint8_t>& keep,
-                    const std::vector<std::int16_t>& hu, const Mask& near, double soft_hu,
+                    const std::vector<std::int16_t>& hu, const Mask& near_two, double soft_hu,
                     Mask& lumen) {
   const Grid& g = lumen.grid;
-  const Mask near_two = dilate_once(near, [](std::size_t) { return true; });
   const std::int64_t ny = g.dims[1];
   for (std::int64_t row = 0; row + 1 < static_cast<std::int64_t>(runs.row_start.size()); ++row) {
     const std::int64_t j = row % ny, k = row / ny;
@@ -306,42 +295,6 @@ void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
         const std::size_t n = g.linear(i, j, k);
         if (near_two.data[n] && hu[n] < half) lumen.data[n] = 0;
       }
-    }
-  }
-}
-
-// A voxel with the lumen on four or more of its six faces is the lumen's: a flap's bright sliver
-// or a corner of its edge, read as a ridge. Cortex beside a lumen has its bone behind it (at most
-// three faces on the lumen). Repeated until none is left.
-void fill_lumen_notches(const Mask& body, const std::vector<std::int16_t>& hu, int max_hu,
-                        Mask& lumen) {
-  const Grid& g = lumen.grid;
-  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  const std::int64_t step[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
-  const auto faces_on_lumen = [&](std::size_t n) {
-    const auto m = static_cast<std::int64_t>(n);
-    const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
-    const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
-    int on = 0;
-    for (int d = 0; d < 6; ++d)
-      on += inside[d] && lumen.data[static_cast<std::size_t>(m + step[d])];
-    return on;
-  };
-  std::vector<std::size_t> todo;
-  for (std::size_t n = 0; n < lumen.size(); ++n)
-    if (!lumen.data[n] && body.data[n] && hu[n] < max_hu && faces_on_lumen(n) >= 4)
-      todo.push_back(n);
-  while (!todo.empty()) {
-    const std::size_t n = todo.back();
-    todo.pop_back();
-    if (lumen.data[n] || faces_on_lumen(n) < 4) continue;
-    lumen.data[n] = 1;
-    const auto m = static_cast<std::int64_t>(n);
-    for (int d = 0; d < 6; ++d) {
-      const std::int64_t o = m + step[d];
-      if (o < 0 || o >= static_cast<std::int64_t>(lumen.size())) continue;
-      const auto q = static_cast<std::size_t>(o);
-      if (!lumen.data[q] && body.data[q] && hu[q] < max_hu) todo.push_back(q);
     }
   }
 }
@@ -369,7 +322,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   // candidates: contrast-level smoothed HU inside the body, not beside cortex
   const int max_pool_hu = static_cast<int>(std::lround(bone_seed_hu + params.max_pool_margin_hu));
   const Mask cortex = ridge_cortex(ct, bone_seed_hu, soft_peak_hu, params.ridge_drop);
-  const Mask near = near_cortex(cortex);
+  const Mask near = dilate_once(cortex, [](std::size_t) { return true; });  // and beside it
   Mask candidates(g, 0, "vessel candidates");
   for (std::size_t n = 0; n < ct.size(); ++n)
     candidates.data[n] =
@@ -405,7 +358,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   std::size_t brightest = stats.size();  // the phase's lumen: an organ never outshines it
   for (std::size_t c = 0; c < stats.size(); ++c) {
     const PartStats& s = stats[c];
-    const Verdict v = judge(s, soft_peak_hu, h_min, ml, params);
+    const Verdict v = judge(s, soft_peak_hu, ml, params);
     count_verdict(v, result);
     if (v != Verdict::lumen) continue;
     keep[c] = 1;
@@ -413,7 +366,9 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   }
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return keep[c]; }, result.lumen);
-  trim_by_cortex(runs, labels, stats, keep, hu, near, soft_peak_hu, result.lumen);
+  // cortex and the voxels within two of it
+  const Mask near_two = dilate_once(near, [](std::size_t) { return true; });
+  trim_by_cortex(runs, labels, stats, keep, hu, near_two, soft_peak_hu, result.lumen);
   // rejoin: the branches and thin pieces the opening cut, grown from the lumens through the
   // candidates, never within a voxel of a part judged not a lumen
   Mask other(g, 0, "not lumens");
@@ -421,7 +376,6 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
       g, runs, labels, [&](std::int64_t c) { return !keep[c]; }, other);
   other = dilate_once(other, [](std::size_t) { return true; });
   // ... nor within two voxels of cortex: cancellous bone's thin pieces lie between trabeculae
-  const Mask near_two = dilate_once(near, [](std::size_t) { return true; });
   grow_within(result.lumen, [&](std::size_t n) {
     return candidates.data[n] && !other.data[n] && !near_two.data[n];
   });
@@ -442,7 +396,13 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   result.lumen = dilate_once(closed, [&](std::size_t n) {
     return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu;
   });
-  fill_lumen_notches(body, hu, max_pool_hu, result.lumen);
+  // a voxel with the lumen on four or more of its six faces is the lumen's: a flap's bright
+  // sliver or a corner of its edge, read as a ridge (cortex beside a lumen has its bone behind
+  // it: at most three faces on the lumen)
+  Mask notch_room(g, 0, "lumen notch room");
+  for (std::size_t n = 0; n < notch_room.size(); ++n)
+    notch_room.data[n] = body.data[n] && hu[n] < max_pool_hu;
+  segmentation::fill_notches(notch_room, kLumenNotchFaces, result.lumen);
   result.voxels = segmentation::count_nonzero(result.lumen);
   result.contrast_phase = result.lumen_level_hu - soft_peak_hu >= params.arterial_above_soft_hu
                               ? "arterial"
