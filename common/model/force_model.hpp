@@ -71,6 +71,7 @@
 
 #include "base/vec.hpp"
 #include "model/field_sampler.hpp"
+#include "model/structure_layers.hpp"
 #include "model/tool.hpp"
 
 namespace palp {
@@ -97,6 +98,16 @@ struct ForceParams {
   // under the skin stand out at working depths (docs/force_model.md, "Rib contrast"). palp's
   // default is palp_params()'s 9 mm; this 8 mm is what a paper model reports (it never reads it).
   double bone_reach_mm = 8.0;
+  // Structure layers (structure_layers.hpp; palp model only, and only where the scene has them).
+  double pulse_bpm = 72.0;            // heart rate of the arteries' pulse; 0 = no pulse
+  double pulse_systolic_mmHg = 120.0;  // the arterial pressure's peak
+  double pulse_diastolic_mmHg = 80.0;  // and its floor
+  double pulse_vessel_mm = 8.0;       // the artery's width the pressure acts over (femoral ~8)
+  double pad_mm = 14.0;               // the fingertip's contact patch, a square of this side
+  double organ_reach_mm = 12.0;       // an organ border is felt this far beneath (mm)
+  double organ_k1 = 0.05;             // N/mm: the border spring's linear term
+  double organ_k3 = 1.5e-3;           // N/mm^3: and its cubic term
+  double organ_fmax = 4.0;            // N: its cap
 };
 
 // "paper" | "palp"; UsageError otherwise.
@@ -119,13 +130,16 @@ ForceParams model_params(ModelKind kind, ToolKind tool);
 // Overrides one parameter by name: c, k, bone_fmax, bone_flip, bone_enabled (0/1),
 // grad_epsilon, direction_epsilon, bone_mode (0 = printed, 1 = robust), bone_k, model (0 = paper,
 // 1 = palp), mu, skin_fmax, bone_fade_mm, bone_reach_mm,
-// bone_along_normal (0/1).
+// bone_along_normal (0/1), pulse_bpm, pulse_systolic_mmHg, pulse_diastolic_mmHg, pulse_vessel_mm,
+// pad_mm, organ_reach_mm, organ_k1, organ_k3, organ_fmax.
 // UsageError for unknown names or unusable values.
 void set_param(ForceParams& params, std::string_view name, double value);
 
 // UsageError outside the physical ranges: c [0, 20] mm/N, k [0, 5] N/mm, bone_fmax [0, 60] N,
 // bone_flip [0, 10], bone_k [0, 100] N/mm, epsilons (0, 0.1], mu [0, 2], skin_fmax [1, 200] N,
-// bone_fade_mm [0, 30] mm, bone_reach_mm [1, 20] mm.
+// bone_fade_mm [0, 30] mm, bone_reach_mm [1, 20] mm, pulse_bpm [0, 240], diastolic [20, 200]
+// mmHg < systolic [40, 300] mmHg, pulse_vessel_mm [1, 40], pad_mm [2, 40], organ_reach_mm
+// [0, 60], organ_k1 [0, 5] N/mm, organ_k3 [0, 0.1] N/mm^3, organ_fmax [0, 20] N.
 void validate(const ForceParams& params);
 
 // f_s(x) = 1.78e-2 x^3 + 3.82e-3 x^2 + 2.28e-4 x for x > 0, else 0 (mm -> N).
@@ -176,17 +190,23 @@ class Model {
   Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params);
   // Parameters default to the tool kind's set.
   Model(std::shared_ptr<const FieldSampler> fields, Tool tool);
+  // With structure layers beyond bone (the palp model applies them; the paper model ignores
+  // them). UsageError for a layer without a map.
+  Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params,
+        std::vector<StructureLayer> layers);
 
   const FieldSampler& fields() const { return *fields_; }
   const std::shared_ptr<const FieldSampler>& fields_ptr() const { return fields_; }
   const Tool& tool() const { return tool_; }
   const ForceParams& params() const { return params_; }
+  const std::vector<StructureLayer>& layers() const { return layers_; }
   std::size_t contact_count() const { return tool_.points.size(); }
 
  private:
   std::shared_ptr<const FieldSampler> fields_;
   Tool tool_;
   ForceParams params_;
+  std::vector<StructureLayer> layers_;
 };
 
 // Status bits of the last tick (State::status).
@@ -234,6 +254,19 @@ struct State {
   // bound on how fast f_device changes per millimetre the tool moves (the curvature of the
   // surfaces aside). The virtual coupling (safety/virtual_coupling.hpp) steps its tool with it.
   double stiffness = 0.0;
+  // Structure layers, device means over the points in contact (zero without layers): the
+  // arteries' pulse (an active term: the passivity observer counts it as a known input) and the
+  // organ borders' springs. Both are part of f_device.
+  Vec3d f_pulse{};  // N
+  Vec3d f_organ{};  // N
+  // The pulse's clock. Input: pulse_bpm (from ForceParams::pulse_bpm at make_state(model); the
+  // loop may change it between ticks). Kept: the beat's phase in [0, 1), advanced by the time
+  // given to tick() times bpm / 60, and that time. Output: pulse_wave = pulse_waveform(phase).
+  double pulse_bpm = 0.0;
+  double pulse_phase = 0.0;
+  double pulse_wave = 0.0;
+  double time_s = 0.0;
+  bool clock_started = false;
   int n_contact = 0;
   std::uint32_t status = kTickOk;
   std::uint64_t ticks = 0;
@@ -247,6 +280,9 @@ State make_state(std::size_t contact_count);
 void reset(State& state);
 
 // One haptic tick at the given device pose. `state` must come from make_state(model).
+// `time_s`: the tick's time (s, any origin, non-decreasing; a step back or a non-finite time holds
+// the pulse's phase): the pulse's clock. Without it the clock stands still (no pulse).
+void tick(const Model& model, State& state, const Pose& device_pose, double time_s);
 void tick(const Model& model, State& state, const Pose& device_pose);
 
 }  // namespace palp
