@@ -311,7 +311,7 @@ void HapticLoop::run_model_and_chain(Tick& t) noexcept {
                     last_device_pose_.orientation};
     model_pose = identity_ ? tool : to_scene(registration_, tool);
   }
-  tick(*bundle.model, bundle.state, model_pose);
+  tick(*bundle.model, bundle.state, model_pose, 1e-9 * static_cast<double>(t.deadline_ns));
   t.force = bundle.state.f_device, t.torque = bundle.state.tau_device;
   if (!identity_) {
     t.force = force_to_device(registration_, t.force);
