@@ -236,6 +236,9 @@ TEST_F(TorsoStructures, FemoralVeinsLieBesideTheArteriesTowardTheMidline) {
       EXPECT_GT(medial_mm, 10.0) << "side " << side << " slice " << k;
       EXPECT_LT(medial_mm, 30.0) << "side " << side << " slice " << k;
       EXPECT_NEAR(vein->depth_mm, artery->depth_mm, 3.0);
+      std::printf(
+          "slice %lld side %+.0f: vein %.1f mm toward the midline, depth %.1f (artery %.1f)\n",
+          static_cast<long long>(k), side, medial_mm, vein->depth_mm, artery->depth_mm);
     }
   }
   // The arteries are the same in every phase; only their HU differ.
