@@ -88,8 +88,9 @@ std::optional<Section> superficial_section(const Mask& m, const Mask& body, std:
   Section s{si / n, sj / n, k, 0.0};
   const auto i0 = static_cast<std::int64_t>(std::floor(s.i));
   const double f = s.i - static_cast<double>(i0);
-  const double skin = (1.0 - f) * static_cast<double>(*skin_row(body, i0, k)) +
-                      f * static_cast<double>(*skin_row(body, i0 + 1, k));
+  const auto left = skin_row(body, i0, k), right = skin_row(body, i0 + 1, k);
+  if (!left || !right) return std::nullopt;  // a centroid at the body's side: no anterior skin
+  const double skin = (1.0 - f) * static_cast<double>(*left) + f * static_cast<double>(*right);
   s.depth_mm = (s.j - (skin - 0.5)) * g.spacing[1];
   return s;
 }
