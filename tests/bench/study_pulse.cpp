@@ -263,17 +263,26 @@ struct Shown {
   double preload_N, amplitude_N, lift_ratio;
 };
 
+// The study's verdict on a lift ratio (the early lift over the quasi-static one): yes within
+// 0.75-1.33, partly within 0.5-2, no outside; n/a when not run.
+std::string study_verdict(double ratio) {
+  if (std::isnan(ratio)) return "n/a";
+  if (ratio >= 0.75 && ratio <= 1.0 / 0.75) return "yes";
+  return ratio >= 0.5 && ratio <= 2.0 ? "partly" : "no";
+}
+
 void device_table(const std::string& out_dir, const std::vector<Shown>& shown) {
   const FalconFigures ff = falcon_figures();
   std::printf(
-      "\ndevices: force resolution against the pulse; then the study's lift / expected "
-      "(1 kHz, known, early)\n");
+      "\ndevices: force resolution against the pulse; then the study's verdict on its lift / "
+      "expected (1 kHz, known, early)\n");
   std::printf(
       "  falcon: one effort count = %.4f N at the centre, up to %.4f N over the +-40 mm "
       "cube; 2.5 N along y within the effort cap at %.0f %% of it, 5.5 N at %.0f %%\n",
       ff.count_centre_N, ff.count_worst_N, 100 * ff.reach_2N, 100 * ff.reach_5N);
-  Csv csv(out_dir + "/pulse_devices.csv", {"profile", "max_force_N", "resolution_N", "source",
-                                           "preload_N", "amp_N", "verdict", "study_lift_ratio"});
+  Csv csv(out_dir + "/pulse_devices.csv",
+          {"profile", "max_force_N", "resolution_N", "source", "preload_N", "amp_N", "verdict",
+           "study_lift_ratio", "study_verdict"});
   for (const DeviceClass& dc : kDeviceClasses) {
     const DeviceProfile& profile = device_profile(dc.profile);
     const bool falcon = std::string(dc.profile) == "falcon";
@@ -290,8 +299,10 @@ void device_table(const std::string& out_dir, const std::vector<Shown>& shown) {
         for (const Shown& x : shown)
           if (x.profile == dc.profile && x.preload_N == preload && x.amplitude_N == a)
             ratio = x.lift_ratio;
-        std::printf("  %.2f %s, %s;", a, v.c_str(), fmt(ratio, "%.2f").c_str());
-        csv.row({std::string(dc.profile), profile.max_force_N, step, source, preload, a, v, ratio});
+        const std::string sv = study_verdict(ratio);
+        std::printf("  %.2f %s, %s %s;", a, v.c_str(), sv.c_str(), fmt(ratio, "%.3g").c_str());
+        csv.row(
+            {std::string(dc.profile), profile.max_force_N, step, source, preload, a, v, ratio, sv});
       }
       std::printf("\n");
     }
