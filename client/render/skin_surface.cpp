@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "base/errors.hpp"
 
@@ -15,25 +16,41 @@ double skin_ramp_half_width_mm(const std::array<double, 3>& spacing) {
   return std::max<double>(kRampHalfWidthMm, 2.0 * diagonal);
 }
 
-void smooth_distance(std::span<float> d, const std::array<std::int64_t, 3>& dims) {
-  const std::array<std::int64_t, 3> stride{1, dims[0], dims[0] * dims[1]};
-  for (int a = 0; a < 3; ++a) {
-    const std::int64_t n = dims[a];
-    if (n < 2) continue;
-    const int b = a == 0 ? 1 : 0, c = a == 2 ? 1 : 2;  // the other two axes
-    for (std::int64_t v = 0; v < dims[c]; ++v)
-      for (std::int64_t u = 0; u < dims[b]; ++u) {
-        float* line = d.data() + u * stride[b] + v * stride[c];
-        const std::int64_t s = stride[a];
-        // In place: `before` keeps the previous node's value from before its own smoothing.
-        float before = 2.0f * line[0] - line[s];  // linear extrapolation past the end
-        for (std::int64_t i = 0; i < n; ++i) {
-          const float here = line[i * s];
-          const float after = i + 1 < n ? line[(i + 1) * s] : 2.0f * here - before;
-          line[i * s] = 0.25f * before + 0.5f * here + 0.25f * after;
-          before = here;
-        }
+namespace {
+
+// One pass along the axis whose lines are `n` long with `inner` values between neighbours: `d`
+// as [outer][n][inner], each block of `inner` values smoothed with its two neighbours at once
+// (contiguous, whatever the axis). `before` keeps the previous block as it was before its own
+// smoothing; past the ends the line is extrapolated linearly.
+void smooth_axis(std::span<float> d, std::int64_t n, std::int64_t inner,
+                 std::vector<float>& before) {
+  const auto block = static_cast<std::size_t>(inner);
+  const std::size_t line = block * static_cast<std::size_t>(n);
+  before.resize(block);
+  for (std::size_t start = 0; start + line <= d.size(); start += line) {
+    float* first = d.data() + start;
+    for (std::size_t x = 0; x < block; ++x) before[x] = 2.0f * first[x] - first[block + x];
+    for (std::int64_t t = 0; t < n; ++t) {
+      float* here = first + static_cast<std::size_t>(t) * block;
+      const bool last = t + 1 == n;
+      for (std::size_t x = 0; x < block; ++x) {
+        const float value = here[x];
+        const float after = last ? 2.0f * value - before[x] : here[block + x];
+        here[x] = 0.25f * before[x] + 0.5f * value + 0.25f * after;
+        before[x] = value;
       }
+    }
+  }
+}
+
+}  // namespace
+
+void smooth_distance(std::span<float> d, const std::array<std::int64_t, 3>& dims) {
+  std::vector<float> before;
+  std::int64_t inner = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (dims[a] >= 2) smooth_axis(d, dims[a], inner, before);
+    inner *= dims[a];
   }
 }
 
