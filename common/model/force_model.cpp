@@ -77,9 +77,10 @@ void tick_impl(const Access& fields, const Model& model, State& st, const Pose& 
   TickRun run = begin_tick(prm, fields.has_bone, bone_step, pose);  // pose -> q, x_device
   const bool palp = prm.model == ModelKind::Palp;
   if (palp) {  // the layers and this tick's pulse (the paper model has none)
-    run.layers = model.layers().data();
+    run.layers = &model.layers();
     run.n_layers = model.layers().size();
     run.pulse_wave = st.pulse_wave;
+    layers_at_pad(run, model.tool_centre());  // the layers once, at the pad's centre
   }
   PointWork w;
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -114,11 +115,16 @@ void advance_pulse_clock(State& st, double time_s) {
 }  // namespace
 
 Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params)
-    : fields_(std::move(fields)), tool_(std::move(tool)), params_(params) {
+    : fields_(std::move(fields)),
+      tool_(std::move(tool)),
+      params_(params),
+      layers_(std::make_shared<const LayerStack>(std::vector<StructureLayer>{})) {
   if (!fields_) throw UsageError("force model: no distance maps");
   if (tool_.points.empty())
     throw UsageError("force model: tool '" + tool_.name + "' has no points");
   validate(params_);
+  for (const Vec3d& p : tool_.points) tool_centre_ += p;
+  tool_centre_ = tool_centre_ * (1.0 / static_cast<double>(tool_.points.size()));
   if (params_.model == ModelKind::Palp && params_.bone_along_normal)
     fields_->prepare_bone_beneath();
 }
@@ -127,12 +133,9 @@ Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool)
     : Model(std::move(fields), tool, default_params(tool.kind)) {}
 
 Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params,
-             std::vector<StructureLayer> layers)
+             std::shared_ptr<const LayerStack> layers)
     : Model(std::move(fields), std::move(tool), params) {
-  for (const StructureLayer& layer : layers)
-    if (!layer.map)
-      throw UsageError("force model: structure layer '" + layer.name + "' has no map");
-  layers_ = std::move(layers);
+  if (layers) layers_ = std::move(layers);
   pulse_waveform(0.0);  // its table is built here, not in the first tick
 }
 

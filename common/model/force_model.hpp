@@ -108,9 +108,9 @@ struct ForceParams {
   // tissue and occlude it at 7-10 N (docs/force_model.md "Structures as layers").
   double pulse_vessel_mm = 5.0;
   double pad_mm = 20.0;
-  double organ_reach_mm = 30.0;  // an organ border is felt this far beneath (mm)
+  double organ_reach_mm = 40.0;  // an organ border is felt this far beneath (mm)
   double organ_k1 = 0.03;        // N/mm: the border spring's linear term
-  double organ_k3 = 4e-4;        // N/mm^3: and its cubic term
+  double organ_k3 = 2e-4;        // N/mm^3: and its cubic term
   double organ_fmax = 8.0;       // N: its cap
 };
 
@@ -195,22 +195,27 @@ class Model {
   // Parameters default to the tool kind's set.
   Model(std::shared_ptr<const FieldSampler> fields, Tool tool);
   // With structure layers beyond bone (the palp model applies them; the paper model ignores
-  // them). UsageError for a layer without a map.
+  // them); null or empty: none.
   Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params,
-        std::vector<StructureLayer> layers);
+        std::shared_ptr<const LayerStack> layers);
 
   const FieldSampler& fields() const { return *fields_; }
   const std::shared_ptr<const FieldSampler>& fields_ptr() const { return fields_; }
   const Tool& tool() const { return tool_; }
   const ForceParams& params() const { return params_; }
-  const std::vector<StructureLayer>& layers() const { return layers_; }
+  // The structure layers (never null; empty without any).
+  const LayerStack& layers() const { return *layers_; }
+  const std::shared_ptr<const LayerStack>& layers_ptr() const { return layers_; }
+  // The mean of the tool's points (tool frame): where the layers are sampled each tick.
+  const Vec3d& tool_centre() const { return tool_centre_; }
   std::size_t contact_count() const { return tool_.points.size(); }
 
  private:
   std::shared_ptr<const FieldSampler> fields_;
   Tool tool_;
   ForceParams params_;
-  std::vector<StructureLayer> layers_;
+  std::shared_ptr<const LayerStack> layers_;
+  Vec3d tool_centre_{};
 };
 
 // Status bits of the last tick (State::status).

@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <string>
 
+#include "base/errors.hpp"
 #include "model/force_model.hpp"
 
 namespace palp {
@@ -60,6 +62,44 @@ const WaveTable& wave_table() {
 }
 
 }  // namespace
+
+LayerStack::LayerStack(std::vector<StructureLayer> layers) {
+  if (layers.size() > kMaxLayers)
+    throw UsageError("structure layers: " + std::to_string(layers.size()) + " given, at most " +
+                     std::to_string(kMaxLayers));
+  if (layers.empty()) return;
+  grid_ = layers.front().map.grid;
+  const std::size_t n = layers.size();
+  const std::size_t voxels = grid_.voxel_count();
+  for (const StructureLayer& layer : layers) {
+    const Grid& g = layer.map.grid;
+    if (g.dims != grid_.dims || g.spacing != grid_.spacing || layer.map.data.size() != voxels)
+      throw UsageError("structure layer '" + layer.name + "': its map is not on the others' grid");
+  }
+  records_.resize(voxels * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    names_.push_back(layers[i].name);
+    kinds_.push_back(layers[i].kind);
+    const std::vector<float>& d = layers[i].map.data;
+    for (std::size_t v = 0; v < voxels; ++v) {
+      if (!std::isfinite(d[v]))
+        throw UsageError("structure layer '" + layers[i].name + "': a non-finite distance");
+      records_[v * n + i] = d[v];
+    }
+    std::vector<float>().swap(layers[i].map.data);  // freed once interleaved
+  }
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t dim = grid_.dims[a];
+    geometry_.spacing[a] = grid_.spacing[a];
+    geometry_.inv_spacing[a] = 1.0 / grid_.spacing[a];
+    geometry_.max_u[a] = static_cast<double>(dim - 1);
+    geometry_.max_i0[a] = std::max<std::int64_t>(dim - 2, 0);
+  }
+  geometry_.stride[0] = 1;
+  geometry_.stride[1] = static_cast<std::size_t>(grid_.dims[0]);
+  geometry_.stride[2] = static_cast<std::size_t>(grid_.dims[0] * grid_.dims[1]);
+  for (int a = 0; a < 3; ++a) geometry_.step[a] = grid_.dims[a] > 1 ? geometry_.stride[a] : 0;
+}
 
 const char* to_string(LayerKind kind) {
   return kind == LayerKind::Artery ? "artery" : "organ";

@@ -31,12 +31,47 @@ struct ForceParams;
 enum class LayerKind { Artery, Organ };
 const char* to_string(LayerKind kind);
 
-// One structure: its name ("artery", "liver"), its law, and its distance map sampled with the
-// analytic trilinear gradient from float32 storage (the map's own grid, scene frame).
+// One structure: its name ("artery", "liver"), its law, and its distance map (positive inside,
+// mm; voxel (i, j, k) at (i, j, k) * spacing in the scene frame, as the scene's maps).
 struct StructureLayer {
   std::string name;
   LayerKind kind = LayerKind::Organ;
-  std::shared_ptr<const FieldSampler> map;
+  DistanceMap map;
+};
+
+// The layers of a scene as one constant stack: every map on one grid, interleaved one float per
+// layer per voxel, so the tick samples all of them at a point from one cell's 8 records, inline
+// (value and the analytic gradient of the trilinear interpolant, as FieldSampler's
+// AnalyticTrilinear does for one float map).
+class LayerStack {
+ public:
+  static constexpr std::size_t kMaxLayers = 8;
+  // Moves the maps in (each freed once interleaved). UsageError for more than kMaxLayers layers,
+  // maps on different grids or holding a non-finite value.
+  explicit LayerStack(std::vector<StructureLayer> layers);
+
+  std::size_t size() const { return names_.size(); }
+  bool empty() const { return names_.empty(); }
+  const std::string& name(std::size_t i) const { return names_[i]; }
+  LayerKind kind(std::size_t i) const { return kinds_[i]; }
+  const Grid& grid() const { return grid_; }
+  std::size_t bytes() const { return records_.size() * sizeof(float); }
+
+  // Every layer at x: out[i] for i < size() (not inside, and no direction, off the grid).
+  void sample(const Vec3d& x, FieldSample* out) const {
+    const std::size_t n = names_.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const sampling::MapView<float> view{records_.data() + i, n, 1.0, nullptr, 3};
+      out[i] = sampling::sample<GradientScheme::AnalyticTrilinear>(geometry_, view, x);
+    }
+  }
+
+ private:
+  std::vector<std::string> names_;
+  std::vector<LayerKind> kinds_;
+  Grid grid_;
+  sampling::Geometry geometry_;
+  std::vector<float> records_;
 };
 
 // 1 mmHg in N/mm^2 (133.322 Pa).

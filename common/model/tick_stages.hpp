@@ -54,9 +54,13 @@ struct TickRun {
   double bone_step = 0.0;  // mm between samples when looking for bone on a segment
   std::uint32_t status = kTickOk;
   // The structure layers (palp model; none for the paper model) and the pulse's wave this tick.
-  const StructureLayer* layers = nullptr;
+  const LayerStack* layers = nullptr;
   std::size_t n_layers = 0;
   double pulse_wave = 0.0;
+  // The layers sampled once at the pad's centre (layers_at_pad), carried to each point to first
+  // order.
+  Vec3d pad_centre{};
+  FieldSample at_pad[LayerStack::kMaxLayers];
   Vec3d pulse_sum{}, organ_sum{};
   // Sums over the points in contact, for the device means (eqs. 12-13).
   Vec3d f_sum{}, tau_sum{}, u_sum{};
@@ -406,17 +410,27 @@ PALP_STAGE void organ_layer(const ForceParams& prm, const FieldSample& o, PointW
 // palp: every structure layer at the contact point (a point without a skin direction, or a map
 // that does not reach it, gets nothing from it). xc, v_s, f_n -> f_pulse, f_organ.
 PALP_STAGE void layer_forces(const TickRun& run, PointWork& w) {
-  if (!w.has_dir) return;
+  if (!w.has_dir || run.n_layers == 0) return;
   for (std::size_t l = 0; l < run.n_layers; ++l) {
-    const StructureLayer& layer = run.layers[l];
-    const FieldSample s = layer.map->sample_surf(w.xc);
-    if (!s.inside) continue;
-    if (layer.kind == LayerKind::Artery) {
+    const FieldSample& c = run.at_pad[l];
+    if (!c.inside) continue;
+    // D(x_c) ~ D(pad) + grad D(pad) . (x_c - pad): one sample a tick for the whole pad.
+    FieldSample s = c;
+    s.value += dot(c.grad, w.xc - run.pad_centre);
+    if (run.layers->kind(l) == LayerKind::Artery) {
       artery_layer(*run.prm, s, run.pulse_wave, w);
     } else {
       organ_layer(*run.prm, s, w);
     }
   }
+}
+
+// palp, once a tick: every layer at the centre of the tool's points (placed), from one cell's
+// records. pose, tool -> pad_centre, at_pad.
+PALP_STAGE void layers_at_pad(TickRun& run, const Vec3d& tool_centre) {
+  if (run.n_layers == 0 || !run.pose_ok) return;
+  run.pad_centre = place_point(run, tool_centre);
+  run.layers->sample(run.pad_centre, run.at_pad);
 }
 
 // (6) s = xc + D_surf v_s (held at its last value without a direction); on entry p = s_last = s.

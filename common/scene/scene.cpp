@@ -65,17 +65,14 @@ StructureLayer read_layer(const fs::path& file, const std::string& name, const G
                        std::to_string(extent) + " mm against " + std::to_string(want) +
                        " mm along axis " + std::to_string(a) + ")");
   }
-  StructureLayer layer;
-  layer.name = name;
-  layer.kind = name == "artery" ? LayerKind::Artery : LayerKind::Organ;
-  layer.map = std::make_shared<const FieldSampler>(
-      std::move(map), SamplerConfig{GradientScheme::AnalyticTrilinear, Storage::Float32});
-  return layer;
+  return StructureLayer{name, name == "artery" ? LayerKind::Artery : LayerKind::Organ,
+                        std::move(map)};
 }
 
 // The layers SceneOptions::layers names that the prep directory has (see there).
 void read_layers(const fs::path& dir, const SceneOptions& options, Scene& out) {
   std::error_code ec;
+  std::vector<StructureLayer> layers;
   for (const std::string& name : options.layers) {
     fs::path file = dir / ("d_" + name + ".nii.gz");
     std::string source = file.filename().string();
@@ -86,9 +83,10 @@ void read_layers(const fs::path& dir, const SceneOptions& options, Scene& out) {
       source = std::string(kVesselDistanceFile) + " (arterial phase: its lumens are arteries)";
     }
     if (!fs::is_regular_file(file, ec)) continue;
-    out.layers.push_back(read_layer(file, name, out.grid));
+    layers.push_back(read_layer(file, name, out.grid));
     out.layer_sources.push_back(source);
   }
+  out.layers = std::make_shared<const LayerStack>(std::move(layers));
 }
 
 }  // namespace

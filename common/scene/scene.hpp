@@ -55,7 +55,7 @@ struct Scene {
   std::shared_ptr<const FieldSampler> fields;
   // The structure layers found (in SceneOptions::layers' order), each map on its own grid in the
   // scene frame, and where each came from ("d_artery.nii.gz", "d_vessel.nii.gz (arterial)").
-  std::vector<StructureLayer> layers;
+  std::shared_ptr<const LayerStack> layers;  // never null after load_scene; empty without any
   std::vector<std::string> layer_sources;
   // With SceneOptions::load_ct, from a prep directory that has them (null otherwise): the CT's
   // HU and the body mask on the maps' grid, or on the coarse CT grid the maps refine

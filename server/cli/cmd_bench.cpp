@@ -287,10 +287,11 @@ int cmd_bench(const Arguments& argv_in) {
     else
       std::printf("  maps      %.1f MiB\n", model_mib);
     if (bare.p50 > 0.0)
-      std::printf("  layers    %zu (%s%s): p50 %.2fx, p99 %.2fx the tick without them (%.0f, %.0f ns)\n",
-                  model.layers().size(), model.layers()[0].name.c_str(),
-                  model.layers().size() > 1 ? ", ..." : "", s.p50 / bare.p50, s.p99 / bare.p99,
-                  bare.p50, bare.p99);
+      std::printf(
+          "  layers    %zu (%s%s): p50 %.2fx, p99 %.2fx the tick without them (%.0f, %.0f ns)\n",
+          model.layers().size(), model.layers().name(0).c_str(),
+          model.layers().size() > 1 ? ", ..." : "", s.p50 / bare.p50, s.p99 / bare.p99, bare.p50,
+          bare.p99);
   }
   std::printf(
       "{\"scene\":%s,\"tool\":%s,\"scheme\":\"%s\",\"storage\":\"%s\",\"path\":%s,"

@@ -99,9 +99,9 @@ Scene load_scene_for(const Args& args, const std::string& command, bool quiet) {
                    g.spacing[0], g.spacing[1], g.spacing[2]);
     }
   }
-  for (std::size_t i = 0; !quiet && i < scene.layers.size(); ++i)
-    std::fprintf(stderr, "scene layer %s (%s): %s\n", scene.layers[i].name.c_str(),
-                 to_string(scene.layers[i].kind), scene.layer_sources[i].c_str());
+  for (std::size_t i = 0; !quiet && i < scene.layers->size(); ++i)
+    std::fprintf(stderr, "scene layer %s (%s): %s\n", scene.layers->name(i).c_str(),
+                 to_string(scene.layers->kind(i)), scene.layer_sources[i].c_str());
   if (!quiet && !scene.map_note.empty())
     std::fprintf(stderr, "scene: note: %s\n", scene.map_note.c_str());
   return scene;

@@ -51,6 +51,7 @@
 #include "bench/closed_loop.hpp"
 #include "bench/study_util.hpp"
 #include "model/falcon_kinematics.hpp"
+#include "model/structure_layers.hpp"
 #include "safety/force_chain.hpp"
 #include "safety/safety.hpp"
 
@@ -65,30 +66,6 @@ constexpr double kStopDepthMm = 25.0, kStopNPerMm = 10.0, kStopNsPerM = 20.0;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kAmplitudes[] = {0.0, 0.02, 0.05, 0.1, 0.2, 0.5};
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-
-// TODO(issue 39): use structure_layers.hpp's pulse_waveform(phase) here once its law is on main.
-// A stand-in of the same interface (w in [0, 1], 0 at the foot, 1 at the systolic peak, phase
-// wrapping): a percussion wave, a tidal shoulder, a notch, the dicrotic wave and the run-off, as
-// three Gaussian waves normalised once over a sampled beat.
-double raw_wave(double phase) {
-  const auto wave = [&](double centre, double width, double height) {
-    const double u = (phase - centre) / width;
-    return height * std::exp(-0.5 * u * u);
-  };
-  return wave(0.12, 0.045, 1.0) + wave(0.25, 0.06, 0.45) + wave(0.45, 0.05, 0.3);
-}
-double pulse_wave_standin(double phase) {
-  static const std::array<double, 2> range = [] {
-    std::array<double, 2> r{1e300, -1e300};
-    for (int i = 0; i < 4000; ++i) {
-      const double w = raw_wave(i / 4000.0);
-      r[0] = std::min(r[0], w), r[1] = std::max(r[1], w);
-    }
-    return r;
-  }();
-  const double p = phase - std::floor(phase);
-  return std::clamp((raw_wave(p) - range[0]) / (range[1] - range[0]), 0.0, 1.0);
-}
 
 enum class Accounting { Known, Unknown, Off };
 const char* accounting_name(Accounting a) {
@@ -188,7 +165,7 @@ RunResult run(Environment& env, const DeviceProfile& profile, const DeviceClass&
     const Vec3d device{env.cx(), 0.0, xq};
     const Vec3d tool = force_chain_tool(chain, config, device);
     const Vec3d skin = env.tick_force_at(tool.x, tool.z);
-    const double w = pulse_wave_standin(t / kBeatS);
+    const double w = pulse_waveform(t / kBeatS);
     const Vec3d pulse{0.0, 0.0, skin.z > 0.0 ? sc.amplitude_N * w : 0.0};  // felt in contact
     const Vec3d active = acc == Accounting::Unknown ? Vec3d{} : pulse;
     const ForceChainOutput out = run_force_chain(chain, config, profile, skin + pulse, {},

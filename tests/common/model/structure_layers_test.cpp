@@ -182,10 +182,12 @@ std::shared_ptr<const FieldSampler> skin_only() {
   return std::make_shared<const FieldSampler>(test::linear_map(kDims, {0, 0, -1}, kZ0));
 }
 
+std::shared_ptr<const LayerStack> stack(std::vector<StructureLayer> layers) {
+  return std::make_shared<const LayerStack>(std::move(layers));
+}
+
 StructureLayer layer(const char* name, LayerKind kind, DistanceMap map) {
-  return {name, kind,
-          std::make_shared<const FieldSampler>(
-              std::move(map), SamplerConfig{GradientScheme::AnalyticTrilinear, Storage::Float32})};
+  return {name, kind, std::move(map)};
 }
 
 // finger:1's pad `depth` mm under the skin at x.
@@ -221,7 +223,7 @@ Beat hold(const Model& model, double depth, double x = kCx) {
 TEST(StructureLayers, AnArteryPulsesAtTheSetRateWithTheLawsAmplitude) {
   const ForceParams p = palp();
   const Model model(skin_only(), parse_tool("finger:1"), p,
-                    {layer("artery", LayerKind::Artery, artery_map(p.pulse_vessel_mm / 2))});
+                    stack({layer("artery", LayerKind::Artery, artery_map(p.pulse_vessel_mm / 2))}));
   const double depth = 4.0;
   const Beat b = hold(model, depth);
   EXPECT_NEAR(b.period_s, 60.0 / 72.0, 2e-3);
@@ -234,15 +236,16 @@ TEST(StructureLayers, AnArteryPulsesAtTheSetRateWithTheLawsAmplitude) {
   EXPECT_EQ(hold(model, 9.0).peak, 0.0);
   ForceParams still = p;
   still.pulse_bpm = 0.0;
-  const Model no_pulse(skin_only(), parse_tool("finger:1"), still,
-                       {layer("artery", LayerKind::Artery, artery_map(still.pulse_vessel_mm / 2))});
+  const Model no_pulse(
+      skin_only(), parse_tool("finger:1"), still,
+      stack({layer("artery", LayerKind::Artery, artery_map(still.pulse_vessel_mm / 2))}));
   EXPECT_EQ(hold(no_pulse, depth).peak, 0.0);
 }
 
 TEST(StructureLayers, ThePulseIsPartOfTheDeviceForceAndTheClockIsTheCallersTime) {
   const ForceParams p = palp();
   const Model with(skin_only(), parse_tool("finger:1"), p,
-                   {layer("artery", LayerKind::Artery, artery_map(p.pulse_vessel_mm / 2))});
+                   stack({layer("artery", LayerKind::Artery, artery_map(p.pulse_vessel_mm / 2))}));
   const Model without(skin_only(), parse_tool("finger:1"), p);
   State a = make_state(with), b = make_state(without);
   for (double t : {0.0, 0.05, 0.117, 0.2, 0.2, 0.1, 0.35}) {  // a repeated and a backward time
@@ -256,9 +259,10 @@ TEST(StructureLayers, ThePulseIsPartOfTheDeviceForceAndTheClockIsTheCallersTime)
 
 TEST(StructureLayers, ThePaperModelIgnoresLayersBitForBit) {
   const ForceParams p = default_params(ToolKind::Finger);
-  const Model with(skin_only(), parse_tool("finger:7"), p,
-                   {layer("artery", LayerKind::Artery, artery_map(3.5)),
-                    layer("liver", LayerKind::Organ, test::linear_map(kDims, {0, 0, -1}, 0.25))});
+  const Model with(
+      skin_only(), parse_tool("finger:7"), p,
+      stack({layer("artery", LayerKind::Artery, artery_map(3.5)),
+             layer("liver", LayerKind::Organ, test::linear_map(kDims, {0, 0, -1}, 0.25))}));
   const Model without(skin_only(), parse_tool("finger:7"), p);
   State a = make_state(with), b = make_state(without);
   for (int n = 0; n < 500; ++n) {
@@ -281,7 +285,7 @@ TEST(StructureLayers, AnOrganBeneathAddsItsBorderSpringAndItsEdgeIsFelt) {
     for (std::int64_t j = 0; j < kDims[1]; ++j)
       for (std::int64_t i = 0; i < 50; ++i) organ.at(i, j, k) = 1;
   const Model model(skin_only(), parse_tool("finger:1"), p,
-                    {layer("liver", LayerKind::Organ, signed_distance(organ))});
+                    stack({layer("liver", LayerKind::Organ, signed_distance(organ))}));
   const Model plain(skin_only(), parse_tool("finger:1"), p);
   auto normal_force = [&](const Model& m, double x) {
     State st = make_state(m);
@@ -295,6 +299,34 @@ TEST(StructureLayers, AnOrganBeneathAddsItsBorderSpringAndItsEdgeIsFelt) {
   EXPECT_GT(over, 1.0);
   // Past its edge nothing: the edge is where the force falls.
   EXPECT_NEAR(normal_force(model, 90.0), normal_force(plain, 90.0), 1e-9);
+}
+
+TEST(LayerStack, SamplesEachLayerAsItsOwnMapWouldBeSampled) {
+  // Two layers interleaved, against each map in a FieldSampler of its own (analytic, float32).
+  const DistanceMap a = test::linear_map(kDims, {0.3, -0.2, 0.9}, -4.0);
+  const DistanceMap b = artery_map(3.5);
+  std::vector<StructureLayer> both;
+  both.push_back(layer("artery", LayerKind::Artery, a));
+  both.push_back(layer("x", LayerKind::Organ, b));
+  const LayerStack layers(std::move(both));
+  const SamplerConfig analytic{GradientScheme::AnalyticTrilinear, Storage::Float32};
+  const FieldSampler fa(a, analytic), fb(b, analytic);
+  FieldSample s[LayerStack::kMaxLayers];
+  for (const Vec3d x : {Vec3d{10.3, 4.7, 20.2}, Vec3d{55.5, 19.1, 3.3}, Vec3d{99.9, 0.0, 40.0}}) {
+    layers.sample(x, s);
+    EXPECT_EQ(s[0].value, fa.sample_surf(x).value);
+    EXPECT_EQ(s[1].value, fb.sample_surf(x).value);
+    EXPECT_EQ(s[1].grad.z, fb.sample_surf(x).grad.z);
+  }
+  layers.sample({-1.0, 0.0, 0.0}, s);
+  EXPECT_FALSE(s[0].inside);
+  // Refused: maps on different grids, more than kMaxLayers.
+  std::vector<StructureLayer> two_grids;
+  two_grids.push_back(layer("a", LayerKind::Organ, a));
+  two_grids.push_back(layer("b", LayerKind::Organ, test::linear_map({10, 10, 10}, {1, 0, 0}, 0)));
+  EXPECT_THROW(LayerStack{std::move(two_grids)}, UsageError);
+  std::vector<StructureLayer> many(LayerStack::kMaxLayers + 1, layer("a", LayerKind::Organ, a));
+  EXPECT_THROW(LayerStack{std::move(many)}, UsageError);
 }
 
 }  // namespace
