@@ -44,6 +44,7 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
   p->set_bone_fade_mm(fp.bone_fade_mm);
   p->set_bone_along_normal(fp.bone_along_normal);
   p->set_bone_reach_mm(fp.bone_reach_mm);
+  p->set_pulse_bpm(loop.pulse_bpm());  // the loop's, which SetParameter pulse_bpm changes
   si->set_device(scene.device);
   si->set_device_profile(scene.device_profile);
   si->set_device_renders_force(loop.device().renders_force());
