@@ -102,8 +102,11 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     const std::size_t voxels0 = static_cast<std::size_t>(dims[0] * dims[1]) * chunk.k_count();
     has_bone_ = !chunk.d_bone().empty();
     has_hu_ = !chunk.hu().empty();
+    has_labels_ = !chunk.labels().empty();
     deflate_ = chunk.deflate();
     if (has_hu_ != !chunk.body().empty()) throw bad("hu and body come together");
+    if (has_labels_ && !(scene && scene->max_label > 0))
+      throw bad("structure labels, but SceneInfo listed no structures");
     // Raw chunks: their sizes now; deflated ones are checked as they inflate (below), bounded
     // by what the slices need.
     if (!deflate_) {
@@ -111,9 +114,11 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
       if (has_bone_) check_size(chunk.d_bone(), voxels0 * sizeof(float), "d_bone", bad);
       if (has_hu_) check_size(chunk.hu(), voxels0 * sizeof(std::int16_t), "hu", bad);
       if (has_hu_) check_size(chunk.body(), voxels0, "body", bad);
+      if (has_labels_) check_size(chunk.labels(), voxels0, "labels", bad);
     }
     const std::size_t voxels = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
-    const bool has_bone = has_bone_, has_hu = has_hu_, deflate = deflate_;
+    const bool has_bone = has_bone_, has_hu = has_hu_, has_labels = has_labels_,
+               deflate = deflate_;
     *this = VolumeAssembly{};
     active_ = true;
     offset_size_ = chunk.offset_size();
@@ -122,6 +127,7 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     chunk_count_ = chunk.chunk_count();
     has_bone_ = has_bone;
     has_hu_ = has_hu;
+    has_labels_ = has_labels;
     deflate_ = deflate;
     try {
       auto volume = std::make_shared<RenderVolume>();
@@ -136,6 +142,7 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
         volume->hu.resize(voxels);
         volume->body.resize(voxels);
       }
+      if (has_labels_) volume->labels.resize(voxels);
       volume_ = std::move(volume);
     } catch (const std::bad_alloc&) {
       *this = VolumeAssembly{};
@@ -164,8 +171,29 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     throw bad("slices " + std::to_string(chunk.k_begin()) + "+" + std::to_string(chunk.k_count()) +
               " outside 0.." + std::to_string(v.dims[2]));
   const std::size_t slice = static_cast<std::size_t>(v.dims[0] * v.dims[1]);
-  const std::size_t voxels = slice * chunk.k_count();
-  const std::size_t offset = slice * chunk.k_begin();
+  copy_fields(chunk, slice * chunk.k_count(), slice * chunk.k_begin(),
+              scene ? scene->max_label : 0, where);
+  next_k_ += chunk.k_count();
+  ++next_chunk_;
+  const bool complete = next_chunk_ == chunk_count_;
+  if (complete && next_k_ != v.dims[2])
+    throw bad("the chunks cover " + std::to_string(next_k_) + " of " + std::to_string(v.dims[2]) +
+              " slices");
+  Added added;
+  added.progress = static_cast<double>(next_k_) / static_cast<double>(volume_->dims[2]);
+  if (complete) {
+    added.volume = std::move(volume_);
+    *this = VolumeAssembly{};
+    done_ = true;
+  }
+  return added;
+}
+
+// Each field's raw bytes (inflated to exactly the slices' size, never more), then copied in.
+void VolumeAssembly::copy_fields(const v1::VolumeChunk& chunk, std::size_t voxels,
+                                 std::size_t offset, std::uint32_t max_label,
+                                 const std::string& where) {
+  const auto bad = [&](const std::string& why) { return ProtocolViolation(where + why); };
   const auto present = [&](const std::string& bytes, bool expected, const char* name) {
     if (bytes.empty() == expected)
       throw bad(std::string(name) + (expected ? " missing" : " not in chunk 0"));
@@ -174,7 +202,7 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
   present(chunk.d_bone(), has_bone_, "d_bone");
   present(chunk.hu(), has_hu_, "hu");
   present(chunk.body(), has_hu_, "body");
-  // Each field's raw bytes (inflated to exactly the slices' size, never more), then copied in.
+  present(chunk.labels(), has_labels_, "labels");
   std::string scratch;
   const auto raw = [&](const std::string& bytes, std::size_t expected,
                        const char* name) -> const std::string& {
@@ -202,20 +230,16 @@ VolumeAssembly::Added VolumeAssembly::add(const v1::VolumeChunk& chunk, std::uin
     const std::string& body = raw(chunk.body(), voxels, "body");
     for (std::size_t i = 0; i < voxels; ++i) volume_->body[offset + i] = body[i] != 0 ? 1 : 0;
   }
-  next_k_ += chunk.k_count();
-  ++next_chunk_;
-  const bool complete = next_chunk_ == chunk_count_;
-  if (complete && next_k_ != v.dims[2])
-    throw bad("the chunks cover " + std::to_string(next_k_) + " of " + std::to_string(v.dims[2]) +
-              " slices");
-  Added added;
-  added.progress = static_cast<double>(next_k_) / static_cast<double>(volume_->dims[2]);
-  if (complete) {
-    added.volume = std::move(volume_);
-    *this = VolumeAssembly{};
-    done_ = true;
+  if (has_labels_) {
+    const std::string& labels = raw(chunk.labels(), voxels, "labels");
+    for (std::size_t i = 0; i < voxels; ++i) {
+      const auto label = static_cast<std::uint8_t>(labels[i]);
+      if (label > max_label)
+        throw bad("structure label " + std::to_string(label) + ", SceneInfo lists up to " +
+                  std::to_string(max_label));
+      volume_->labels[offset + i] = label;
+    }
   }
-  return added;
 }
 
 }  // namespace palp::view::net
