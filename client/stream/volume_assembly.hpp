@@ -40,6 +40,15 @@ class VolumeAssembly {
   bool active_ = false, done_ = false;
   std::uint32_t step_ = 0, chunk_count_ = 0, next_chunk_ = 0;
   std::int64_t next_k_ = 0;
+  struct Geometry {  // chunk 0's dims, spacing and offset, checked
+    std::array<std::int64_t, 3> dims{}, offset{};
+    std::array<double, 3> spacing{};
+  };
+  static Geometry chunk0_geometry(const v1::VolumeChunk& chunk, std::uint32_t max_dim,
+                                  const SceneGrid* scene, const std::string& where);
+  void begin(const v1::VolumeChunk& chunk, const Geometry& g, const SceneGrid* scene,
+             const std::string& where);
+  void check_next(const v1::VolumeChunk& chunk, const std::string& where) const;
   void copy_fields(const v1::VolumeChunk& chunk, std::size_t voxels, std::size_t offset,
                    std::uint32_t max_label, const std::string& where);
 
