@@ -92,8 +92,9 @@ bool parse_switch(const std::string& text, const std::string& key) {
 }
 
 void check_options(const std::string& name, const PhantomOptions& o) {
-  if (name != "torso" && (o.contrast || o.aorta_hu || o.arms != 1 || o.metal))
-    throw UsageError("phantom " + name + " has no contrast, aorta-hu, arms or metal (torso only)");
+  if (name != "torso" && (o.contrast || o.aorta_hu || o.arms != 1 || o.metal || o.structures))
+    throw UsageError("phantom " + name +
+                     " has no contrast, aorta-hu, arms, metal or structures (torso only)");
   if (o.arms < 0 || o.arms > 2)
     throw UsageError("phantom option arms needs 0, 1 or 2, got " + std::to_string(o.arms));
   if (o.aorta_hu && !(*o.aorta_hu >= -1000.0 && *o.aorta_hu <= 3000.0))
@@ -132,9 +133,11 @@ void set_phantom_option(PhantomOptions& options, const std::string& key, const s
     options.arms = parse_value<int>(value, key);
   } else if (key == "metal") {
     options.metal = parse_switch(value, key);
+  } else if (key == "structures") {
+    options.structures = parse_switch(value, key);
   } else {
     throw UsageError("unknown phantom option '" + key +
-                     "' (known: dims, spacing, contrast, aorta-hu, arms, metal)");
+                     "' (known: dims, spacing, contrast, aorta-hu, arms, metal, structures)");
   }
   check_options("torso", options);
 }
@@ -152,8 +155,9 @@ PhantomSpec parse_phantom_spec(const std::string& text) {
       first = false;
     } else {
       const std::size_t eq = item.find('=');
-      if (eq == std::string::npos && item != "metal")
-        throw UsageError("phantom option '" + item + "' needs KEY=VALUE (or the flag metal)");
+      if (eq == std::string::npos && item != "metal" && item != "structures")
+        throw UsageError("phantom option '" + item +
+                         "' needs KEY=VALUE (or a flag: metal, structures)");
       set_phantom_option(spec.options, item.substr(0, eq),
                          eq == std::string::npos ? "1" : item.substr(eq + 1));
     }

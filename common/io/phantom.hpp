@@ -43,10 +43,39 @@
 //                 with deterministic metal streaks in the slices through them: bright and dark
 //                 rays of 300-800 HU from each screw, decaying with distance (about halving every
 //                 40 mm), and a dark band between the screws, on the patient's voxels only.
-// On the command line: palp phantom torso --contrast arterial --aorta-hu 400 --arms 2 --metal.
-// In a CT input or scene (parse_phantom_spec): phantom:NAME[,KEY=VALUE...] with the keys dims,
-// spacing, contrast, aorta-hu, arms, metal (metal alone means metal=1), e.g.
-// phantom:torso,contrast=arterial,arms=2 or phantom:torso,dims=384x256x20,spacing=1.25x1.25x1.5.
+//   structures    what a finger feels besides bone (issue 39), for the truth masks the force
+//                 model's structure layers come from (prep writes them: artery.nii.gz,
+//                 liver.nii.gz and their maps):
+//                 - the groin's vessels. The field of view ends 27 mm below the aorta's
+//                   bifurcation (z = -68 mm; the last slice's centre is at z = -95 mm), so the
+//                   groin is compressed about fourfold along z: the common iliacs divide 1 mm
+//                   below the bifurcation (their drawn course on is the internal iliac), the
+//                   external iliac arteries (4 mm radius) run forward and outward almost within
+//                   those slices to the inguinal point (z = -70 mm, 72 mm either side of the
+//                   body's midline), and the femoral arteries (4 mm radius) descend from there
+//                   inferomedially at 54.5 degrees from the body axis (what a 20-degree course
+//                   becomes) with their centre line 15 mm under the anterior skin (along y) to
+//                   z = -100 mm, then straight down: about 43 mm of each inside the default
+//                   field of view. The femoral veins (5 mm radius) lie beside them toward the
+//                   midline (11 mm between the centre lines), from the inguinal point down (their
+//                   iliac veins are not drawn). Without the vessel tree (no contrast options) the
+//                   aorta ends at its bifurcation too, with its common iliacs.
+//                   HU: the arteries at the arteries' level (the lone aorta's 250 HU without
+//                   contrast options), the femoral veins at the infrarenal IVC's (soft tissue
+//                   without contrast options or in the arterial phase).
+//                 - the liver's inferior edge below the right costal margin: a lobe along the
+//                   front of the abdominal cavity (ellipsoid, centre 55 mm right of the midline,
+//                   46 mm in front of the body's centre, z = -16 mm; semi-axes 30 x 18 x 34 mm)
+//                   at the liver's HU. 55 mm right of the midline, where no rib reaches, the
+//                   liver's front is 34 mm under the skin at the lowest rib's level (z = -22 mm
+//                   at its front end, its lower border -26.5 mm), 35 mm at z = -29 mm, 42 mm at
+//                   z = -45 mm, and its edge is at z = -50 mm; below, no liver.
+//                 Everything else (and every slice above z = 20 mm) is the torso without it.
+// On the command line: palp phantom torso --contrast arterial --aorta-hu 400 --arms 2 --metal
+// --structures. In a CT input or scene (parse_phantom_spec): phantom:NAME[,KEY=VALUE...] with the
+// keys dims, spacing, contrast, aorta-hu, arms, metal, structures (metal or structures alone
+// means =1), e.g. phantom:torso,contrast=arterial,arms=2 or
+// phantom:torso,dims=384x256x20,spacing=1.25x1.25x1.5 or phantom:torso,structures.
 #pragma once
 
 #include <optional>
@@ -70,6 +99,7 @@ struct PhantomOptions {
   std::optional<double> aorta_hu;  // [-1000, 3000]
   int arms = 1;                    // 0, 1 or 2
   bool metal = false;
+  bool structures = false;
 };
 
 // Sets one option from its text: dims and spacing as NXxNYxNZ, contrast, aorta-hu, arms, metal
@@ -96,9 +126,11 @@ Grid phantom_grid(const std::string& name, const PhantomOptions& options = {});
 // cable; empty for cube and sphere). `vessel`: the lumens of the visibly contrast-filled vessels,
 // arteries and veins, those drawn at least 60 HU above soft tissue (>= 100 HU; so in the arterial
 // phase the arteries only, none without contrast, every drawn vessel in the portal-venous one).
-// `artery`: the arteries' lumens whatever their HU (the aorta alone without contrast options).
-// `metal`: the implant. A voxel belongs to a structure when its centre does (partial-volume
-// coverage >= 1/2) and no later-painted structure (a vertebra over the aorta's back) covers it.
+// `artery`: the arteries' lumens whatever their HU (the aorta alone without contrast options;
+// with `structures` the iliac and femoral arteries too). `metal`: the implant. `liver`: the
+// liver's parenchyma (its portal vein is a vein; with `structures` its inferior edge's lobe too).
+// A voxel belongs to a structure when its centre does (partial-volume coverage >= 1/2) and no
+// later-painted structure (a vertebra over the aorta's back) covers it.
 struct PhantomTruth {
   Mask body;
   Mask bone;
@@ -106,6 +138,7 @@ struct PhantomTruth {
   Mask vessel;
   Mask artery;
   Mask metal;
+  Mask liver;
 };
 
 // Throws UsageError for an unknown name. When `truth` is given it receives the true masks.

@@ -30,6 +30,7 @@ enum class Tissue : std::uint8_t {
   kVeinContrast,
   kVeinPlain,
   kMetal,  // an implant: part of the bone truth (rigid, inside a vertebra) and of the metal truth
+  kLiver,  // the liver's parenchyma (its vessels are vessels)
 };
 constexpr double kContrastAboveTissueHu = 60.0;
 
@@ -313,7 +314,7 @@ inline std::int16_t to_hu(double value) {
 
 inline PhantomTruth empty_truth(const Grid& grid, const char* name) {
   PhantomTruth t;
-  for (Mask* m : {&t.body, &t.bone, &t.equipment, &t.vessel, &t.artery, &t.metal})
+  for (Mask* m : {&t.body, &t.bone, &t.equipment, &t.vessel, &t.artery, &t.metal, &t.liver})
     *m = Mask(grid, 0, name);
   return t;
 }

@@ -11,34 +11,15 @@
 #include <vector>
 
 #include "base/parallel.hpp"
-#include "io/phantom_shapes.hpp"
+#include "io/phantom_torso_anatomy.hpp"
 
 namespace palp::phantom_detail {
-namespace {
 
-// ---------------------------------------------------------------------------------------------
-// Torso anatomy (mm, anatomy frame: x = patient left, y = posterior, z = superior; the default
-// field of view 480 x 320 x 192 mm is centred on the origin).
-
-constexpr Vec3 kTorsoReferenceFov{480.0, 320.0, 192.0};
-constexpr double kBodyCx = 20.0, kBodyCy = -20.0;  // body centre
-constexpr double kBodyA = 150.0, kBodyB = 105.0;   // half width, half depth
-constexpr double kPadTop = kBodyCy + kBodyB;       // the back rests on the pad
-constexpr double kSpineCy = kBodyCy + 45.0;        // vertebral body centre
-constexpr double kCanalCy = kSpineCy + 24.0;       // spinal canal centre
-constexpr double kVertebraPeriod = 32.0;
-constexpr double kAortaCx = kBodyCx + 10.0, kAortaCy = kSpineCy - 25.5, kAortaR = 12.0;
-constexpr double kScrewZ = 8.0;  // the implant's vertebra (n = 0, centred in the field of view)
-
-// HU of the organs and vessels that contrast changes. Without contrast options: today's default
-// (aorta only, 250 HU). `tree`: the arterial branches and the veins are drawn too.
-struct TorsoLevels {
-  bool tree = false;
-  double liver = 60.0, kidney = 150.0;
-  double artery = 250.0;                                        // the aorta and its branches
-  double ivc_upper = kSoftTissueHu, ivc_lower = kSoftTissueHu;  // above / below the renal veins
-  double portal = kSoftTissueHu, renal_vein = kSoftTissueHu;
-};
+Tissue vessel_tissue(bool artery, double hu) {
+  const bool contrast = hu >= kSoftTissueHu + kContrastAboveTissueHu;
+  if (artery) return contrast ? Tissue::kArteryContrast : Tissue::kArteryPlain;
+  return contrast ? Tissue::kVeinContrast : Tissue::kVeinPlain;
+}
 
 TorsoLevels torso_levels(const PhantomOptions& o) {
   TorsoLevels l;
@@ -59,11 +40,7 @@ TorsoLevels torso_levels(const PhantomOptions& o) {
   return l;
 }
 
-Tissue vessel_tissue(bool artery, double hu) {
-  const bool contrast = hu >= kSoftTissueHu + kContrastAboveTissueHu;
-  if (artery) return contrast ? Tissue::kArteryContrast : Tissue::kArteryPlain;
-  return contrast ? Tissue::kVeinContrast : Tissue::kVeinPlain;
-}
+namespace {
 
 void add_body_wall(std::vector<Layer>& layers) {
   const auto ring = [](double inset) {
@@ -106,19 +83,19 @@ void add_vessel_tree(std::vector<Layer>& layers, const TorsoLevels& l) {
   vein(Tube{{14.0, -26.0, 4.0}, {-22.0, -38.0, 32.0}, 6.5}, l.portal);     // into the liver
   const Tissue artery = vessel_tissue(true, l.artery);
   const auto add = [&](const Shape& s) { layers.push_back({s, l.artery, artery}); };
-  add(EllipticCylinder{kAortaCx, kAortaCy, kAortaR, kAortaR, -68.0, kInfinity});
-  add(Tube{{kAortaCx, kAortaCy, -68.0}, {58.0, 4.0, -112.0}, 6.5});  // left common iliac
-  add(Tube{{kAortaCx, kAortaCy, -68.0}, {0.0, 4.0, -112.0}, 6.5});   // right common iliac
-  add(Tube{{kAortaCx, -6.0, 32.0}, {24.0, -42.0, 36.0}, 3.5});       // coeliac trunk
-  add(Tube{{kAortaCx, -6.0, 16.0}, {28.0, -46.0, -18.0}, 4.0});      // superior mesenteric
-  add(Tube{{24.0, 3.0, -16.0}, {-16.0, 10.0, -22.0}, 3.0});          // right renal
-  add(Tube{{36.0, 3.0, -16.0}, {54.0, 9.0, -20.0}, 3.0});            // left renal
+  add(EllipticCylinder{kAortaCx, kAortaCy, kAortaR, kAortaR, kAortaBifurcationZ, kInfinity});
+  add(common_iliac(1.0));
+  add(common_iliac(-1.0));
+  add(Tube{{kAortaCx, -6.0, 32.0}, {24.0, -42.0, 36.0}, 3.5});   // coeliac trunk
+  add(Tube{{kAortaCx, -6.0, 16.0}, {28.0, -46.0, -18.0}, 4.0});  // superior mesenteric
+  add(Tube{{24.0, 3.0, -16.0}, {-16.0, 10.0, -22.0}, 3.0});      // right renal
+  add(Tube{{36.0, 3.0, -16.0}, {54.0, 9.0, -20.0}, 3.0});        // left renal
 }
 
-void add_organs(std::vector<Layer>& layers, const TorsoLevels& levels) {
+void add_organs(std::vector<Layer>& layers, const TorsoLevels& levels, bool structures) {
   layers.push_back({Ellipsoid{{kBodyCx - 50.0, kBodyCy - 5.0, 10.0}, {55.0, 55.0, 50.0}},
-                    levels.liver, Tissue::kPatient});  // liver
-  for (double side : {-1.0, 1.0}) {                    // kidneys
+                    levels.liver, Tissue::kLiver});  // liver
+  for (double side : {-1.0, 1.0}) {                  // kidneys
     layers.push_back({Ellipsoid{{kBodyCx + side * 55.0, kBodyCy + 35.0, -20.0}, {25.0, 18.0, 45.0}},
                       levels.kidney, Tissue::kPatient});
   }
@@ -137,13 +114,17 @@ void add_organs(std::vector<Layer>& layers, const TorsoLevels& levels) {
     layers.push_back({Ellipsoid{{kBodyCx + p[0], kBodyCy + p[1], p[2]}, {p[3], p[4], p[5]}}, kAirHu,
                       Tissue::kPatient});
   }
+  if (structures) add_liver_edge(layers, levels);
   if (levels.tree) {
     add_vessel_tree(layers, levels);
-    return;
+  } else if (structures) {
+    add_aorta_to_bifurcation(layers, levels);
+  } else {
+    // Contrast-filled aorta, pressed against the front of the vertebral bodies.
+    layers.push_back({EllipticCylinder{kAortaCx, kAortaCy, kAortaR, kAortaR}, levels.artery,
+                      vessel_tissue(true, levels.artery)});
   }
-  // Contrast-filled aorta, pressed against the front of the vertebral bodies.
-  layers.push_back({EllipticCylinder{kAortaCx, kAortaCy, kAortaR, kAortaR}, levels.artery,
-                    vessel_tissue(true, levels.artery)});
+  if (structures) add_groin_vessels(layers, levels);
 }
 
 void add_spine(std::vector<Layer>& layers, double z_lo, double z_hi) {
@@ -203,7 +184,7 @@ std::vector<Layer> torso_layers(const PhantomOptions& options, double z_lo, doub
   add_table(layers);
   add_body_wall(layers);
   add_ribs(layers);
-  add_organs(layers, torso_levels(options));
+  add_organs(layers, torso_levels(options), options.structures);
   add_spine(layers, z_lo, z_hi);
   if (options.metal)
     for (double side : {-1.0, 1.0}) layers.push_back({screw(side), kScrewHu, Tissue::kMetal});
@@ -326,6 +307,7 @@ void write_truth(const RowBuffers& buf, std::size_t base, PhantomTruth& truth) {
     truth.vessel.data[base + i] = t == Tissue::kArteryContrast || t == Tissue::kVeinContrast;
     truth.artery.data[base + i] = artery;
     truth.metal.data[base + i] = t == Tissue::kMetal;
+    truth.liver.data[base + i] = t == Tissue::kLiver;
   }
 }
 

@@ -59,6 +59,7 @@ template <class Access>
   resample_skin_at_contact(fields, prm, st, i, w);  // held off x: xc -> D_surf, v_s
   flag_skin_direction(run, w);                      //   (none: kTickNoSkinDirection)
   skin_force_saturated(prm, st, i, w);              // D_surf -> f_surf, kept normal
+  layer_forces(run, w);                             // layers: f_n -> f_organ, f_pulse
   surface_point(st, i, w);                          // xc, D_surf, v_s -> s
   friction_coulomb(prm, w);                         // s, p_last, f_n -> p, f_friction
   if (!commit_point(run, st, i, w)) return;         // -> State[i], sums
@@ -69,10 +70,17 @@ template <class Access>
 }
 
 template <class Access>
-void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<Vec3d>& points,
-               State& st, const Pose& pose, double bone_step) {
+void tick_impl(const Access& fields, const Model& model, State& st, const Pose& pose,
+               double bone_step) {
+  const ForceParams& prm = model.params();
+  const std::vector<Vec3d>& points = model.tool().points;
   TickRun run = begin_tick(prm, fields.has_bone, bone_step, pose);  // pose -> q, x_device
   const bool palp = prm.model == ModelKind::Palp;
+  if (palp) {  // the layers and this tick's pulse (the paper model has none)
+    run.layers = model.layers().data();
+    run.n_layers = model.layers().size();
+    run.pulse_wave = st.pulse_wave;
+  }
   PointWork w;
   for (std::size_t i = 0; i < points.size(); ++i) {
     begin_point(place_point(run, points[i]), w);  // tool frame -> scene frame
@@ -85,6 +93,22 @@ void tick_impl(const Access& fields, const ForceParams& prm, const std::vector<V
     }
   }
   device_outputs(run, st);  // sums -> f_device, tau, u (eqs. 12-13)
+}
+
+// The pulse's clock: the phase advances by the time since the last tick times bpm / 60 (held on
+// the first tick, a step back, a non-finite time or rate) -> pulse_phase, pulse_wave.
+void advance_pulse_clock(State& st, double time_s) {
+  if (std::isfinite(time_s)) {
+    const double dt = st.clock_started ? time_s - st.time_s : 0.0;
+    const double bpm = std::isfinite(st.pulse_bpm) ? std::clamp(st.pulse_bpm, 0.0, 240.0) : 0.0;
+    if (dt > 0.0 && dt < 1.0e6) {
+      st.pulse_phase += dt * bpm / 60.0;
+      st.pulse_phase -= std::floor(st.pulse_phase);
+    }
+    if (!st.clock_started || dt > 0.0) st.time_s = time_s;
+    st.clock_started = true;
+  }
+  st.pulse_wave = st.pulse_bpm > 0.0 ? pulse_waveform(st.pulse_phase) : 0.0;
 }
 
 }  // namespace
@@ -102,8 +126,20 @@ Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams 
 Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool)
     : Model(std::move(fields), tool, default_params(tool.kind)) {}
 
+Model::Model(std::shared_ptr<const FieldSampler> fields, Tool tool, ForceParams params,
+             std::vector<StructureLayer> layers)
+    : Model(std::move(fields), std::move(tool), params) {
+  for (const StructureLayer& layer : layers)
+    if (!layer.map)
+      throw UsageError("force model: structure layer '" + layer.name + "' has no map");
+  layers_ = std::move(layers);
+  pulse_waveform(0.0);  // its table is built here, not in the first tick
+}
+
 State make_state(const Model& model) {
-  return make_state(model.contact_count());
+  State st = make_state(model.contact_count());
+  st.pulse_bpm = model.params().pulse_bpm;
+  return st;
 }
 
 State make_state(std::size_t n) {
@@ -140,12 +176,19 @@ void reset(State& st) {
   std::fill(st.normal.begin(), st.normal.end(), Vec3d{});
   st.f_device = st.tau_device = st.u = Vec3d{};
   st.stiffness = 0.0;
+  st.f_pulse = st.f_organ = Vec3d{};
+  st.pulse_phase = st.pulse_wave = st.time_s = 0.0;
+  st.clock_started = false;
   st.n_contact = 0;
   st.status = kTickOk;
   st.ticks = 0;
 }
 
 void tick(const Model& model, State& state, const Pose& device_pose) {
+  tick(model, state, device_pose, state.clock_started ? state.time_s : 0.0);
+}
+
+void tick(const Model& model, State& state, const Pose& device_pose, double time_s) {
   const std::size_t n = model.contact_count();
   if (state.x.size() != n || state.s.size() != n || state.s_prev.size() != n ||
       state.p.size() != n || state.f.size() != n || state.f_friction.size() != n ||
@@ -155,15 +198,16 @@ void tick(const Model& model, State& state, const Pose& device_pose) {
     // Not a State of this model: touch nothing per contact, report nothing.
     state.f_device = state.tau_device = state.u = Vec3d{};
     state.stiffness = 0.0;
+    state.f_pulse = state.f_organ = Vec3d{};
     state.n_contact = 0;
     state.status = kTickBadState;
     return;
   }
+  advance_pulse_clock(state, time_s);  // time -> phase, wave
   // Scheme and storage are chosen here, once per tick; the loop inside is monomorphic.
   const double bone_step = 0.5 * model.fields().grid().min_spacing();
-  model.fields().dispatch([&](const auto& access) {
-    tick_impl(access, model.params(), model.tool().points, state, device_pose, bone_step);
-  });
+  model.fields().dispatch(
+      [&](const auto& access) { tick_impl(access, model, state, device_pose, bone_step); });
 }
 
 }  // namespace palp

@@ -99,15 +99,19 @@ struct ForceParams {
   // default is palp_params()'s 9 mm; this 8 mm is what a paper model reports (it never reads it).
   double bone_reach_mm = 8.0;
   // Structure layers (structure_layers.hpp; palp model only, and only where the scene has them).
-  double pulse_bpm = 72.0;            // heart rate of the arteries' pulse; 0 = no pulse
+  double pulse_bpm = 72.0;             // heart rate of the arteries' pulse; 0 = no pulse
   double pulse_systolic_mmHg = 120.0;  // the arterial pressure's peak
   double pulse_diastolic_mmHg = 80.0;  // and its floor
-  double pulse_vessel_mm = 8.0;       // the artery's width the pressure acts over (femoral ~8)
-  double pad_mm = 14.0;               // the fingertip's contact patch, a square of this side
-  double organ_reach_mm = 12.0;       // an organ border is felt this far beneath (mm)
-  double organ_k1 = 0.05;             // N/mm: the border spring's linear term
-  double organ_k3 = 1.5e-3;           // N/mm^3: and its cubic term
-  double organ_fmax = 4.0;            // N: its cap
+  // The width of the artery's wall that bears on the tissue above (a femoral artery is 6-10 mm
+  // across) and the square of tissue the fingertip's pad loads; both set so that the defaults
+  // give the measured human range (0.02-0.5 N under 2-5 N) over an artery under 10-20 mm of
+  // tissue and occlude it at 7-10 N (docs/force_model.md "Structures as layers").
+  double pulse_vessel_mm = 5.0;
+  double pad_mm = 20.0;
+  double organ_reach_mm = 30.0;  // an organ border is felt this far beneath (mm)
+  double organ_k1 = 0.03;        // N/mm: the border spring's linear term
+  double organ_k3 = 4e-4;        // N/mm^3: and its cubic term
+  double organ_fmax = 8.0;       // N: its cap
 };
 
 // "paper" | "palp"; UsageError otherwise.

@@ -1,6 +1,7 @@
 // The force model's parameters: names, defaults per model and tool, validation and setting by
 // name (see force_model.hpp; the tick is in force_model.cpp).
 #include <cmath>
+#include <iterator>
 #include <string>
 
 #include "base/errors.hpp"
@@ -55,6 +56,54 @@ ForceParams model_params(ModelKind kind, ToolKind tool) {
   return kind == ModelKind::Palp ? palp_params(tool) : default_params(tool);
 }
 
+namespace {
+
+// The structure layers' parameters (structure_layers.hpp).
+template <class Check, class In>
+void validate_layers(const ForceParams& p, Check check, In in) {
+  check(in(p.pulse_bpm, 0.0, 240.0), "pulse_bpm must be in [0, 240] (0: no pulse; default 72)");
+  check(in(p.pulse_systolic_mmHg, 40.0, 300.0), "pulse_systolic_mmHg must be in [40, 300]");
+  check(in(p.pulse_diastolic_mmHg, 20.0, 200.0) && p.pulse_diastolic_mmHg < p.pulse_systolic_mmHg,
+        "pulse_diastolic_mmHg must be in [20, 200] and below pulse_systolic_mmHg");
+  check(in(p.pulse_vessel_mm, 1.0, 40.0), "pulse_vessel_mm must be in [1, 40] mm");
+  check(in(p.pad_mm, 2.0, 40.0), "pad_mm must be in [2, 40] mm");
+  check(in(p.organ_reach_mm, 0.0, 60.0), "organ_reach_mm must be in [0, 60] mm");
+  check(in(p.organ_k1, 0.0, 5.0), "organ_k1 must be in [0, 5] N/mm");
+  check(in(p.organ_k3, 0.0, 0.1), "organ_k3 must be in [0, 0.1] N/mm^3");
+  check(in(p.organ_fmax, 0.0, 20.0), "organ_fmax must be in [0, 20] N");
+}
+
+// The layers' parameters by name; false for a name that is not one of them.
+bool set_layer_param(ForceParams& p, std::string_view name, double value) {
+  double* const fields[] = {&p.pulse_bpm,
+                            &p.pulse_systolic_mmHg,
+                            &p.pulse_diastolic_mmHg,
+                            &p.pulse_vessel_mm,
+                            &p.pad_mm,
+                            &p.organ_reach_mm,
+                            &p.organ_k1,
+                            &p.organ_k3,
+                            &p.organ_fmax};
+  const char* const names[] = {"pulse_bpm",
+                               "pulse_systolic_mmHg",
+                               "pulse_diastolic_mmHg",
+                               "pulse_vessel_mm",
+                               "pad_mm",
+                               "organ_reach_mm",
+                               "organ_k1",
+                               "organ_k3",
+                               "organ_fmax"};
+  for (std::size_t i = 0; i < std::size(names); ++i) {
+    if (name == names[i]) {
+      *fields[i] = value;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 void validate(const ForceParams& p) {
   // Physical ranges: every value that shapes the force is bounded, whichever way it comes in
   // (command line, config file, a controller's SetParameter).
@@ -82,6 +131,7 @@ void validate(const ForceParams& p) {
   check(in(p.skin_fmax, 1.0, 200.0), "skin_fmax must be in [1, 200] N (default 30)");
   check(in(p.bone_fade_mm, 0.0, 30.0), "bone_fade_mm must be in [0, 30] mm (default 4)");
   check(in(p.bone_reach_mm, 1.0, 20.0), "bone_reach_mm must be in [1, 20] mm (printed law: 5)");
+  validate_layers(p, check, in);
 }
 
 void set_param(ForceParams& params, std::string_view name, double value) {
@@ -124,11 +174,13 @@ void set_param(ForceParams& params, std::string_view name, double value) {
     if (value != 0.0 && value != 1.0)
       throw UsageError("force parameter bone_enabled must be 0 or 1");
     p.bone_enabled = value != 0.0;
-  } else {
+  } else if (!set_layer_param(p, name, value)) {
     throw UsageError("unknown force parameter '" + std::string(name) +
                      "' (known: c, k, bone_fmax, bone_flip, bone_enabled, grad_epsilon, "
                      "direction_epsilon, bone_mode, bone_k, model, mu, skin_fmax, bone_fade_mm, "
-                     "bone_reach_mm, bone_along_normal)");
+                     "bone_reach_mm, bone_along_normal, pulse_bpm, pulse_systolic_mmHg, "
+                     "pulse_diastolic_mmHg, pulse_vessel_mm, pad_mm, organ_reach_mm, organ_k1, "
+                     "organ_k3, organ_fmax)");
   }
   validate(p);
   params = p;

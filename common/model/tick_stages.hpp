@@ -11,6 +11,8 @@
 //     bone_*          D_bone, v_b, v_s -> f_structures (the printed law, the bone proxy, or the
 //                     palp model's bone along the skin normal)
 //     skin_force_*    D_surf at the contact point -> f_surf
+//     layer_forces    palp, per structure layer: D_layer, v_s, f_n -> organ border spring (into
+//                     f_structures), artery pulse (f_pulse)
 //     surface_point   contact point, D_surf, v_s -> s, and the last s and p
 //     friction_*      s, last p, f_n -> proxy p and f_friction (eqs. 7-10, or Coulomb)
 //     commit_point    -> State[i] and the device sums (a non-finite point is dropped)
@@ -51,6 +53,11 @@ struct TickRun {
   bool bone_on = false;    // a bone map and bone terms enabled
   double bone_step = 0.0;  // mm between samples when looking for bone on a segment
   std::uint32_t status = kTickOk;
+  // The structure layers (palp model; none for the paper model) and the pulse's wave this tick.
+  const StructureLayer* layers = nullptr;
+  std::size_t n_layers = 0;
+  double pulse_wave = 0.0;
+  Vec3d pulse_sum{}, organ_sum{};
   // Sums over the points in contact, for the device means (eqs. 12-13).
   Vec3d f_sum{}, tau_sum{}, u_sum{};
   double k_sum = 0.0;
@@ -72,6 +79,7 @@ struct PointWork {
   bool latched = false;      // the bone proxy holds the point
   double depth = 0.0;        // D_surf at the contact point, >= 0
   Vec3d f_surf{}, f_struct{}, f_friction{};
+  Vec3d f_pulse{}, f_organ{};  // the layers' terms (f_organ is also in f_struct)
   Vec3d s{}, s_last{}, p_last{}, p{};
   double k_skin = 0.0, k_struct = 0.0, k_friction = 0.0;  // slopes of the laws (N/mm)
 };
@@ -130,6 +138,7 @@ PALP_STAGE void begin_point(const Vec3d& x, PointWork& w) {
   w.latched = false;
   w.f_struct = Vec3d{};
   w.k_struct = 0.0;
+  w.f_pulse = w.f_organ = Vec3d{};
 }
 
 // Point i leaves (or is out of) contact: no force, proxies and normal forgotten, s = p = x.
@@ -362,6 +371,54 @@ PALP_STAGE void skin_force_saturated(const ForceParams& prm, State& st, std::siz
   if (w.has_dir) st.normal[i] = w.v_s;
 }
 
+// palp, one artery layer: the vessel's centre line from the contact point (its nearest surface
+// point along grad D_layer, then half the vessel's width on), split into depth along -v_s and
+// lateral offset; the pulse there under the point's normal force -> f_pulse (along v_s).
+PALP_STAGE void artery_layer(const ForceParams& prm, const FieldSample& a, double wave,
+                             PointWork& w) {
+  const double g = norm(a.grad);
+  if (!(g >= prm.grad_epsilon) || !(wave > 0.0)) return;
+  const Vec3d toward = a.grad * (1.0 / g);  // into the vessel
+  const Vec3d centre = (0.5 * prm.pulse_vessel_mm - a.value) * toward;
+  const double depth = std::max(0.0, -dot(centre, w.v_s));
+  const double lateral = norm(centre + depth * w.v_s);
+  const double press = std::max(0.0, dot(w.f_surf + w.f_struct, w.v_s));
+  w.f_pulse += pulse_force(prm, depth, lateral, press, wave) * w.v_s;
+}
+
+// palp, one organ layer: the border's spring of the distance to the organ, where the organ lies
+// beneath (its outward normal along v_s, weighted by that cosine), faded in with skin depth like
+// the bone -> f_organ, added to f_struct and k_struct.
+PALP_STAGE void organ_layer(const ForceParams& prm, const FieldSample& o, PointWork& w) {
+  const double g = norm(o.grad);
+  if (!(g >= prm.grad_epsilon)) return;
+  const double cos_o = -dot(o.grad, w.v_s) / g;  // the organ's outward normal . v_s
+  if (!(cos_o > 0.0)) return;
+  const double fade = prm.bone_fade_mm > 0.0 ? smoothstep(w.depth / prm.bone_fade_mm) : 1.0;
+  double slope = 0.0;
+  const double f = organ_force(prm, -o.value, &slope) * cos_o * fade;
+  if (!(f > 0.0)) return;
+  w.f_organ += f * w.v_s;
+  w.f_struct += f * w.v_s;
+  w.k_struct += slope * cos_o * fade;
+}
+
+// palp: every structure layer at the contact point (a point without a skin direction, or a map
+// that does not reach it, gets nothing from it). xc, v_s, f_n -> f_pulse, f_organ.
+PALP_STAGE void layer_forces(const TickRun& run, PointWork& w) {
+  if (!w.has_dir) return;
+  for (std::size_t l = 0; l < run.n_layers; ++l) {
+    const StructureLayer& layer = run.layers[l];
+    const FieldSample s = layer.map->sample_surf(w.xc);
+    if (!s.inside) continue;
+    if (layer.kind == LayerKind::Artery) {
+      artery_layer(*run.prm, s, run.pulse_wave, w);
+    } else {
+      organ_layer(*run.prm, s, w);
+    }
+  }
+}
+
 // (6) s = xc + D_surf v_s (held at its last value without a direction); on entry p = s_last = s.
 PALP_STAGE void surface_point(const State& st, std::size_t i, PointWork& w) {
   w.s = w.has_dir ? w.xc + w.depth * w.v_s : (w.entering ? w.xc : st.s[i]);
@@ -407,7 +464,8 @@ PALP_STAGE void friction_coulomb(const ForceParams& prm, PointWork& w) {
 // f = f_surf + f_friction + f_struct -> State[i]; (11) tau = (xc - x_device) x f and the sums of
 // (12, 13). A non-finite point is dropped instead (kTickNonFinite); returns whether committed.
 PALP_STAGE bool commit_point(TickRun& run, State& st, std::size_t i, const PointWork& w) {
-  const Vec3d f = w.f_surf + w.f_friction + w.f_struct;
+  const Vec3d f = run.n_layers > 0 ? w.f_surf + w.f_friction + w.f_struct + w.f_pulse
+                                   : w.f_surf + w.f_friction + w.f_struct;
   if (!is_finite(f) || !is_finite(w.p) || !is_finite(w.s) || !is_finite(w.xc)) {
     run.status |= kTickNonFinite;
     drop_point(st, i, w.x);
@@ -426,6 +484,8 @@ PALP_STAGE bool commit_point(TickRun& run, State& st, std::size_t i, const Point
   run.tau_sum += cross(w.xc - run.xd, f);
   run.u_sum += w.p - w.xc;
   run.k_sum += w.k_skin + w.k_struct + w.k_friction;
+  run.pulse_sum += w.f_pulse;
+  run.organ_sum += w.f_organ;
   ++run.n_contact;
   return true;
 }
@@ -438,9 +498,11 @@ PALP_STAGE void device_outputs(TickRun& run, State& st) {
   st.tau_device = run.tau_sum * inv;
   st.u = run.u_sum * inv;
   st.stiffness = std::isfinite(run.k_sum) ? run.k_sum * inv : 0.0;
+  st.f_pulse = run.pulse_sum * inv;
+  st.f_organ = run.organ_sum * inv;
   if (!is_finite(st.f_device) || !is_finite(st.tau_device) || !is_finite(st.u)) {
     run.status |= kTickNonFinite;
-    st.f_device = st.tau_device = st.u = Vec3d{};
+    st.f_device = st.tau_device = st.u = st.f_pulse = st.f_organ = Vec3d{};
   }
   st.n_contact = run.n_contact;
   st.status = run.status;

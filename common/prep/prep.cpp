@@ -11,7 +11,8 @@
 //                then waits for surf_job
 //   d_bone       bone (+ bone points) -> signed distance map, in d_surf's buffer; write d_bone
 //   d_vessel     lumens -> signed distance map to the mask's faces, same buffer (when any)
-//   structures   each labelled organ / muscle -> <name>.nii.gz, d_<name>.nii.gz, one at a time
+//   structures   the labelled arteries and each labelled organ / muscle, or a phantom's own
+//                truth (artery, liver) -> <name>.nii.gz, d_<name>.nii.gz, one at a time
 //                (prep_structures.hpp); labelled bone replaces the bone mask, labelled vessels
 //                the vessel search
 //   prep.json    grid, parameters, counts, timings, CPU seconds, peak memory, cache key
@@ -324,7 +325,12 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
       if (progress) progress(d.name, true, d.seconds);
     }
   };
-  stage("read CT", [&] { ct = read_ct(input); });
+  // Structures beyond bone and vessels, written last, one at a time: a label map's arteries,
+  // organs and muscles, or the truth of a phantom that draws its own (prep_structures.hpp).
+  std::vector<LabelledStructure> structures;
+  stage("read CT", [&] {
+    ct = read_ct_with_truth(input, params.labels_path.empty() ? &structures : nullptr);
+  });
   stage("check CT", [&] {
     const CtCheck check = check_hu(ct);
     if (!check.plausible && !params.not_hu_ok) throw InputError(not_a_ct_message(input, check));
@@ -343,10 +349,12 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   if (!params.labels_path.empty()) {
     stage("read labels",
           [&] { labels = read_label_maps(params.labels_path, ct.grid, {params.labels_map}); });
-    labels.artery = Mask{};  // the split's classes and voxels are in labels.source
-    labels.vein = Mask{};
-    guard.add_names(structure_files(labels.organs));
+    if (auto artery = labelled_artery(labels)) structures.push_back(std::move(*artery));
+    labels.vein = Mask{};  // the split's classes and voxels are in labels.source
+    for (LabelledStructure& organ : labels.organs) structures.push_back(std::move(organ));
+    labels.organs.clear();
   }
+  guard.add_names(structure_files(structures));
   remove_stale_outputs(dir, previous, input, params.labels_path);
   if (input_serves_as_ct_copy(input, result.reoriented)) {
     writes.add("bg write CT",
@@ -496,9 +504,9 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
                        record.vessel_range[1]);
     });
   }
-  if (!labels.organs.empty()) {  // one at a time: a CT-sized mask and the maps' buffer
+  if (!structures.empty()) {  // one at a time: a CT-sized mask and the maps' buffer
     stage("structures", [&] {
-      write_labelled_structures(labels.organs, result.grid, params.distance, refine, dir, map,
+      write_labelled_structures(structures, result.grid, params.distance, refine, dir, map,
                                 record.structures, record.structure_files);
     });
   }

@@ -33,8 +33,10 @@ namespace palp {
 // as bright as no cancellous bone need no shell test; bone islands mostly on a lumen removed; 24:
 // the table followed past an arm resting on the pad's end; 25: a lab's label map (--labels)
 // gives the bone, the vessels and a <name>.nii.gz + d_<name>.nii.gz per organ or muscle, its
-// bytes in the key; prep.json's structures record every structure's source and voxels
-inline constexpr int kPrepAlgorithmVersion = 25;
+// bytes in the key; prep.json's structures record every structure's source and voxels; 26: a
+// label map's arteries written as artery.nii.gz + d_artery.nii.gz, and a phantom drawn with
+// `structures` gives its own artery and liver truth as structures
+inline constexpr int kPrepAlgorithmVersion = 26;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "base/parallel.hpp"
+#include "io/phantom.hpp"
 #include "prep/segment/components.hpp"
 
 namespace palp {
@@ -144,6 +145,69 @@ nlohmann::json labelled_vessel_json(const LabelMaps& maps, std::uint64_t voxels)
           {"files", {kVesselFile, kVesselDistanceFile}}};
 }
 
+namespace {
+
+// The voxels of `full` (a mask on the CT's grid) as a structure cut to their box; none when empty.
+std::optional<LabelledStructure> boxed_structure(const std::string& name, const char* kind,
+                                                 const Mask& full, nlohmann::json source) {
+  const Grid& g = full.grid;
+  Index3 lo = g.dims, hi{-1, -1, -1};
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        if (!full.data[g.linear(i, j, k)]) continue;
+        const Index3 p{i, j, k};
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+      }
+  if (hi[0] < 0) return std::nullopt;
+  Grid box = g;
+  for (int a = 0; a < 3; ++a) box.dims[a] = hi[a] - lo[a] + 1;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      box.world.origin[r] +=
+          g.world.direction[r * 3 + c] * g.spacing[c] * static_cast<double>(lo[c]);
+  LabelledStructure s{name, kind, Mask(box, 0, name), lo, std::move(source)};
+  for (std::int64_t k = 0; k < box.dims[2]; ++k)
+    for (std::int64_t j = 0; j < box.dims[1]; ++j)
+      std::copy_n(
+          full.data.begin() + static_cast<std::ptrdiff_t>(g.linear(lo[0], lo[1] + j, lo[2] + k)),
+          box.dims[0], s.mask.data.begin() + static_cast<std::ptrdiff_t>(box.linear(0, j, k)));
+  return s;
+}
+
+}  // namespace
+
+std::optional<LabelledStructure> labelled_artery(LabelMaps& maps) {
+  if (maps.artery.data.empty()) return std::nullopt;
+  std::optional<LabelledStructure> artery =
+      boxed_structure("artery", "artery", maps.artery,
+                      label_source(maps, label_structure(maps, "artery")["classes"]));
+  maps.artery = Mask{};
+  return artery;
+}
+
+bool phantom_draws_structures(const std::string& input) {
+  const std::string prefix = "phantom:";
+  if (input.rfind(prefix, 0) != 0) return false;
+  return parse_phantom_spec(input.substr(prefix.size())).options.structures;
+}
+
+CtVolume read_ct_with_truth(const std::string& input, std::vector<LabelledStructure>* truth) {
+  if (truth == nullptr || !phantom_draws_structures(input)) return read_ct(input);
+  const PhantomSpec spec = parse_phantom_spec(input.substr(std::string("phantom:").size()));
+  PhantomTruth drawn;
+  CtVolume ct = make_phantom(spec.name, spec.options, &drawn);
+  const auto add = [&](const char* name, const char* kind, Mask& mask) {
+    nlohmann::json source = {{"format", "phantom-truth"}, {"phantom", input}, {"truth", name}};
+    if (auto s = boxed_structure(name, kind, mask, std::move(source)))
+      truth->push_back(std::move(*s));
+    mask = Mask{};
+  };
+  add("artery", "artery", drawn.artery);
+  add("liver", "organ", drawn.liver);
+  return ct;
+}
+
 void write_labelled_structures(std::vector<LabelledStructure>& structures, const Grid& ct_grid,
                                const DistanceParams& distance, const Refinement& refine,
                                const fs::path& dir, DistanceMap& map, nlohmann::json& records,
@@ -175,9 +239,11 @@ void write_labelled_structures(std::vector<LabelledStructure>& structures, const
 
 namespace {
 
-// "auto", or "labels FILE (its classes: up to three by name, else how many)".
+// "auto", "phantom truth INPUT", or "labels FILE (its classes: up to three by name, else how
+// many)".
 std::string describe_source(const nlohmann::json& source) {
   if (source.is_string()) return source.get<std::string>();
+  if (source.contains("phantom")) return "phantom truth " + source.value("phantom", std::string());
   std::string text = "labels " + source.value("file", std::string());
   const nlohmann::json& classes = source.contains("classes") ? source["classes"] : nlohmann::json();
   if (!classes.is_array() || classes.empty()) return text;
@@ -202,7 +268,7 @@ std::vector<PrepStructure> structure_summaries(const nlohmann::json& records) {
          describe_source(record.contains("source") ? record["source"] : nlohmann::json("auto"))});
   }
   auto rank = [](const PrepStructure& s) {
-    return s.name == "bone" ? 0 : s.name == "vessel" ? 1 : 2;
+    return s.name == "bone" ? 0 : s.name == "vessel" ? 1 : s.name == "artery" ? 2 : 3;
   };
   std::stable_sort(out.begin(), out.end(), [&](const PrepStructure& a, const PrepStructure& b) {
     return rank(a) < rank(b);

@@ -1,12 +1,14 @@
-// prep's structures beyond the body (internal to prep): the files of a label map's organs and
-// muscles, <name>.nii.gz (uint8 0/1) and d_<name>.nii.gz (float32 mm, positive inside), written
-// one at a time; prep.json's record of where each structure came from; the outputs an earlier
-// prep in the directory recorded; and the atomic writes every output goes through.
+// prep's structures beyond the body (internal to prep): the files of a label map's arteries,
+// organs and muscles, and of a phantom's own truth (its artery and liver), <name>.nii.gz (uint8
+// 0/1) and d_<name>.nii.gz (float32 mm, positive inside), written one at a time; prep.json's
+// record of where each structure came from; the outputs an earlier prep in the directory
+// recorded; and the atomic writes every output goes through.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -60,6 +62,22 @@ nlohmann::json labelled_bone_json(const LabelMaps& maps, std::uint64_t voxels);
 // classes and voxels.
 nlohmann::json labelled_vessel_json(const LabelMaps& maps, std::uint64_t voxels);
 
+// The label map's arteries as a structure of their own: "artery", kind "artery" (artery.nii.gz,
+// d_artery.nii.gz, written as an organ is), cut to their box of CT voxels, its source the label
+// map's artery classes; none when the map has no artery class. Frees maps.artery (the vessel mask
+// keeps the arteries, with the veins).
+std::optional<LabelledStructure> labelled_artery(LabelMaps& maps);
+
+// Whether `input` is a phantom that draws its own truth of the structures beyond bone
+// (phantom:torso,...,structures; io/phantom.hpp): prep takes its artery and liver from that truth,
+// as a lab's label map would give them (the phantom is its own expert).
+bool phantom_draws_structures(const std::string& input);
+// The CT of `input`, as read_ct reads it. When `truth` is given and phantom_draws_structures, the
+// phantom's truth is drawn with it and `truth` receives its artery ("artery", kind "artery") and
+// its liver ("liver", kind "organ"), each cut to its box, source {"format": "phantom-truth",
+// "phantom": input, "truth": the truth mask's name}.
+CtVolume read_ct_with_truth(const std::string& input, std::vector<LabelledStructure>* truth);
+
 // Writes each structure's mask and map into `dir`, one at a time (one CT-sized mask and `map`,
 // the maps' buffer), freeing each structure's box once written: the map is the mask's signed
 // distance (to its voxel faces), on the maps' grid when `refine` refines the CT's. Adds each
@@ -69,7 +87,7 @@ void write_labelled_structures(std::vector<LabelledStructure>& structures, const
                                const std::filesystem::path& dir, DistanceMap& map,
                                nlohmann::json& records, std::vector<std::string>& files);
 
-// prep.json's "structures" -> the summary: bone, vessel, then the rest by name.
+// prep.json's "structures" -> the summary: bone, vessel, artery, then the rest by name.
 std::vector<PrepStructure> structure_summaries(const nlohmann::json& records);
 
 }  // namespace palp

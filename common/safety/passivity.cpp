@@ -6,12 +6,13 @@
 
 namespace palp {
 
-PassivityState observe_port(PassivityState state, const Vec3d& written_prev,
-                            const Vec3d& travel_mm) {
+PassivityState observe_port(PassivityState state, const Vec3d& written_prev, const Vec3d& travel_mm,
+                            const Vec3d& active_prev) {
   if (!std::isfinite(state.energy_mJ)) state.energy_mJ = 0.0;
-  if (!is_finite(written_prev) || !is_finite(travel_mm)) return state;
-  // the work the written force did on the device came out of the rendered environment
-  state.energy_mJ -= dot(written_prev, travel_mm);
+  if (!is_finite(written_prev) || !is_finite(travel_mm) || !is_finite(active_prev)) return state;
+  // the work the written force's passive part did on the device came out of the rendered
+  // environment; the active part's is the known input's (x - 0 is x: bit for bit without one)
+  state.energy_mJ -= dot(written_prev - active_prev, travel_mm);
   return state;
 }
 

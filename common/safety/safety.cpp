@@ -102,6 +102,19 @@ Filtered clamp_force(const Vec3d& f, double max_force_N) {
   return clamp_magnitude(f, max_force_N, kSafetyForceClamped);
 }
 
+double clamp_scale(const Vec3d& v, double max) {
+  const double m = norm(v);
+  if (!(max > 0.0)) return 0.0;
+  return m <= max ? 1.0 : max / m;
+}
+
+double step_fraction(const Vec3d& target, const Vec3d& prev, double max_step) {
+  const double m = norm(target - prev);
+  if (m == 0.0) return 1.0;
+  if (!(max_step > 0.0)) return 0.0;
+  return m <= max_step ? 1.0 : max_step / m;
+}
+
 Filtered limit_stiffness(const Vec3d& f, const Vec3d& f_prev, const Vec3d& x, const Vec3d& x_prev,
                          double max_stiffness_N_per_mm, double slack_N) {
   double travel = norm(x - x_prev);

@@ -82,6 +82,13 @@ Filtered clamp_magnitude(const Vec3d& v, double max, std::uint32_t flag);
 Filtered limit_step(const Vec3d& target, const Vec3d& prev, double max_step, std::uint32_t flag);
 // Force clamp: |f| <= max_force_N.
 Filtered clamp_force(const Vec3d& f, double max_force_N);
+// The factor clamp_magnitude(v, max, ...) scales v by: 1 within max, max / |v| beyond, 0 when max
+// <= 0 (so a part of v, scaled by it, is that part of the clamped vector: force_chain.hpp).
+double clamp_scale(const Vec3d& v, double max);
+// The fraction of the way from `prev` to `target` limit_step(target, prev, max_step, ...) moves:
+// 1 when not cut (or target == prev), max_step / |target - prev| when cut, 0 when max_step <= 0.
+// Its output is prev + s (target - prev); a part of target and of prev follows the same line.
+double step_fraction(const Vec3d& target, const Vec3d& prev, double max_step);
 // Stiffness limit: |f - f_prev| <= max_stiffness * |x - x_prev| + slack_N, i.e. the force may
 // not change faster per millimetre of device travel since the previous tick than the device
 // renders stably; slack_N (settle_rate * dt in apply_device_limits) lets a limited force settle.

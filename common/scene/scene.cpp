@@ -5,10 +5,14 @@
 //   sampler     DistanceMaps (moved) -> FieldSampler in the configured storage and scheme
 #include "scene/scene.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <system_error>
 #include <utility>
 
@@ -37,6 +41,54 @@ fs::path prep_into_cache(const std::string& input, const SceneOptions& options, 
   const PrepResult result = run_prep(input, dir, params, options.progress);
   *prepped = !result.from_cache;
   return dir;
+}
+
+// The prep's contrast phase from its prep.json ("" when it records none).
+std::string recorded_contrast_phase(const fs::path& dir) {
+  std::ifstream in(dir / kPrepJsonFile);
+  if (!in) return {};
+  const nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
+  if (!json.is_object()) return {};
+  const auto it = json.find("contrast_phase");
+  return it != json.end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
+// One layer's map: d_<name>.nii.gz, which must span the scene's maps (the prepped grid, so the
+// same scene frame), sampled with the analytic gradient from float32.
+StructureLayer read_layer(const fs::path& file, const std::string& name, const Grid& scene) {
+  DistanceMap map = read_nifti_float(file.string());
+  for (int a = 0; a < 3; ++a) {
+    const double extent = map.grid.spacing[a] * static_cast<double>(map.grid.dims[a] - 1);
+    const double want = scene.spacing[a] * static_cast<double>(scene.dims[a] - 1);
+    if (!(std::fabs(extent - want) <= 1e-3 * std::max(1.0, want)))
+      throw InputError(file.string() + ": does not span the scene's maps (" +
+                       std::to_string(extent) + " mm against " + std::to_string(want) +
+                       " mm along axis " + std::to_string(a) + ")");
+  }
+  StructureLayer layer;
+  layer.name = name;
+  layer.kind = name == "artery" ? LayerKind::Artery : LayerKind::Organ;
+  layer.map = std::make_shared<const FieldSampler>(
+      std::move(map), SamplerConfig{GradientScheme::AnalyticTrilinear, Storage::Float32});
+  return layer;
+}
+
+// The layers SceneOptions::layers names that the prep directory has (see there).
+void read_layers(const fs::path& dir, const SceneOptions& options, Scene& out) {
+  std::error_code ec;
+  for (const std::string& name : options.layers) {
+    fs::path file = dir / ("d_" + name + ".nii.gz");
+    std::string source = file.filename().string();
+    if (!fs::is_regular_file(file, ec) && name == "artery" &&
+        fs::is_regular_file(dir / kVesselDistanceFile, ec) &&
+        recorded_contrast_phase(dir) == "arterial") {
+      file = dir / kVesselDistanceFile;
+      source = std::string(kVesselDistanceFile) + " (arterial phase: its lumens are arteries)";
+    }
+    if (!fs::is_regular_file(file, ec)) continue;
+    out.layers.push_back(read_layer(file, name, out.grid));
+    out.layer_sources.push_back(source);
+  }
 }
 
 }  // namespace
@@ -101,6 +153,7 @@ Scene load_scene(const std::string& scene, const SceneOptions& options) {
   // sampler: the maps move in (no copy with float32 storage).
   out.fields = std::make_shared<const FieldSampler>(std::move(maps.surf), std::move(maps.bone),
                                                     options.sampler);
+  read_layers(dir, options, out);  // d_<layer> -> structure layers
   out.load_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return out;
 }

@@ -11,9 +11,11 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "base/volume.hpp"
 #include "model/field_sampler.hpp"
+#include "model/structure_layers.hpp"
 #include "prep/prep.hpp"
 #include "scene/scene_maps.hpp"
 
@@ -29,6 +31,11 @@ struct SceneOptions {
   // (scene_maps.hpp); 0 = as prepped. The commands give palp's model kPalpMapSpacingMm.
   double map_spacing_mm = 0.0;
   unsigned threads = 0;  // of the refinement; 0 = default_thread_count()
+  // The structures loaded as force layers (model/structure_layers.hpp) when the prep directory
+  // has their d_<name>.nii.gz: "artery" pulses, any other name is an organ border. Without
+  // d_artery.nii.gz, a scan whose contrast_phase is "arterial" gives its d_vessel.nii.gz as the
+  // artery (in that phase the lumens that are bright are arteries). Empty: bone only.
+  std::vector<std::string> layers = {"artery", "liver"};
 };
 
 // The in-memory map spacing of the palp model (mm): a 3 mm CT's maps at 1.5 mm, so the skin's
@@ -46,6 +53,10 @@ struct Scene {
   std::string map_note;                // why asked-for refinement was not done ("" otherwise)
   double load_seconds = 0.0;
   std::shared_ptr<const FieldSampler> fields;
+  // The structure layers found (in SceneOptions::layers' order), each map on its own grid in the
+  // scene frame, and where each came from ("d_artery.nii.gz", "d_vessel.nii.gz (arterial)").
+  std::vector<StructureLayer> layers;
+  std::vector<std::string> layer_sources;
   // With SceneOptions::load_ct, from a prep directory that has them (null otherwise): the CT's
   // HU and the body mask on the maps' grid, or on the coarse CT grid the maps refine
   // (prep/maps/map_refine.hpp).

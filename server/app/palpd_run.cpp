@@ -117,7 +117,7 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
   Scene scene = cli::load_scene_for(o.args, "palpd", o.quiet);
   cli::StartTuning tuning =
       cli::tune_at_start(o.args, scene, o.tool, o.params, o.loop.rate_hz, o.quiet);
-  auto model = std::make_shared<const Model>(scene.fields, o.tool, o.params);
+  auto model = std::make_shared<const Model>(scene.fields, o.tool, o.params, scene.layers);
 
   rt::DeviceConfig device_config;
   device_config.rate_hz = o.loop.rate_hz;
@@ -137,7 +137,7 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
     throw InputError("device " + o.device_spec + ": " + device.last_error());
   auto maps =
       cli::maps_at_start(o.args, o.device_spec, device.kind(), scene, placement, o.tool, o.quiet);
-  if (maps.windowed) model = std::make_shared<const Model>(maps.haptic, o.tool, o.params);
+  if (maps.windowed) model = std::make_shared<const Model>(maps.haptic, o.tool, o.params, scene.layers);
   device_config.fields.reset();  // the whole maps' gradient fields go with the last holder
   auto structures = read_structures(o, scene);
   return Built{std::move(scene), std::move(tuning), std::move(model), placement, std::move(maps),

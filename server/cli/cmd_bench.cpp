@@ -118,7 +118,9 @@ Timings time_ticks(const Model& model, const Trajectory& path, std::size_t warmu
                    std::size_t ticks) {
   State state = make_state(model);
   const std::size_t n = path.size();
-  for (std::size_t i = 0; i < warmup; ++i) tick(model, state, path[ping_pong(i, n)].pose);
+  // the pulse's clock at 1 kHz (structure layers: the artery's term is computed every tick)
+  for (std::size_t i = 0; i < warmup; ++i)
+    tick(model, state, path[ping_pong(i, n)].pose, 1e-3 * static_cast<double>(i));
   Timings out;
   out.ns.resize(ticks);
   out.pose.resize(ticks);
@@ -128,7 +130,7 @@ Timings time_ticks(const Model& model, const Trajectory& path, std::size_t warmu
     out.pose[i] = ping_pong(warmup + i, n);
     const Pose& pose = path[out.pose[i]].pose;
     const auto t0 = Clock::now();
-    tick(model, state, pose);
+    tick(model, state, pose, 1e-3 * static_cast<double>(warmup + i));
     const auto t1 = Clock::now();
     out.ns[i] = std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
     out.status[i] = state.status;
@@ -247,8 +249,12 @@ int cmd_bench(const Arguments& argv_in) {
     const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
     fields = window_sampler(maps.surf, maps.bone, *scene.fields, window, scene.fields->config());
   }
-  const Model model(fields, tool, params);
+  const Model model(fields, tool, params, scene.layers);
   const double model_mib = maps_mib(*fields, params);
+  // With structure layers, the same ticks without them, for the layers' cost as a ratio.
+  Summary bare;
+  if (!model.layers().empty() && params.model == ModelKind::Palp)
+    bare = summarize(time_ticks(Model(fields, tool, params), path, warmup, ticks).ns);
 
   // Timing, then the summary.
   const double clock_ns = clock_pair_ns();
@@ -280,16 +286,23 @@ int cmd_bench(const Arguments& argv_in) {
           model_mib > 0.0 ? whole_mib / model_mib : 0.0);
     else
       std::printf("  maps      %.1f MiB\n", model_mib);
+    if (bare.p50 > 0.0)
+      std::printf("  layers    %zu (%s%s): p50 %.2fx, p99 %.2fx the tick without them (%.0f, %.0f ns)\n",
+                  model.layers().size(), model.layers()[0].name.c_str(),
+                  model.layers().size() > 1 ? ", ..." : "", s.p50 / bare.p50, s.p99 / bare.p99,
+                  bare.p50, bare.p99);
   }
   std::printf(
       "{\"scene\":%s,\"tool\":%s,\"scheme\":\"%s\",\"storage\":\"%s\",\"path\":%s,"
       "\"ticks\":%zu,\"warmup\":%zu,\"tick_ns_p50\":%.0f,\"tick_ns_p90\":%.0f,"
       "\"tick_ns_p99\":%.0f,\"tick_ns_p999\":%.0f,\"tick_ns_max\":%.0f,\"tick_ns_mean\":%.1f,"
       "\"contacts\":%zu,\"in_contact_mean\":%.3f,\"touching_fraction\":%.4f,"
-      "\"clock_pair_ns\":%.0f,\"maps_mib\":%.2f,\"whole_maps_mib\":%.2f}\n",
+      "\"clock_pair_ns\":%.0f,\"maps_mib\":%.2f,\"whole_maps_mib\":%.2f,\"layers\":%zu,"
+      "\"tick_ns_p50_without_layers\":%.0f,\"tick_ns_p99_without_layers\":%.0f}\n",
       json_string(scene.source).c_str(), json_string(tool.name).c_str(), scheme, storage,
       json_string(path_name).c_str(), ticks, warmup, s.p50, s.p90, s.p99, s.p999, s.max, s.mean,
-      tool.points.size(), in_contact_mean, touching, clock_ns, model_mib, whole_mib);
+      tool.points.size(), in_contact_mean, touching, clock_ns, model_mib, whole_mib,
+      model.layers().size(), bare.p50, bare.p99);
   return 0;
 }
 

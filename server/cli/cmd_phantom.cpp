@@ -24,7 +24,7 @@ Options:
   --dims NXxNYxNZ       grid size in voxels (default: the phantom's own); x and y scale the
                         anatomy down to fit, z never does (--dims 384x256x20: a thin slab)
   --spacing SXxSYxSZ    voxel size in mm (default: the phantom's own)
-Torso only (the same in a CT input: phantom:torso,contrast=arterial,arms=2,metal):
+Torso only (the same in a CT input: phantom:torso,contrast=arterial,arms=2,metal,structures):
   --contrast PHASE      none, arterial or portal-venous: the vessel tree (aorta to its
                         bifurcation, coeliac, SMA, renal and iliac arteries, IVC, renal and
                         portal veins) at that phase's HU instead of the lone 250 HU aorta
@@ -32,6 +32,10 @@ Torso only (the same in a CT input: phantom:torso,contrast=arterial,arms=2,metal
                         unless --contrast says otherwise)
   --arms N              0, 1 (default) or 2 arms beside the torso
   --metal               a pair of pedicle screws (3500 HU) in a vertebra, with streaks
+  --structures          what a finger feels besides bone: the femoral arteries (and veins) in
+                        the groin 15 mm under the skin, joined to the aorta by the iliac
+                        arteries, and the liver's inferior edge below the right costal margin;
+                        the truth masks (artery, liver) prep writes as artery.nii.gz, liver.nii.gz
   --orientation CODE    store the voxels in another axis order, the same patient in the same
                         place: three letters naming where each index axis grows toward, e.g.
                         RAS (NIfTI's canonical order) or LPS (DICOM's; torso and sphere default)
@@ -41,7 +45,7 @@ Torso only (the same in a CT input: phantom:torso,contrast=arterial,arms=2,metal
 }  // namespace
 
 int cmd_phantom(const Arguments& argv) {
-  const Args args(argv, {"help", "metal"},
+  const Args args(argv, {"help", "metal", "structures"},
                   {"out", "dims", "spacing", "orientation", "contrast", "aorta-hu", "arms"});
   if (args.has("help")) {
     std::cout << kPhantomUsage;
@@ -58,6 +62,7 @@ int cmd_phantom(const Arguments& argv) {
   for (const char* key : {"contrast", "aorta-hu", "arms"})
     if (const auto value = args.get(key)) set_phantom_option(options, key, *value);
   if (args.has("metal")) options.metal = true;
+  if (args.has("structures")) options.structures = true;
   CtVolume ct = make_phantom(args.positional()[0], options);
   if (const auto code = args.get("orientation")) ct = reorder_axes(ct, *code);
   write_nifti(*out, ct);

@@ -24,8 +24,11 @@ Segments body and bone and computes the signed distance maps the force model sam
 INPUT: a .nii/.nii.gz/.mha/.mhd/.nrrd/.nhdr file, a DICOM series directory, or phantom:NAME.
 Writes body.nii.gz, bone.nii.gz, d_surf.nii.gz, d_bone.nii.gz and prep.json into DIR.
 With --labels, a lab's label map of the same CT gives the bone (the union of its bone classes),
-vessel.nii.gz + d_vessel.nii.gz from its arteries and veins, and <name>.nii.gz + d_<name>.nii.gz
-per organ or muscle (uint8 0/1, float32 mm positive inside) on the CT's grid (docs/labels.md).
+vessel.nii.gz + d_vessel.nii.gz from its arteries and veins, artery.nii.gz + d_artery.nii.gz
+from its arteries alone, and <name>.nii.gz + d_<name>.nii.gz per organ or muscle (uint8 0/1,
+float32 mm positive inside) on the CT's grid (docs/labels.md). Without --labels, the torso
+phantom drawn with structures (phantom:torso,structures) gives its own truth the same way:
+artery.nii.gz + d_artery.nii.gz and liver.nii.gz + d_liver.nii.gz (docs/prep.md).
 The input is checked first: air near -1000 HU and soft tissue near 0..100 HU must be present
 and the body must leave air around it. Patient directions come from the file's direction
 matrix; an oblique volume (gantry tilt) is resampled onto the nearest axis-aligned frame.

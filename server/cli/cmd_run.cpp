@@ -42,7 +42,12 @@ constexpr const char* kRunOptions =
                             direction_epsilon (0, 0.1], model 0 (paper) | 1 (palp);
                             palp only: mu [0, 2], skin_fmax [1, 200] N,
                             bone_fade_mm [0, 30] mm, bone_reach_mm [1, 20] mm,
-                            bone_along_normal 0|1
+                            bone_along_normal 0|1; structure layers (palp only):
+                            pulse_bpm [0, 240], pulse_systolic_mmHg, pulse_diastolic_mmHg,
+                            pulse_vessel_mm, pad_mm, organ_reach_mm, organ_k1, organ_k3,
+                            organ_fmax (docs/force_model.md "Structures as layers")
+  --pulse-bpm N           the arteries' pulse rate (default 72; 0 = no pulse), the same as
+                          --param pulse_bpm=N
   --device-profile NAME   apply a device's limits after the model: touch, falcon,
                           phantom-premium, omega (default: none, the model's own output)
   --config FILE           TOML with scene, tool, model, scheme, storage, param (e.g. what
@@ -112,7 +117,8 @@ int cmd_run(const Arguments& argv_in) {
   Arguments argv = with_model_config(argv_in);
   const std::vector<std::string> assignments = take_repeated(argv, "param");
   std::vector<std::string> valued = kSceneOptions;
-  valued.insert(valued.end(), {"tool", "trajectory", "out", "device-profile", "config"});
+  valued.insert(valued.end(),
+                {"tool", "trajectory", "out", "device-profile", "config", "pulse-bpm"});
   const Args args(argv, {"help", "quiet"}, valued);
   if (args.has("help")) {
     print_usage();
@@ -130,14 +136,15 @@ int cmd_run(const Arguments& argv_in) {
   const bool quiet = args.has("quiet");
   // Everything a usage mistake can be is checked before the (slower) scene load.
   const Tool tool = parse_tool(*tool_name);
-  const ForceParams params = force_params(model_kind(args), tool, assignments);
+  ForceParams params = force_params(model_kind(args), tool, assignments);
+  if (args.get("pulse-bpm")) set_param(params, "pulse_bpm", args.number("pulse-bpm", 0.0));
   DeviceFilter filter;
   if (const auto profile = args.get("device-profile")) filter.profile = &device_profile(*profile);
   (void)scene_options(args);
 
   const Trajectory trajectory = read_trajectory_csv(*trajectory_path);
   const Scene scene = load_scene_for(args, "run", quiet);
-  const Model model(scene.fields, tool, params);
+  const Model model(scene.fields, tool, params, scene.layers);
   State state = make_state(model);
   ForceCsvWriter writer(*out);
 
@@ -146,7 +153,7 @@ int cmd_run(const Arguments& argv_in) {
   RunSummary summary;
   for (const TrajectorySample& row : trajectory) {
     // Row -> tick -> record (contact summary) -> device limits -> CSV.
-    tick(model, state, row.pose);
+    tick(model, state, row.pose, row.t);  // the pulse's clock runs on the trajectory's time
     ForceRecord record = force_record(row.t, state);
     filter.apply(record, row.pose.position, first_dt);
     writer.write(record);

@@ -1,6 +1,7 @@
 // Shared setup of the model commands (see model_setup.hpp).
 #include "cli/model_setup.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -50,6 +51,19 @@ SceneOptions scene_options(const Args& args) {
   options.map_spacing_mm = args.number("map-spacing", options.map_spacing_mm);
   if (!(options.map_spacing_mm >= 0.0 && options.map_spacing_mm <= 100.0))
     throw UsageError("--map-spacing needs 0 (the maps as prepped) or a spacing in mm up to 100");
+  if (const auto layers = args.get("layers")) {
+    options.layers.clear();
+    std::size_t begin = 0;
+    while (*layers != "none" && begin <= layers->size()) {
+      const std::size_t end = std::min(layers->find(',', begin), layers->size());
+      const std::string name = layers->substr(begin, end - begin);
+      if (name.empty() || name.find_first_of("/\\.") != std::string::npos)
+        throw UsageError("--layers needs structure names (artery, liver, ...) or none, got '" +
+                         *layers + "'");
+      options.layers.push_back(name);
+      begin = end + 1;
+    }
+  }
   if (const auto dir = args.get("cache-dir")) {
     if (dir->empty()) throw UsageError("--cache-dir needs a directory");
     options.cache_dir = *dir;
@@ -85,6 +99,9 @@ Scene load_scene_for(const Args& args, const std::string& command, bool quiet) {
                    g.spacing[0], g.spacing[1], g.spacing[2]);
     }
   }
+  for (std::size_t i = 0; !quiet && i < scene.layers.size(); ++i)
+    std::fprintf(stderr, "scene layer %s (%s): %s\n", scene.layers[i].name.c_str(),
+                 to_string(scene.layers[i].kind), scene.layer_sources[i].c_str());
   if (!quiet && !scene.map_note.empty())
     std::fprintf(stderr, "scene: note: %s\n", scene.map_note.c_str());
   return scene;

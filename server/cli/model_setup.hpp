@@ -14,8 +14,8 @@
 namespace palp::cli {
 
 // Valued options every model command accepts (besides its own).
-inline const std::vector<std::string> kSceneOptions = {"scene",     "scheme", "storage",
-                                                       "cache-dir", "model",  "map-spacing"};
+inline const std::vector<std::string> kSceneOptions = {
+    "scene", "scheme", "storage", "cache-dir", "model", "map-spacing", "layers"};
 
 // Help text of those options.
 inline constexpr const char* kSceneOptionsHelp =
@@ -31,6 +31,9 @@ inline constexpr const char* kSceneOptionsHelp =
                           coarser, the skin's band projected onto the CT's own surface at the
                           new nodes (default 2 for --model palp: a 3 mm CT's maps at 1.5 mm;
                           0 = as prepped, the default for --model paper)
+  --layers LIST           structures felt besides skin and bone when the scene has their maps
+                          (palp model): artery (pulses), liver or any prepped organ, comma-
+                          separated; none = bone only (default: artery,liver)
   --cache-dir DIR         scene cache (default $PALP_SCENE_CACHE, else
                           $XDG_CACHE_HOME/palp/scenes, else ~/.cache/palp/scenes)
 )";

@@ -58,7 +58,7 @@ std::string PalpdControl::set_tool(const std::string& name) {
   const ForceParams params = tool.kind == current->tool().kind
                                  ? current->params()
                                  : model_params(current->params().model, tool.kind);
-  loop_.swap_model(std::make_shared<const Model>(fields_, tool, params));
+  loop_.swap_model(std::make_shared<const Model>(fields_, tool, params, current->layers()));
   return {};
 }
 
@@ -74,7 +74,7 @@ std::string PalpdControl::set_parameter(const std::string& name, double value) {
   ForceParams params = current->params();
   set_param(params, name, value);
   validate(params);
-  loop_.swap_model(std::make_shared<const Model>(fields_, current->tool(), params));
+  loop_.swap_model(std::make_shared<const Model>(fields_, current->tool(), params, current->layers()));
   return {};
 }
 

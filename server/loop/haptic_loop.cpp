@@ -200,6 +200,7 @@ struct HapticLoop::Tick {
   std::uint32_t zero = 0;    // LoopFault bits: why the force is zeroed (0: it is not)
   DeviceState device_state = DeviceState::Present;  // what the snapshot says of the device
   Vec3d force{}, torque{};                          // device frame, as the force chain left them
+  Vec3d active{};  // the model's known active force (the pulse, part of force), device frame
   std::uint32_t safety = kSafetyOk;
   TickRecord rec;
   const State* state = nullptr;  // contacts to publish: set when the force was written
@@ -323,23 +324,26 @@ void HapticLoop::run_model_and_chain(Tick& t) noexcept {
     model_pose = identity_ ? tool : to_scene(registration_, tool);
   }
   bundle.state.pulse_bpm = pulse_bpm_.load(std::memory_order_relaxed);  // set_pulse_bpm
-  tick(*bundle.model, bundle.state, model_pose);
+  tick(*bundle.model, bundle.state, model_pose, 1e-9 * static_cast<double>(t.deadline_ns));
   t.force = bundle.state.f_device, t.torque = bundle.state.tau_device;
+  t.active = bundle.state.f_pulse;
   if (!identity_) {
     t.force = force_to_device(registration_, t.force);
     t.torque = torque_to_device(registration_, t.torque);
+    t.active = force_to_device(registration_, t.active);
   }
   if (config_.profile) run_force_chain_stage(t);
 }
 
-// The force chain (safety/force_chain.hpp): limits, engagement, passivity, step bound, clamp.
+// The force chain (safety/force_chain.hpp): limits, engagement, passivity, step bound, clamp; the
+// pulse passed as the known active force the passivity observer counts as an input.
 void HapticLoop::run_force_chain_stage(Tick& t) noexcept {
   const ForceChainOutput out = run_force_chain(
       chain_, chain_config_, with_declared(*config_.profile, device_.declared_limits()), t.force,
       t.torque,
       // N per scene mm -> N per device mm (a device mm moves the tool `scale` scene mm)
       current_->state.stiffness * (identity_ ? 1.0 : registration_.scale),
-      last_device_pose_.position, dt_s_);
+      last_device_pose_.position, dt_s_, t.active);
   t.force = out.force, t.torque = out.torque, t.safety = out.status;
   if (out.damping_N_s_per_mm > 0.0) {
     passivity_ticks_.fetch_add(1, std::memory_order_relaxed);

@@ -124,5 +124,19 @@ TEST_F(PalpCli, PhantomTorsoOptions) {
   EXPECT_TRUE(read_ct(ct.string()).data == make_phantom("torso", o).data);
 }
 
+TEST_F(PalpCli, PhantomTorsoStructures) {
+  const fs::path ct = dir_ / "torso.nii.gz";
+  const auto made =
+      run_palp("phantom torso --out " + ct.string() + " --dims 96x64x12 --structures");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  PhantomOptions o;
+  o.dims = Index3{96, 64, 12};
+  o.structures = true;
+  const CtVolume read = read_ct(ct.string());
+  EXPECT_TRUE(read.data == make_phantom("torso", o).data);
+  o.structures = false;  // the slab's middle 24 mm hold the liver's edge lobe
+  EXPECT_FALSE(read.data == make_phantom("torso", o).data);
+}
+
 }  // namespace
 }  // namespace palp

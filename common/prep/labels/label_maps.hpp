@@ -28,7 +28,7 @@ namespace palp {
 
 struct LabelledStructure {
   std::string name;  // a file name: "liver", "kidney_left", "lung_right", "tumor", ...
-  std::string kind;  // "organ" or "muscle"
+  std::string kind;  // "organ" or "muscle" (prep adds "artery": prep/prep_structures.hpp)
   // 0/1 over the structure's box of CT voxels: voxel (i, j, k) is CT voxel offset + (i, j, k).
   // mask.grid is that box, placed in the world where those CT voxels are (the CT's spacing and
   // direction), so written as it is it overlays the CT; on_ct_grid() makes it CT-sized.

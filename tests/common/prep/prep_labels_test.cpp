@@ -1,9 +1,10 @@
 // run_prep with a lab's label map (issue 38): a small sphere CT and a TotalSegmentator `total`
 // output built here, as its multi-label NIfTI (ids from TotalSegmentator's map_to_binary.py,
 // class_map["total"], as literals) and as its folder of one mask per class. The bone written is
-// the union of the bone classes voxel for voxel, the vessel the arteries' and veins', each organ a
-// <name>.nii.gz and d_<name>.nii.gz; prep.json says where each came from; the cache follows the
-// label file's bytes; a label map that does not fit the CT leaves nothing.
+// the union of the bone classes voxel for voxel, the vessel the arteries' and veins', the artery
+// the arteries' alone, each organ a <name>.nii.gz and d_<name>.nii.gz; prep.json says where each
+// came from; the cache follows the label file's bytes; a label map that does not fit the CT leaves
+// nothing.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -151,6 +152,13 @@ void PrepLabels::expect_abdomen_outputs(const std::string& labels, const std::st
   EXPECT_NEAR(at(d_liver, 8, 13, 13), 1 * 2.0 - 1.0, 1e-4);   // on its face
   EXPECT_NEAR(at(d_liver, 4, 13, 13), -(4 * 2.0 - 1.0), 1e-4);
   EXPECT_NEAR(at(d_liver, 5, 5, 13), -(std::sqrt(18.0) * 2.0 - 1.0), 1e-4);  // from (8, 8, 13)
+  // The arteries alone as a structure of their own, written as an organ is (issue 39: the force
+  // model's artery layer): the aorta's box; 2 voxels from its faces at its middle.
+  EXPECT_EQ(read_nifti_mask((out() / "artery.nii.gz").string()).data, mask_of(grid_, {kAorta}));
+  const DistanceMap d_artery = read_nifti_float((out() / "d_artery.nii.gz").string());
+  EXPECT_EQ(d_artery.grid.dims, grid_.dims);
+  EXPECT_NEAR(at(d_artery, 10, 28, 25), 2 * 2.0 - 1.0, 1e-4);     // 2 voxels from (12, 28, 25)
+  EXPECT_NEAR(at(d_artery, 15, 28, 25), -(4 * 2.0 - 1.0), 1e-4);  // in the cava, 4 from (11, ...)
   const DistanceMap d_vessel = read_nifti_float((out() / kVesselDistanceFile).string());
   EXPECT_GT(at(d_vessel, 10, 28, 25), 0.0f);
   EXPECT_LT(at(d_vessel, 13, 28, 25), 0.0f);  // between the aorta and the cava
@@ -169,6 +177,11 @@ void PrepLabels::expect_abdomen_outputs(const std::string& labels, const std::st
             (std::set<std::string>{"aorta", "inferior_vena_cava"}));
   EXPECT_EQ(s["vessel"]["source"]["split"]["artery"]["voxels"], kAorta.box.voxels());
   EXPECT_EQ(s["vessel"]["source"]["split"]["vein"]["voxels"], kCava.box.voxels());
+  EXPECT_EQ(s["artery"]["kind"], "artery");
+  EXPECT_EQ(s["artery"]["source"]["file"], labels);
+  EXPECT_EQ(s["artery"]["source"]["classes"], nlohmann::json({"aorta"}));
+  EXPECT_EQ(s["artery"]["voxels"], kAorta.box.voxels());
+  EXPECT_EQ(s["artery"]["files"], nlohmann::json({"artery.nii.gz", "d_artery.nii.gz"}));
   EXPECT_EQ(s["liver"]["kind"], "organ");
   EXPECT_EQ(s["liver"]["source"]["file"], labels);
   EXPECT_EQ(s["liver"]["source"]["classes"], nlohmann::json({"liver"}));
@@ -181,9 +194,10 @@ void PrepLabels::expect_abdomen_outputs(const std::string& labels, const std::st
     recorded.insert(name);
     EXPECT_EQ(bytes, fs::file_size(out() / name)) << name;
   }
-  EXPECT_EQ(recorded, (std::set<std::string>{"body.nii.gz", "bone.nii.gz", "d_surf.nii.gz",
-                                             "d_bone.nii.gz", "ct.nii.gz", "vessel.nii.gz",
-                                             "d_vessel.nii.gz", "liver.nii.gz", "d_liver.nii.gz"}));
+  EXPECT_EQ(recorded,
+            (std::set<std::string>{"body.nii.gz", "bone.nii.gz", "d_surf.nii.gz", "d_bone.nii.gz",
+                                   "ct.nii.gz", "vessel.nii.gz", "d_vessel.nii.gz", "artery.nii.gz",
+                                   "d_artery.nii.gz", "liver.nii.gz", "d_liver.nii.gz"}));
   recorded.insert(kPrepJsonFile);
   EXPECT_EQ(files_in(out()), recorded);
 }
@@ -194,14 +208,18 @@ TEST_F(PrepLabels, MultilabelNiftiGivesBoneVesselAndOrgans) {
   EXPECT_FALSE(result.from_cache);
   EXPECT_EQ(result.stats.bone_voxels, kVertebra.box.voxels() + kRib.box.voxels());
   expect_abdomen_outputs(labels, "totalsegmentator-multilabel");
-  // The summary palp prep prints: bone, vessel, then the organs, each with its source.
-  ASSERT_EQ(result.structures.size(), 3u);
+  // The summary palp prep prints: bone, vessel, artery, then the organs, each with its source.
+  ASSERT_EQ(result.structures.size(), 4u);
   EXPECT_EQ(result.structures[0].name, "bone");
   EXPECT_EQ(result.structures[0].source, "labels " + labels + " (vertebrae_L1, rib_left_1)");
   EXPECT_EQ(result.structures[1].name, "vessel");
-  EXPECT_EQ(result.structures[2].name, "liver");
-  EXPECT_EQ(result.structures[2].voxels, 1000u);
-  EXPECT_EQ(result.structures[2].source, "labels " + labels + " (liver)");
+  EXPECT_EQ(result.structures[2].name, "artery");
+  EXPECT_EQ(result.structures[2].kind, "artery");
+  EXPECT_EQ(result.structures[2].voxels, kAorta.box.voxels());
+  EXPECT_EQ(result.structures[2].source, "labels " + labels + " (aorta)");
+  EXPECT_EQ(result.structures[3].name, "liver");
+  EXPECT_EQ(result.structures[3].voxels, 1000u);
+  EXPECT_EQ(result.structures[3].source, "labels " + labels + " (liver)");
   EXPECT_EQ(read_json(out() / kPrepJsonFile)["parameters"]["labels"]["map"], "totalsegmentator");
 }
 
@@ -221,9 +239,10 @@ TEST_F(PrepLabels, CachedUntilTheLabelsChangeAndAnEarlierRunsStructuresGo) {
   EXPECT_TRUE(fs::exists(out() / "d_spleen.nii.gz"));
   const PrepResult cached = prep(labels);
   EXPECT_TRUE(cached.from_cache);
-  ASSERT_EQ(cached.structures.size(), 4u);
-  EXPECT_EQ(cached.structures[3].name, "spleen");
-  EXPECT_EQ(cached.structures[3].voxels, 64u);
+  ASSERT_EQ(cached.structures.size(), 5u);
+  EXPECT_EQ(cached.structures[2].name, "artery");
+  EXPECT_EQ(cached.structures[4].name, "spleen");
+  EXPECT_EQ(cached.structures[4].voxels, 64u);
   EXPECT_EQ(cached.vessel_voxels, kAorta.box.voxels() + kCava.box.voxels());
   // A structure file gone: not a valid cache.
   fs::remove(out() / "d_spleen.nii.gz");
@@ -245,6 +264,7 @@ TEST_F(PrepLabels, CachedUntilTheLabelsChangeAndAnEarlierRunsStructuresGo) {
   ASSERT_EQ(plain.structures.size(), 1u);
   EXPECT_EQ(plain.structures[0].source, "auto");
   EXPECT_FALSE(fs::exists(out() / "liver.nii.gz"));
+  EXPECT_FALSE(fs::exists(out() / "d_artery.nii.gz"));
   EXPECT_FALSE(fs::exists(out() / kVesselFile));
 }
 
@@ -257,6 +277,8 @@ TEST_F(PrepLabels, WithoutBoneClassesTheBoneIsSegmentedAndTheOrgansStillWritten)
   EXPECT_FALSE(json["structures"].contains("vessel"));
   EXPECT_EQ(read_nifti_mask((out() / "liver.nii.gz").string()).data, mask_of(grid_, {kLiver}));
   EXPECT_FALSE(fs::exists(out() / kVesselFile));
+  EXPECT_FALSE(fs::exists(out() / "artery.nii.gz")) << "no artery class, no artery";
+  EXPECT_FALSE(json["structures"].contains("artery"));
 }
 
 TEST_F(PrepLabels, RefinedMapsForTheStructuresToo) {
@@ -268,6 +290,8 @@ TEST_F(PrepLabels, RefinedMapsForTheStructuresToo) {
   EXPECT_NE(d_liver.grid.dims, grid_.dims);
   EXPECT_EQ(read_nifti_mask((out() / "liver.nii.gz").string()).grid.dims, grid_.dims);
   EXPECT_EQ(read_nifti_float((out() / kVesselDistanceFile).string()).grid.dims,
+            result.map_grid.dims);
+  EXPECT_EQ(read_nifti_float((out() / "d_artery.nii.gz").string()).grid.dims,
             result.map_grid.dims);
 }
 

@@ -114,6 +114,25 @@ TEST(SafetyFilters, RateLimitBoundsTheStep) {
   EXPECT_EQ(limit_rate({5, 0, 0}, {1, 0, 0}, -1.0, 1000.0).value, (Vec3d{1, 0, 0}));
 }
 
+TEST(SafetyFilters, ClampScaleAndStepFractionDescribeTheFilters) {
+  // |f| = 13: the clamp to 6.5 N scales it by 1/2, to 13.5 N by 1, to 0 by 0.
+  const Vec3d f{3.0, -4.0, 12.0};
+  EXPECT_EQ(clamp_scale(f, 6.5), 0.5);
+  EXPECT_EQ(clamp_scale(f, 13.5), 1.0);
+  EXPECT_EQ(clamp_scale(f, 0.0), 0.0);
+  // From (1, 0, 0) toward (1, 0, 5): a step of 2 goes 2/5 of the way, 6 all of it, 0 none; a
+  // target on prev is reached whatever the step.
+  EXPECT_EQ(step_fraction({1, 0, 5}, {1, 0, 0}, 2.0), 0.4);
+  EXPECT_EQ(step_fraction({1, 0, 5}, {1, 0, 0}, 6.0), 1.0);
+  EXPECT_EQ(step_fraction({1, 0, 5}, {1, 0, 0}, 0.0), 0.0);
+  EXPECT_EQ(step_fraction({1, 0, 0}, {1, 0, 0}, 0.0), 1.0);
+  // and the filters' outputs lie where the fractions say
+  const Vec3d prev{1, 0, 0}, target{1, 0, 5};
+  EXPECT_EQ(limit_rate(target, prev, 0.001, 2000.0).value,
+            prev + (target - prev) * step_fraction(target, prev, 2.0));
+  EXPECT_EQ(clamp_force(f, 6.5).value, f * clamp_scale(f, 6.5));
+}
+
 TEST(SafetyFilters, StiffnessLimitBoundsForceChangePerTravel) {
   // 0.1 mm of travel at 3 N/mm allows 0.3 N (plus the slack).
   const Filtered s = limit_stiffness({5, 0, 0}, {1, 0, 0}, {0.1, 0, 0}, {0, 0, 0}, 3.0, 0.01);
