@@ -109,8 +109,11 @@ std::string hud_text(const LatestState& state, const HudInputs& inputs) {
   }
   if (const auto& bpm = state.frame.pulse_bpm) {
     out << "pulse " << (*bpm > 0 ? fixed(*bpm, 0) + " bpm" : std::string("off"));
-    if (state.frame.pulse_force > 0) out << "   felt " << fixed(state.frame.pulse_force, 2) << " N";
-    if (state.frame.organ_force > 0) out << "   organ " << fixed(state.frame.organ_force, 2) << " N";
+    // what shows at two decimals (below 0.005 N it would read 0.00)
+    if (state.frame.pulse_force >= 0.005)
+      out << "   felt " << fixed(state.frame.pulse_force, 2) << " N";
+    if (state.frame.organ_force >= 0.005)
+      out << "   organ " << fixed(state.frame.organ_force, 2) << " N";
     out << "\n";
   }
   if (inputs.controller) {

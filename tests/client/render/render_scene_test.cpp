@@ -147,6 +147,8 @@ TEST(Hud, ThePulsesLine) {
   s.frame.organ_force = 1.5;
   EXPECT_NE(hud_text(s, {}).find("pulse 72 bpm   felt 0.25 N   organ 1.50 N"), std::string::npos)
       << hud_text(s, {});
+  s.frame.pulse_force = 0.004;  // would read 0.00: not shown
+  EXPECT_EQ(hud_text(s, {}).find("felt"), std::string::npos);
   s.frame.pulse_bpm = 0.0;
   EXPECT_NE(hud_text(s, {}).find("pulse off"), std::string::npos);
   HudInputs in;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -95,6 +96,7 @@ rt::Snapshot newest(rt::HapticLoop& loop) {
   while (const rt::Snapshot* s = loop.net_ring().front()) {
     last.tick = s->tick;
     last.pulse_bpm = s->pulse_bpm;
+    last.pulse_wave = s->pulse_wave;
     loop.net_ring().pop();
   }
   return last;
@@ -124,6 +126,31 @@ TEST(PalpdControl, ThePulseRateReachesTheLoopBetweenTicks) {
   EXPECT_EQ(control.set_parameter("pulse_bpm", 0.0), "");  // off
   s.step();
   EXPECT_EQ(newest(*s.loop).pulse_bpm, 0.0f);
+}
+
+// The snapshots' wave follows the pulse's clock at the rate the control set: over one beat at
+// 60 bpm (1000 ticks of 1 ms) it spans diastole to systole; at 0 bpm it holds.
+TEST(PalpdControl, TheSnapshotsWaveBeatsAtTheRateSet) {
+  SteppedLoop s;
+  PalpdControl control(*s.loop, s.model->fields_ptr(), s.device, {}, "/nonexistent");
+  ASSERT_EQ(control.set_parameter("pulse_bpm", 60.0), "");
+  float lo = 2, hi = -1;
+  for (int i = 0; i < 1000; ++i) {
+    s.step();
+    const float w = newest(*s.loop).pulse_wave;
+    lo = std::min(lo, w), hi = std::max(hi, w);
+  }
+  EXPECT_GE(lo, 0.0f);
+  EXPECT_LT(lo, 0.05f);  // end diastole
+  EXPECT_LE(hi, 1.0f);
+  EXPECT_GT(hi, 0.95f);  // the systolic peak
+  ASSERT_EQ(control.set_parameter("pulse_bpm", 0.0), "");
+  s.step();
+  const float held = newest(*s.loop).pulse_wave;
+  for (int i = 0; i < 200; ++i) {
+    s.step();
+    EXPECT_EQ(newest(*s.loop).pulse_wave, held);
+  }
 }
 
 // The rate is fixed while recording, like the parameters, and kept in the recording's metadata
