@@ -73,6 +73,7 @@ SceneSettings scene_settings(const Options& o) {
   settings.follow_mm = o.follow_mm;
   settings.chart_seconds = o.chart_s;
   settings.keep_outside = o.show_outside;
+  settings.skin_from_volume = o.skin_hu;
   return settings;
 }
 

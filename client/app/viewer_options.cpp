@@ -45,6 +45,8 @@ and deforms the skin where the tool presses.
   --show-outside          show the CT outside the body mask (table, cables; default hidden,
                           and the volume cropped to the body's box)
   --no-ct                 render the distance maps' pseudo-density, not the CT's HU
+  --skin-hu               the skin preset on the CT's HU (3 mm terraces on a 3 mm CT) instead
+                          of the sub-voxel skin, d_surf's zero level (docs/palpview.md)
   --no-deformation        do not deform the skin
   --width W --height H    window size (default 1280x800)
   --view SIDE             the camera's starting view: the patient's anterior (default),
@@ -158,6 +160,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.show_outside = true;
     } else if (arg == "--no-ct") {
       o.ct = false;
+    } else if (arg == "--skin-hu") {
+      o.skin_hu = true;
     } else if (arg == "--follow") {
       o.follow_mm = parse_number(arg, value());
       if (!(o.follow_mm >= 0 && o.follow_mm <= 10000)) throw UsageError("--follow: 0 .. 10000 mm");

@@ -29,6 +29,7 @@ struct Options {
   PresetId preset = PresetId::Skin;
   bool deformation = true;
   bool show_outside = false, ct = true;
+  bool skin_hu = false;  // --skin-hu: the skin preset on the CT's HU, not d_surf's zero level
   double chart_s = 30.0;
   double follow_mm = -1;  // -1: 150 unless --camera
   bool have_camera = false;

@@ -84,6 +84,7 @@ RenderScene::RenderScene(vtkRenderWindow* window, SceneSettings settings)
     : impl_(std::make_unique<Impl>(window, settings)) {
   Impl& s = *impl_;
   s.volume.set_keep_outside(settings.keep_outside);
+  s.volume.set_skin_from_volume(settings.skin_from_volume);
   s.renderer->SetBackground(0.08, 0.09, 0.12);
   s.renderer->SetLayer(0);
   // The semi-transparent tool (tool_layer.cpp) sorted against the ray-cast volume: depth

@@ -1,9 +1,10 @@
 // palpview's VTK scene: the volume palpd sent (GPU ray casting through one composed render
-// scalar, transfer_presets.hpp), the tool (fingertip, two fingertips or probe), its contact points
-// coloured by contact, the proxies and their springs, the device force as an arrow, the
-// fingertip's spherical shadow on the skin, the skin deformation (SkinDeformer), and a head-up
-// display (text, banner, force chart). It draws into any vtkRenderWindow: the GLFW-hosted
-// vtkGenericOpenGLRenderWindow of palpview, or an off-screen window in the tests.
+// scalar, transfer_presets.hpp; the skin preset's from d_surf, skin_surface.hpp), the tool
+// (fingertip, two fingertips or probe), its contact points coloured by contact, the proxies and
+// their springs, the device force as an arrow, the fingertip's spherical shadow on the skin, the
+// skin deformation (SkinDeformer), and a head-up display (text, banner, force chart). It draws
+// into any vtkRenderWindow: the GLFW-hosted vtkGenericOpenGLRenderWindow of palpview, or an
+// off-screen window in the tests.
 //
 // Data flow per frame (main loop, palpview_main.cpp):
 //   StreamClient::latest() -> update_state(): on a new volume, compose the render scalar into the
@@ -57,7 +58,11 @@ struct SceneSettings {
   // the view's height, and follows the tool smoothly (the user's orbit and zoom are kept);
   // 0: the camera stays on the volume's centre (the whole volume fitted unless a distance).
   double follow_mm = 0;
-  bool keep_outside = false;       // the CT outside the body mask shown (else transparent air)
+  bool keep_outside = false;  // the CT outside the body mask shown (else transparent air)
+  // The skin preset on the CT's HU as before (3 mm terraces on a 3 mm CT; the maps'
+  // pseudo-density without the CT); false: on d_surf's zero level, the sub-voxel skin
+  // (skin_surface.hpp).
+  bool skin_from_volume = false;
   bool orientation_marker = true;  // the patient-axes cube in the bottom-left corner
   double arrow_mm_per_newton = 4.0;
   double chart_seconds = 5.0;  // force plot span

@@ -18,7 +18,7 @@ VolumeLayer::VolumeLayer(vtkRenderer* renderer, PresetId preset, bool deformatio
                          const DeformerParams& deformer)
     : deformation_(deformation),
       deformer_params_(deformer),
-      preset_(make_preset(preset)),
+      preset_(make_preset_on(palp::view::scalar_kind(preset, false, false), preset)),
       window_level_(preset_.window) {
   // The pipeline (its input arrives with the volume).
   mapper_->AutoAdjustSampleDistancesOff();
@@ -34,6 +34,7 @@ VolumeLayer::VolumeLayer(vtkRenderer* renderer, PresetId preset, bool deformatio
   volume_->SetProperty(property_);
   volume_->VisibilityOff();
   renderer->AddVolume(volume_);
+  kind_ = palp::view::scalar_kind(preset, false, false);  // until a volume says what it has
   apply_preset();
 }
 
@@ -55,16 +56,39 @@ bool VolumeLayer::load(const LatestState& state) {
     return false;
   source_ = state.volume;
   const bool ct = !source.hu.empty();
-  render_scalars_ = ct ? compose_ct_scalar(source.hu, source.body, keep_outside_)
-                       : compose_render_scalar(source.d_surf, source.d_bone);
-  if (ct != ct_) {  // the presets follow what the scalar is: HU or the pseudo-density
+  const ScalarKind kind = palp::view::scalar_kind(preset_.id, ct, skin_from_volume_);
+  if (ct != ct_ || kind != kind_) {  // the presets follow what the scalar is
     ct_ = ct;
-    set_preset(preset_.id);
+    kind_ = kind;
+    preset_ = make_preset_on(kind, preset_.id);
+    window_level_ = preset_.window;
+    apply_preset();
   }
   image_->SetDimensions(static_cast<int>(source.dims[0]), static_cast<int>(source.dims[1]),
                         static_cast<int>(source.dims[2]));
   image_->SetSpacing(source.spacing[0], source.spacing[1], source.spacing[2]);
   image_->SetOrigin(source.origin[0], source.origin[1], source.origin[2]);
+  mapper_->SetSampleDistance(0.5 *
+                             std::min({source.spacing[0], source.spacing[1], source.spacing[2]}));
+  compose();
+  volume_->VisibilityOn();
+  return true;
+}
+
+void VolumeLayer::compose() {
+  const RenderVolume& source = *source_;
+  const std::int64_t n = source.dims[0] * source.dims[1] * source.dims[2];
+  switch (kind_) {
+    case ScalarKind::Hu:
+      render_scalars_ = compose_ct_scalar(source.hu, source.body, keep_outside_);
+      break;
+    case ScalarKind::Skin:
+      render_scalars_ = compose_skin_scalar(source.d_surf, source.dims, source.spacing);
+      break;
+    case ScalarKind::Maps:
+      render_scalars_ = compose_render_scalar(source.d_surf, source.d_bone);
+      break;
+  }
   scalar_array_->SetName("render_scalar");
   scalar_array_->SetNumberOfComponents(1);
   // No copy: the array reads render_scalars_, which the deformer writes in place.
@@ -73,15 +97,11 @@ bool VolumeLayer::load(const LatestState& state) {
   scalar_array_->Modified();
   image_->Modified();
   mapper_->SetInputData(image_);
-  mapper_->SetSampleDistance(0.5 *
-                             std::min({source.spacing[0], source.spacing[1], source.spacing[2]}));
-  volume_->VisibilityOn();
   loaded_ = true;
   pending_lo_ = pending_hi_ = {};
   deformer_ = deformation_ ? std::make_unique<SkinDeformer>(source.dims, source.spacing,
                                                             render_scalars_, deformer_params_)
                            : nullptr;
-  return true;
 }
 
 void VolumeLayer::set_contacts(const FrameState& frame) {
@@ -174,9 +194,14 @@ void VolumeLayer::apply_preset() {
 }
 
 void VolumeLayer::set_preset(PresetId id) {
-  preset_ = make_preset(id, ct_);
+  const ScalarKind kind = palp::view::scalar_kind(id, ct_, skin_from_volume_);
+  preset_ = make_preset_on(kind, id);
   window_level_ = preset_.window;
   apply_preset();
+  if (kind != kind_) {  // another scalar: composed again from the volume (when there is one)
+    kind_ = kind;
+    if (source_) compose();
+  }
 }
 
 void VolumeLayer::adjust_window(double dlevel, double width_factor) {

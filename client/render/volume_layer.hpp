@@ -1,6 +1,9 @@
 // The volume layer: the ray-cast CT volume, its transfer functions and its deformed texture.
 //
-// The volume palpd sent is GPU ray cast through one composed render scalar (transfer_presets.hpp).
+// The volume palpd sent is GPU ray cast through one composed render scalar (transfer_presets.hpp):
+// the CT's HU (or the maps' pseudo-density without the CT) for every preset but skin, which takes
+// the sub-voxel skin from d_surf (skin_surface.hpp) unless set_skin_from_volume(true). A preset
+// change that changes the scalar composes it again (and the deformer over it).
 //
 // The ray caster's sample distance is fixed (half the smallest voxel spacing) and its automatic
 // adjustment off, so equal inputs give equal images. The deformation writes into
@@ -26,6 +29,7 @@
 #include <vector>
 
 #include "deform/skin_deformation.hpp"
+#include "render/skin_surface.hpp"
 #include "render/transfer_presets.hpp"
 #include "stream/stream_client.hpp"
 
@@ -67,6 +71,10 @@ class VolumeLayer {
   void set_preset(PresetId id);  // resets the window to the preset's default
   // Whether the CT's HU outside the body mask (table, cables, air) are shown; from the next load.
   void set_keep_outside(bool keep) { keep_outside_ = keep; }
+  // The skin preset on the volume's own scalar (the CT's HU, as before the sub-voxel skin)
+  // instead of d_surf's zero level; from the next load or preset change.
+  void set_skin_from_volume(bool from_volume) { skin_from_volume_ = from_volume; }
+  ScalarKind scalar_kind() const { return kind_; }
   bool ct() const { return ct_; }
   const Preset& preset() const { return preset_; }
   void adjust_window(double dlevel, double width_factor);
@@ -74,6 +82,9 @@ class VolumeLayer {
 
  private:
   void apply_preset();
+  // Composes the render scalar of kind_ from source_ into the mapper's buffer, hands it to the
+  // mapper whole and makes the deformer over it.
+  void compose();
 
   bool deformation_;
   DeformerParams deformer_params_;
@@ -96,9 +107,10 @@ class VolumeLayer {
   std::array<std::int64_t, 3> pending_lo_{}, pending_hi_{};  // box written, not yet uploaded
   bool loaded_ = false;  // a new volume: the next render uploads it whole
   std::int64_t full_uploads_ = 0;
-  bool ct_ = false;            // the scalar is the CT's HU (else the maps' pseudo-density)
-  bool keep_outside_ = false;  // HU outside the body mask kept (else made air)  // the last update
-                               // wrote a ROI (the next one restores it)
+  bool ct_ = false;                     // the scalar is the CT's HU (else the maps' pseudo-density)
+  bool keep_outside_ = false;           // HU outside the body mask kept (else made air)
+  bool skin_from_volume_ = false;       // the skin preset on the HU (else on d_surf's zero level)
+  ScalarKind kind_ = ScalarKind::Maps;  // what render_scalars_ holds
 };
 
 }  // namespace palp::view

@@ -41,6 +41,14 @@ TEST(ViewerOptions, DefaultsFollowTheToolFromTheAnteriorSide) {
   EXPECT_TRUE(o->ct);
   EXPECT_TRUE(o->deformation);
   EXPECT_EQ(o->chart_s, 30.0);
+  EXPECT_FALSE(o->skin_hu);  // the skin preset on d_surf's zero level
+}
+
+TEST(ViewerOptions, SkinHuKeepsTheSkinPresetOnTheCtsHu) {
+  const auto o = parse({"--connect", "h:1", "--skin-hu"});
+  ASSERT_TRUE(o);
+  EXPECT_TRUE(o->skin_hu);
+  EXPECT_TRUE(o->ct);  // the HU are still asked for
 }
 
 TEST(ViewerOptions, ACameraTurnsFollowingOffUnlessAsked) {

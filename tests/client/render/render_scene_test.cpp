@@ -18,6 +18,7 @@
 
 #include "base/errors.hpp"
 #include "model/tool.hpp"
+#include "render/skin_surface.hpp"
 #include "render/transfer_presets.hpp"
 #include "render/workspace_box.hpp"
 
@@ -418,7 +419,8 @@ TEST(RenderScene, PressingDeformsTheSkinInsideTheRoiOnly) {
 
   // Releasing restores the original scalars and image exactly.
   const RgbImage released = view.draw(resting);
-  EXPECT_EQ(view.scene->render_scalars(), compose_render_scalar(volume->d_surf, volume->d_bone));
+  EXPECT_EQ(view.scene->render_scalars(),
+            compose_skin_scalar(volume->d_surf, volume->dims, volume->spacing));
   EXPECT_EQ(differing_pixels(before, released), 0u);
 }
 
