@@ -84,6 +84,13 @@ void FrameLoop::send_requests() {
     }
     p_.requests.record_toggle = false;
   }
+  if (p_.requests.pulse.steps != 0 || p_.requests.pulse.toggle) {
+    // from the rate the frames report (an older palpd says none: SceneInfo's, else 0)
+    const double now = state_.frame.pulse_bpm.value_or(state_.scene ? state_.scene->pulse_bpm : 0);
+    if (const auto bpm = pulse_request(now, p_.requests.pulse, last_on_bpm_))
+      p_.client.set_pulse_bpm(*bpm);
+    p_.requests.pulse = {};
+  }
 }
 
 void FrameLoop::note_live_frame(const DeformResult& deform, const Clock::time_point (&t)[5],

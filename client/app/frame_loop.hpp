@@ -71,6 +71,7 @@ class FrameLoop {
   bool refused_reported_ = false;
   bool controller_ready_ = false;
   std::uint64_t controller_connection_ = 0;
+  double last_on_bpm_ = 0;  // the last heart rate above 0 (B turns the pulse back on at it)
 };
 
 }  // namespace palp::view

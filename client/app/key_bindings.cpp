@@ -13,7 +13,9 @@ std::optional<ViewKey> view_key(int glfw_key) {
       {GLFW_KEY_LEFT_BRACKET, ViewKey::LevelDown}, {GLFW_KEY_RIGHT_BRACKET, ViewKey::LevelUp},
       {GLFW_KEY_MINUS, ViewKey::Narrower},         {GLFW_KEY_EQUAL, ViewKey::Wider},
       {GLFW_KEY_HOME, ViewKey::ResetCamera},       {GLFW_KEY_H, ViewKey::Recentre},
-      {GLFW_KEY_O, ViewKey::ToggleRecording},      {GLFW_KEY_V, ViewKey::NextView}};
+      {GLFW_KEY_O, ViewKey::ToggleRecording},      {GLFW_KEY_V, ViewKey::NextView},
+      {GLFW_KEY_COMMA, ViewKey::PulseSlower},      {GLFW_KEY_PERIOD, ViewKey::PulseFaster},
+      {GLFW_KEY_B, ViewKey::PulseToggle}};
   for (const auto& [key, action] : kKeys)
     if (key == glfw_key) return action;
   return std::nullopt;

@@ -20,6 +20,9 @@ enum class ViewKey {
   Recentre,         // H  (controller) re-centre a registered device
   ToggleRecording,  // O  (controller) start or stop a recording
   NextView,         // V  the next of kViewCycle
+  PulseSlower,      // ,  (controller) the arteries' heart rate down (pulse_keys.hpp)
+  PulseFaster,      // .  (controller) and up
+  PulseToggle,      // B  (controller) the pulse off, and back on
 };
 
 // The view's action for a GLFW key (GLFW_KEY_*), if it has one.

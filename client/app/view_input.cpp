@@ -26,7 +26,7 @@ void apply_view_key(ViewKey key, ViewWindow& window, RenderScene& scene, bool co
       window.request_close();
       return;
     case ViewKey::NextPreset:
-      scene.set_preset(static_cast<PresetId>((static_cast<int>(scene.preset()) + 1) % 3));
+      scene.set_preset(static_cast<PresetId>((static_cast<int>(scene.preset()) + 1) % kPresetCount));
       return;
     case ViewKey::LevelDown:
       scene.adjust_window(-20.0, 1.0);
@@ -48,6 +48,13 @@ void apply_view_key(ViewKey key, ViewWindow& window, RenderScene& scene, bool co
       return;
     case ViewKey::ToggleRecording:
       if (controller_mode) requests.record_toggle = true;  // sent from the frame loop
+      return;
+    case ViewKey::PulseSlower:
+    case ViewKey::PulseFaster:
+      if (controller_mode) requests.pulse.steps += key == ViewKey::PulseFaster ? 1 : -1;
+      return;
+    case ViewKey::PulseToggle:
+      if (controller_mode) requests.pulse.toggle = !requests.pulse.toggle;
       return;
     case ViewKey::NextView: {
       const auto at = std::find(kViewCycle.begin(), kViewCycle.end(), scene.view());

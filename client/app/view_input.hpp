@@ -3,6 +3,7 @@
 // a recording) are left in InputRequests for the frame loop, which sends them.
 #pragma once
 
+#include "app/pulse_keys.hpp"
 #include "render/render_scene.hpp"
 #include "window/controller_input.hpp"
 #include "window/view_window.hpp"
@@ -13,6 +14,7 @@ namespace palp::view {
 struct InputRequests {
   bool recentre = false;       // H (controller): re-centre a registered device
   bool record_toggle = false;  // O (controller): start or stop a recording
+  PulseKeys pulse;             // , . B (controller): the heart rate
 };
 
 // The callbacks for window.set_events. Every reference must outlive the window's events.

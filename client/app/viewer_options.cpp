@@ -37,7 +37,11 @@ and deforms the skin where the tool presses.
   --name NAME             client name shown by the server (default palpview)
   --rate HZ               frames/s asked of the server (default 120)
   --volume-max-dim N      render volume: at most N voxels per axis (default 256)
-  --preset skin|bone|soft transfer-function preset (default skin), on the CT's HU
+  --preset skin|bone|soft|vessels
+                          transfer-function preset (default skin), on the CT's HU; vessels:
+                          the body a faint veil under the scene's structures (palpd's prep
+                          directory: vessel.nii.gz, artery.nii.gz, organs), each in its own
+                          colour, named in a legend, the artery beating with the pulse
   --show-outside          show the CT outside the body mask (table, cables; default hidden,
                           and the volume cropped to the body's box)
   --no-ct                 render the distance maps' pseudo-density, not the CT's HU
@@ -74,8 +78,9 @@ Keys: P next preset, [ ] level, - = width, V next view (anterior, left, posterio
 superior, inferior), Home camera reset, Esc quit; controller: H re-centres a device placed on
 the patient (palpd --home), arrows
 slide, W/S press, Q/E R/F Z/C rotate, 1/2/3 finger:37/twofinger:19/probe:9x3, space pause,
-O start / stop a recording (trial-YYYYMMDD-HHMMSS in palpd's --record-dir), backspace start
-pose. The HUD shows RECORDING and PAUSED, and palpd's answer to the last command.
+O start / stop a recording (trial-YYYYMMDD-HHMMSS in palpd's --record-dir), , and . the
+arteries' heart rate down / up 6 bpm, B the pulse off / on, backspace start pose. The HUD shows
+RECORDING and PAUSED, the pulse's rate, and palpd's answer to the last command.
 )";
 
 namespace {

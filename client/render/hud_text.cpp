@@ -107,8 +107,17 @@ std::string hud_text(const LatestState& state, const HudInputs& inputs) {
       out << "\n";
     }
   }
+  if (const auto& bpm = state.frame.pulse_bpm) {
+    out << "pulse " << (*bpm > 0 ? fixed(*bpm, 0) + " bpm" : std::string("off"));
+    // what shows at two decimals (below 0.005 N it would read 0.00)
+    if (state.frame.pulse_force >= 0.005)
+      out << "   felt " << fixed(state.frame.pulse_force, 2) << " N";
+    if (state.frame.organ_force >= 0.005)
+      out << "   organ " << fixed(state.frame.organ_force, 2) << " N";
+    out << "\n";
+  }
   if (inputs.controller) {
-    out << "keys  1/2/3 tool  space pause  O record  H re-centre";
+    out << "keys  1/2/3 tool  space pause  O record  H re-centre  ,/. pulse -/+  B pulse on/off";
     if (link.last_request_id > 0)
       out << "\nlast command " << (link.last_result_ok ? "ok" : "refused")
           << (link.last_result_message.empty() ? "" : ": " + link.last_result_message);

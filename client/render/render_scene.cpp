@@ -28,6 +28,7 @@
 #include "render/orientation_marker.hpp"
 #include "render/patient_view.hpp"
 #include "render/shadow.hpp"
+#include "render/structure_layer.hpp"
 #include "render/tool_layer.hpp"
 #include "render/volume_layer.hpp"
 #include "render/workspace_box.hpp"
@@ -43,6 +44,7 @@ struct RenderScene::Impl {
   vtkNew<vtkRenderer> renderer;  // declared before the parts: it outlives them
   // The parts, constructed in this order (the order their props enter the renderer).
   VolumeLayer volume;
+  StructureLayer structures;  // over the volume, with the vessels preset
   ToolLayer tools;
   FingertipShadow shadow;
   HudLayer hud;
@@ -64,6 +66,7 @@ struct RenderScene::Impl {
       : window(w),
         settings(s),
         volume(renderer, s.preset, s.deformation, s.deformer),
+        structures(renderer),
         tools(renderer, s.arrow_mm_per_newton),
         shadow(renderer),
         hud(renderer),
@@ -175,6 +178,7 @@ void RenderScene::Impl::follow_tool(const FrameState& latest) {
 }
 
 void RenderScene::Impl::apply_visibility() {
+  structures.set_visible(volume.preset().id == PresetId::Vessels, overlays);
   hud.set_visible(overlays);
   chart.set_visible(overlays);
   marker.set_visible(overlays && settings.orientation_marker);
@@ -191,10 +195,16 @@ void RenderScene::update_state(const LatestState& state, const HudInputs& inputs
     s.orientation = s.frame.orientation_code();
     s.marker.set_frame(s.frame);
   }
-  if (s.volume.is_new(state) && s.volume.load(state) && !s.camera_placed) {
-    s.place_camera();
-    s.camera_placed = true;
+  if (s.volume.is_new(state) && s.volume.load(state)) {
+    s.structures.load(*s.volume.source(), state.scene.get());
+    if (!s.camera_placed) {
+      s.place_camera();
+      s.camera_placed = true;
+    }
   }
+  // A palpd that says nothing of the pulse (older): the artery steady, at its systolic colour.
+  s.structures.set_pulse(state.frame.pulse_bpm ? state.frame.pulse_wave : 1.0,
+                         state.frame.pulse_bpm);
   if (state.connection != s.followed_connection) {  // a new connection: find the tool anew
     s.followed_connection = state.connection;
     s.tool_known = false;
@@ -296,6 +306,7 @@ CameraAxes RenderScene::camera_axes() const {
 
 void RenderScene::set_preset(PresetId id) {
   impl_->volume.set_preset(id);
+  impl_->apply_visibility();
 }
 
 PresetId RenderScene::preset() const {
@@ -340,6 +351,12 @@ const std::string& RenderScene::last_banner_text() const {
 }
 bool RenderScene::workspace_visible() const {
   return impl_->workspace.visible();
+}
+bool RenderScene::structures_visible() const {
+  return impl_->structures.visible() && impl_->structures.has_structures();
+}
+const std::vector<std::string>& RenderScene::legend_lines() const {
+  return impl_->structures.legend();
 }
 
 const std::vector<float>& RenderScene::render_scalars() const {

@@ -20,7 +20,8 @@
 // The parts, each in its own file here: volume_layer (volume, transfer functions, deformed
 // texture), tool_layer (tool, contacts, proxies, springs, arrow), shadow (the fingertip's
 // shadow), hud_layer (the HUD's text actors), force_chart (the chart and its renderer),
-// orientation_marker (the patient-axes cube); patient_view places the camera in patient terms.
+// orientation_marker (the patient-axes cube), structure_layer (vessels, artery and organs with
+// their legend, the vessels preset's); patient_view places the camera in patient terms.
 // This class composes them, owns the scene renderer and its camera.
 #pragma once
 
@@ -127,6 +128,10 @@ class RenderScene {
   const std::string& last_banner_text() const;
   // Whether the registered device's workspace box is drawn (a device placed on the patient).
   bool workspace_visible() const;
+  // Whether the scene's structures are drawn (the vessels preset, a volume with labels), and
+  // the legend's lines (structure_layer.hpp; empty without structures).
+  bool structures_visible() const;
+  const std::vector<std::string>& legend_lines() const;
   // The render scalars currently in the mapper's buffer (deformed when pressing).
   const std::vector<float>& render_scalars() const;
 

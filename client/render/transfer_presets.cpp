@@ -86,6 +86,16 @@ Preset make_ct_preset(PresetId id) {
                   {1.0, {1.0, 0.85, 0.7}, 0.3},
                   {2.15, {1.0, 1.0, 0.95}, 0.6}};
       break;
+    case PresetId::Vessels:
+      // Window -600 .. 600 HU: the air -> skin step (-700 .. -200 HU, most at -420) a faint
+      // grey veil, bone (250 HU up) a fainter grey; fat, soft tissue, contrast and the lumens
+      // clear, so the structures' own colours show through (structure_layer.hpp).
+      p.window = {0.0, 1200.0};
+      p.points = {{-0.083, {0.7, 0.7, 0.72}, 0.0}, {0.15, {0.7, 0.7, 0.72}, 0.08},
+                  {0.333, {0.7, 0.7, 0.72}, 0.0},  {0.708, {0.8, 0.8, 0.8}, 0.0},
+                  {0.875, {0.85, 0.85, 0.85}, 0.03}, {4.0, {0.9, 0.9, 0.9}, 0.03}};
+      p.shade = false;
+      break;
   }
   p.shade = true;
   return p;
@@ -97,7 +107,8 @@ PresetId parse_preset(std::string_view name) {
   if (name == "skin") return PresetId::Skin;
   if (name == "bone") return PresetId::Bone;
   if (name == "soft") return PresetId::Soft;
-  throw UsageError("unknown preset '" + std::string(name) + "' (skin, bone or soft)");
+  if (name == "vessels") return PresetId::Vessels;
+  throw UsageError("unknown preset '" + std::string(name) + "' (skin, bone, soft or vessels)");
 }
 
 const char* to_string(PresetId id) {
@@ -108,6 +119,8 @@ const char* to_string(PresetId id) {
       return "bone";
     case PresetId::Soft:
       return "soft";
+    case PresetId::Vessels:
+      return "vessels";
   }
   return "?";
 }
@@ -145,6 +158,15 @@ Preset make_preset(PresetId id, bool ct) {
       p.points = {{-8.0, {0.6, 0.3, 0.3}, 0.0},  {-7.0, {0.8, 0.5, 0.4}, 0.01},
                   {0.0, {0.8, 0.4, 0.3}, 0.01},  {1.0, {0.7, 0.1, 0.1}, 0.03},
                   {9.0, {0.95, 0.9, 0.8}, 0.03}, {10.0, {1.0, 1.0, 0.95}, 0.5}};
+      p.shade = false;
+      break;
+    case PresetId::Vessels:
+      // The skin step (-650 .. -350) a faint grey veil, the bone step (+550) a fainter one;
+      // the tissue between clear. Window -1000 .. +1000.
+      p.window = {0.0, 2000.0};
+      p.points = {{0.15, {0.7, 0.7, 0.72}, 0.0},  {0.25, {0.7, 0.7, 0.72}, 0.08},
+                  {0.35, {0.7, 0.7, 0.72}, 0.0},  {0.65, {0.8, 0.8, 0.8}, 0.0},
+                  {0.8, {0.85, 0.85, 0.85}, 0.03}, {4.0, {0.9, 0.9, 0.9}, 0.03}};
       p.shade = false;
       break;
   }

@@ -47,9 +47,11 @@ inline constexpr float kOutsideValue = -1024.0f;
 std::vector<float> compose_ct_scalar(std::span<const std::int16_t> hu,
                                      std::span<const std::uint8_t> body, bool keep_outside);
 
-enum class PresetId { Skin, Bone, Soft };
+// Vessels: the body a faint veil, for the structures drawn over it (structure_layer.hpp).
+enum class PresetId { Skin, Bone, Soft, Vessels };
+inline constexpr int kPresetCount = 4;
 
-// "skin" | "bone" | "soft"; UsageError otherwise.
+// "skin" | "bone" | "soft" | "vessels"; UsageError otherwise.
 PresetId parse_preset(std::string_view name);
 const char* to_string(PresetId id);
 

@@ -1,6 +1,7 @@
 // palp.v1 -> plain structs: see frame_decoding.hpp.
 #include "stream/frame_decoding.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -25,6 +26,31 @@ DeviceState device_state_of(v1::DeviceState s) {
       return DeviceState::Unknown;
   }
 }
+
+namespace {
+
+// SceneInfo.structures: at most kMaxStructures, labels 1..kMaxStructures increasing, names and
+// kinds within the name limit.
+void decode_structures(const v1::SceneInfo& s, SceneDescription& scene) {
+  if (static_cast<std::size_t>(s.structures_size()) > palp::wire::kMaxStructures)
+    throw ProtocolViolation("SceneInfo: " + std::to_string(s.structures_size()) +
+                            " structures, at most " +
+                            std::to_string(palp::wire::kMaxStructures));
+  std::uint32_t last = 0;
+  for (const v1::Structure& st : s.structures()) {
+    if (st.label() <= last || st.label() > palp::wire::kMaxStructures)
+      throw ProtocolViolation("SceneInfo: structure label " + std::to_string(st.label()) +
+                              " not increasing within 1.." +
+                              std::to_string(palp::wire::kMaxStructures));
+    if (st.name().size() > palp::wire::kMaxNameBytes ||
+        st.kind().size() > palp::wire::kMaxNameBytes)
+      throw ProtocolViolation("SceneInfo: a structure's name or kind is too long");
+    last = st.label();
+    scene.structures.push_back({static_cast<std::uint8_t>(st.label()), st.name(), st.kind()});
+  }
+}
+
+}  // namespace
 
 std::shared_ptr<SceneDescription> decode_scene(const v1::SceneInfo& s) {
   const v1::Grid& g = s.grid();
@@ -60,6 +86,9 @@ std::shared_ptr<SceneDescription> decode_scene(const v1::SceneInfo& s) {
   scene->k = s.parameters().k();
   scene->bone_fmax = s.parameters().bone_fmax();
   scene->bone_enabled = s.parameters().bone_enabled();
+  const double bpm = s.parameters().pulse_bpm();
+  scene->pulse_bpm = std::isfinite(bpm) ? std::clamp(bpm, 0.0, 1e3) : 0.0;
+  decode_structures(s, *scene);
   scene->device = s.device();
   scene->device_profile = s.device_profile();
   scene->tick_rate_hz = s.tick_rate_hz();
@@ -120,6 +149,12 @@ FrameState decode_frame(const v1::HapticFrame& f) {
   frame.safety_status = f.safety_status();
   frame.fault = f.fault();
   frame.device_state = device_state_of(f.device_state());
+  // The pulse, kept to its ranges whatever came (it only colours the artery and fills the HUD).
+  const auto within = [](double v, double hi) { return std::isfinite(v) ? std::clamp(v, 0.0, hi) : 0.0; };
+  frame.pulse_wave = within(f.pulse_wave(), 1.0);
+  frame.pulse_force = within(f.pulse_force(), 1e4);
+  frame.organ_force = within(f.organ_force(), 1e4);
+  if (f.has_pulse_bpm()) frame.pulse_bpm = within(f.pulse_bpm(), 1e3);
   return frame;
 }
 

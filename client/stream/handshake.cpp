@@ -20,6 +20,7 @@ std::string encode_hello(const StreamOptions& opts) {
   h->set_volume_skip_bone(!opts.volume_bone);
   h->set_volume_deflate(opts.volume_deflate);
   h->set_volume_crop(opts.volume_crop);
+  h->set_volume_labels(opts.volume_labels);
   return palp::wire::encode_frame(m);
 }
 

@@ -100,7 +100,9 @@ void StreamClient::Impl::on_scene(Connection& c, const v1::SceneInfo& s) {
   if (c.scene_grid &&
       (scene->dims != c.scene_grid->dims || scene->spacing != c.scene_grid->spacing))
     throw ProtocolViolation("SceneInfo: the grid changed within a connection");
-  c.scene_grid = net::SceneGrid{scene->dims, scene->spacing};
+  c.scene_grid = net::SceneGrid{
+      scene->dims, scene->spacing,
+      scene->structures.empty() ? 0u : std::uint32_t{scene->structures.back().label}};
   scene->server_name = server_name;
   std::lock_guard lock(shared_mutex);
   shared.scene = std::move(scene);

@@ -68,6 +68,7 @@ struct StreamOptions {
   bool volume_bone = true;     // d_bone (false: Hello.volume_skip_bone)
   bool volume_deflate = true;  // zlib on the wire (Hello.volume_deflate)
   bool volume_crop = true;     // the body's bounding box only, with hu (Hello.volume_crop)
+  bool volume_labels = true;   // the structures' labels (Hello.volume_labels)
   bool want_contacts = true;
   double stall_s = 0.5;          // no frame for this long: Stalled
   double reconnect_min_s = 0.2;  // first retry delay; doubles up to reconnect_max_s
@@ -99,6 +100,15 @@ struct SceneDescription {
   bool bone_enabled = true;
   std::map<std::string, std::string> metadata;  // palpd: prep_dir, scheme, storage
   std::string server_name;                      // from Welcome
+  // The structures beyond skin and bone (SceneInfo.structures; none from an older palpd), in
+  // label order: RenderVolume::labels holds their labels.
+  struct Structure {
+    std::uint8_t label = 0;  // 1..64
+    std::string name;        // "vessel", "artery", "liver", ...
+    std::string kind;        // "vessel", "artery", "organ" (another kind is drawn as an organ)
+  };
+  std::vector<Structure> structures;
+  double pulse_bpm = 0;  // Parameters.pulse_bpm when the SceneInfo was sent (frames: now)
   // Where the device sits on the patient (palpd --home ...); unset for scene-frame devices.
   struct Placement {
     std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major, device -> scene
@@ -124,6 +134,9 @@ struct RenderVolume {
   std::vector<float> d_bone;       // mm, positive inside bone; empty when the scene has none
   std::vector<std::int16_t> hu;    // the CT's HU; empty unless asked for and the scene has it
   std::vector<std::uint8_t> body;  // 0/1 body mask (with hu)
+  // The structure of each voxel (SceneDescription::structures' labels, 0: none); empty unless
+  // asked for and the scene has structures.
+  std::vector<std::uint8_t> labels;
 };
 
 struct ContactState {
@@ -145,6 +158,11 @@ struct FrameState {
   std::vector<ContactState> contacts;
   std::uint32_t tick_status = 0, safety_status = 0, fault = 0;
   DeviceState device_state = DeviceState::Unknown;
+  // The structure layers (HapticFrame 15..18): the arterial pressure 0 (diastole) .. 1
+  // (systole), |the pulse's| and |the organ borders'| force (N); the heart rate in force, unset
+  // from a palpd that does not say.
+  double pulse_wave = 0, pulse_force = 0, organ_force = 0;
+  std::optional<double> pulse_bpm;
 };
 
 struct ForceSample {
@@ -208,6 +226,8 @@ class StreamClient {
   std::uint64_t set_tool(const std::string& tool);
   std::uint64_t set_parameter(const std::string& name, double value);
   std::uint64_t set_paused(bool paused);
+  // The arteries' heart rate (SetParameter pulse_bpm, 0..240; palpd applies it between ticks).
+  std::uint64_t set_pulse_bpm(double bpm) { return set_parameter("pulse_bpm", bpm); }
   // Re-centre a registered device (palpd moves its home at the next tick out of contact).
   std::uint64_t recentre();
   // Start a recording named `name` in palpd's --record-dir (refused when it exists), or stop it.

@@ -12,6 +12,8 @@ namespace palp::wire {
 
 inline constexpr std::uint32_t kProtocolVersion = 1;
 inline constexpr std::size_t kMaxNameBytes = 256;  // client_name, token, tool, parameter names
+// SceneInfo.structures: at most this many, labelled 1..kMaxStructures (one uint8 a voxel).
+inline constexpr std::size_t kMaxStructures = 64;
 
 // The frame (varint prefix + body) of a message.
 std::string encode_frame(const google::protobuf::MessageLite& message);

@@ -67,6 +67,9 @@ constexpr const char* kOptions = R"(  --device DEVICE         see above (require
   --falcon-firmware FILE  Novint's Falcon firmware (from its driver; palp does not ship it)
   --falcon-tool-from DIR  the Falcon's fixed tool points into the skin from DIR (anterior)
   --rate HZ               loop rate, 1..100000 (default 1000; tested 500..10000)
+  --pulse-bpm N           the arteries' heart rate, 0..240 beats per minute (default 72; 0 = no
+                          pulse); a controller changes it while palpd runs (palp ctl HOST:PORT
+                          pulse N, palpview's , and . keys), contacts kept
 Placing a force device on the patient (usb-haptic; spacemouse takes --home and
 --home-clearance; sim, replay and remote move in the scene frame and take none):
   --home SITE             where the device's workspace centre sits: auto (default: the
@@ -130,6 +133,7 @@ const std::vector<std::string> kValued = {"device",
                                           "tool",
                                           "device-profile",
                                           "rate",
+                                          "pulse-bpm",
                                           "port",
                                           "bind",
                                           "token",
@@ -191,7 +195,8 @@ ReplayDefaults read_replay(PalpdOptions& o) {
     return it->second;
   };
   std::vector<std::string> defaults;
-  for (const char* key : {"scene", "tool", "rate", "device-profile", "scheme", "storage"})
+  for (const char* key :
+       {"scene", "tool", "rate", "device-profile", "scheme", "storage", "pulse-bpm"})
     if (!o.args.has(key))
       if (const auto v = meta(key)) defaults.push_back("--" + std::string(key) + "=" + *v);
   std::vector<std::string> recorded_params;
@@ -304,6 +309,7 @@ std::optional<PalpdOptions> parse_palpd_options(cli::Arguments argv) {
   const cli::Args& args = o.args;
   o.tool = parse_tool(args.get("tool").value_or("finger:37"));
   o.params = cli::force_params(cli::model_kind(args), o.tool, params_in);
+  o.params.pulse_bpm = option_within(args, "pulse-bpm", o.params.pulse_bpm, 0, rt::kMaxPulseBpm);
   if (const auto name = args.get("device-profile")) o.profile = &device_profile(*name);
   o.loop = loop_config_from(args);
   o.server = server_config_from(args, o.loop.rate_hz);

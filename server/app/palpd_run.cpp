@@ -27,6 +27,7 @@
 #include "net/client_log.hpp"
 #include "safety/engagement.hpp"
 #include "scene/home_site.hpp"
+#include "scene/structure_labels.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
 
@@ -81,7 +82,22 @@ struct Built {
   std::shared_ptr<const Model> model;
   std::optional<net::SceneDescription::Placement> placement;  // a device placed on the patient
   cli::MapsAtStart maps;
+  std::shared_ptr<const StructureLabels> structures;  // what the clients draw beyond skin, bone
 };
+
+// The prep directory's vessels, artery and organs as labels for the render volume (none: empty).
+std::shared_ptr<const StructureLabels> read_structures(const PalpdOptions& o, const Scene& scene) {
+  auto labels =
+      std::make_shared<const StructureLabels>(read_structure_labels(scene.prep_dir, scene.grid));
+  if (!labels->note.empty())
+    std::fprintf(stderr, "palpd: warning: structures: %s\n", labels->note.c_str());
+  if (!o.quiet && !labels->structures.empty()) {
+    std::string names;
+    for (const StructureLabel& l : labels->structures) names += (names.empty() ? "" : ", ") + l.name;
+    std::printf("palpd: structures for the clients: %s\n", names.c_str());
+  }
+  return labels;
+}
 
 // A device taking a home pose (spacemouse): at --home, --home-clearance above the skin.
 Pose home_pose(const cli::Args& args, const Scene& scene) {
@@ -123,7 +139,9 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
       cli::maps_at_start(o.args, o.device_spec, device.kind(), scene, placement, o.tool, o.quiet);
   if (maps.windowed) model = std::make_shared<const Model>(maps.haptic, o.tool, o.params, scene.layers);
   device_config.fields.reset();  // the whole maps' gradient fields go with the last holder
-  return Built{std::move(scene), std::move(tuning), std::move(model), placement, std::move(maps)};
+  auto structures = read_structures(o, scene);
+  return Built{std::move(scene), std::move(tuning), std::move(model), placement, std::move(maps),
+               std::move(structures)};
 }
 
 rt::RecordingMetadata recording_metadata(const PalpdOptions& o, const Built& b) {
@@ -153,6 +171,7 @@ net::SceneDescription describe_scene(const PalpdOptions& o, const Built& b) {
   description.fields = b.scene.fields;
   description.ct = b.scene.ct;
   description.body = b.scene.body;
+  description.structures = b.structures;
   description.placement = b.placement;
   return description;
 }

@@ -41,6 +41,8 @@ Actions:
   record stop             stop the recording (its files are complete when this returns)
   set NAME=VALUE...       force parameters, one Command each, in order (palp run --help lists
                           them and their ranges); stops at the first refused
+  pulse BPM               the arteries' heart rate, 0..240 beats per minute (0: no pulse);
+                          the same as set pulse_bpm=BPM, applied between two ticks, contacts kept
   tool TOOL               finger:N, twofinger:N or probe:NXxNY
   pause | resume          zero force and the model held, or ticking again (force ramps back in)
   recentre                move the device's home to where it is now (usb-haptic, spacemouse)
@@ -69,6 +71,36 @@ struct Action {
   std::vector<std::string> what;  // one line per command, for people
   bool status = false;
 };
+
+// A number for `what` (a parameter's or the pulse's value); UsageError otherwise.
+double action_number(const std::string& text, const std::string& what) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(value))
+    throw UsageError("ctl " + what + " needs a number, got '" + text + "'");
+  return value;
+}
+
+void add_parameter(Action& a, const std::string& name, double value, std::string what) {
+  v1::Command c;
+  c.mutable_set_parameter()->set_name(name);
+  c.mutable_set_parameter()->set_value(value);
+  a.commands.push_back(c);
+  a.what.push_back(std::move(what));
+}
+
+// set NAME=VALUE...
+void parse_set(const std::vector<std::string>& words, Action& a) {
+  if (words.size() < 2) throw UsageError("ctl set needs NAME=VALUE");
+  for (std::size_t i = 1; i < words.size(); ++i) {
+    const std::string& w = words[i];
+    const auto eq = w.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == w.size())
+      throw UsageError("ctl set needs NAME=VALUE, got '" + w + "'");
+    add_parameter(a, w.substr(0, eq), action_number(w.substr(eq + 1), "set " + w.substr(0, eq)),
+                  "set " + w);
+  }
+}
 
 Action parse_action(const std::vector<std::string>& words) {
   if (words.empty()) throw UsageError("ctl needs an ACTION (status, record, set, tool, ...)");
@@ -103,23 +135,10 @@ Action parse_action(const std::vector<std::string>& words) {
     }
     a.commands.push_back(c);
   } else if (verb == "set") {
-    if (words.size() < 2) throw UsageError("ctl set needs NAME=VALUE");
-    for (std::size_t i = 1; i < words.size(); ++i) {
-      const std::string& w = words[i];
-      const auto eq = w.find('=');
-      if (eq == std::string::npos || eq == 0 || eq + 1 == w.size())
-        throw UsageError("ctl set needs NAME=VALUE, got '" + w + "'");
-      char* end = nullptr;
-      const double value = std::strtod(w.c_str() + eq + 1, &end);
-      if (*end != '\0' || !std::isfinite(value))
-        throw UsageError("ctl set " + w.substr(0, eq) + " needs a number, got '" +
-                         w.substr(eq + 1) + "'");
-      v1::Command c;
-      c.mutable_set_parameter()->set_name(w.substr(0, eq));
-      c.mutable_set_parameter()->set_value(value);
-      a.commands.push_back(c);
-      a.what.push_back("set " + w);
-    }
+    parse_set(words, a);
+  } else if (verb == "pulse") {
+    if (words.size() != 2) throw UsageError("ctl pulse needs one BPM (0..240, 0: no pulse)");
+    add_parameter(a, "pulse_bpm", action_number(words[1], "pulse"), "pulse " + words[1]);
   } else if (verb == "tool") {
     if (words.size() != 2) throw UsageError("ctl tool needs one TOOL");
     v1::Command c;
@@ -140,7 +159,7 @@ Action parse_action(const std::vector<std::string>& words) {
     a.what.push_back("recentre");
   } else {
     throw UsageError("unknown ctl action '" + verb +
-                     "' (status, record start|stop, set, tool, pause, resume, recentre)");
+                     "' (status, record start|stop, set, pulse, tool, pause, resume, recentre)");
   }
   for (std::size_t i = 0; i < a.commands.size(); ++i) a.commands[i].set_request_id(i + 1);
   return a;
@@ -298,6 +317,7 @@ class Session {
     out.emplace_back("bone_fade_mm", num(p.bone_fade_mm()));
     out.emplace_back("bone_reach_mm", num(p.bone_reach_mm()));
     out.emplace_back("bone_along_normal", p.bone_along_normal() ? "1" : "0");
+    out.emplace_back("pulse_bpm", num(p.pulse_bpm()));
     return out;
   }
 

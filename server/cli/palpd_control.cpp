@@ -64,6 +64,12 @@ std::string PalpdControl::set_tool(const std::string& name) {
 
 std::string PalpdControl::set_parameter(const std::string& name, double value) {
   if (recording()) return kLockedWhileRecording;
+  // The heart rate goes to the loop's atomic, read between ticks: no new model, contacts kept.
+  if (name == "pulse_bpm") {
+    if (std::string why = rt::pulse_bpm_refusal(value); !why.empty()) return why;
+    loop_.set_pulse_bpm(value);
+    return {};
+  }
   const auto current = loop_.model();
   ForceParams params = current->params();
   set_param(params, name, value);
@@ -103,6 +109,7 @@ std::string PalpdControl::start(const std::filesystem::path& path,
   rt::RecordingMetadata meta = metadata_;
   const auto model = loop_.model();
   meta["tool"] = model->tool().name;
+  meta["pulse-bpm"] = number_text(loop_.pulse_bpm());  // fixed while recording, as the rest
   meta["started-by"] = requested_by;
   meta["started-at"] = utc_now_text();
   const std::vector<std::string> params = param_assignments(model->params());

@@ -1,6 +1,7 @@
 // palpd's answer to Commands (net::ControlTarget): tool and parameter changes swapped into the
-// loop, pause, re-centre, recordings started and stopped (named files in --record-dir), and the
-// remote device's poses. Commands come from the network thread; nothing here runs in the tick.
+// loop, the heart rate (SetParameter pulse_bpm) handed to the loop's atomic, pause, re-centre,
+// recordings started and stopped (named files in --record-dir), and the remote device's poses.
+// Commands come from the network thread; nothing here runs in the tick.
 #pragma once
 
 #include <cstdint>

@@ -89,11 +89,11 @@ class DdsPublisher::Impl {
     }
     host_ = std::move(host), tool_ = std::move(tool);
     // The render volume, prepared now: the chunks palp.v1 would send a client that asks for
-    // max_dim voxels an axis, with HU, bone and zlib.
+    // max_dim voxels an axis, with HU, bone, the structures' labels and zlib.
     if (volume_w_) {
       net::VolumeRequest request;
       request.max_dim = config_.volume_max_dim;
-      request.hu = true, request.bone = true, request.deflate = true;
+      request.hu = true, request.bone = true, request.deflate = true, request.labels = true;
       const net::VolumePlan plan = net::plan_volume(scene_, request, 1 << 20);
       std::uint32_t k = 0;
       for (std::uint32_t i = 0; i < plan.chunks; ++i) {

@@ -47,6 +47,16 @@ std::string us_text(std::int64_t ns) {
 
 }  // namespace
 
+std::string pulse_bpm_refusal(double bpm) {
+  if (bpm >= 0.0 && bpm <= kMaxPulseBpm) return {};
+  return "pulse_bpm must be in [0, 240] beats per minute (0: no pulse)";
+}
+
+void HapticLoop::set_pulse_bpm(double bpm) {
+  if (const std::string why = pulse_bpm_refusal(bpm); !why.empty()) throw UsageError(why);
+  pulse_bpm_.store(bpm, std::memory_order_relaxed);
+}
+
 HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopConfig config)
     : config_(config),
       device_(device),
@@ -58,6 +68,7 @@ HapticLoop::HapticLoop(std::shared_ptr<const Model> model, Device& device, LoopC
   if (!model) throw UsageError("haptic loop: no model");
   dt_s_ = static_cast<double>(period_ns_) * 1e-9;
   current_ = std::make_unique<Bundle>(Bundle{model, make_state(*model)});
+  set_pulse_bpm(model->params().pulse_bpm);
   requested_ = std::move(model);
   device_state_.store(static_cast<std::uint8_t>(device_.state()), std::memory_order_relaxed);
   registration_ = config.registration;
@@ -312,6 +323,7 @@ void HapticLoop::run_model_and_chain(Tick& t) noexcept {
                     last_device_pose_.orientation};
     model_pose = identity_ ? tool : to_scene(registration_, tool);
   }
+  bundle.state.pulse_bpm = pulse_bpm_.load(std::memory_order_relaxed);  // set_pulse_bpm
   tick(*bundle.model, bundle.state, model_pose, 1e-9 * static_cast<double>(t.deadline_ns));
   t.force = bundle.state.f_device, t.torque = bundle.state.tau_device;
   t.active = bundle.state.f_pulse;
@@ -395,6 +407,7 @@ void HapticLoop::publish(const Tick& t) noexcept {
       }
       s->contact_count = static_cast<std::uint32_t>(n);
     }
+    publish_pulse(t, *s);
     // The network thread is woken (an eventfd write, never blocking: wake_signal.hpp) only when
     // it waits and a client is due a frame, the ring is half full or the device came or went
     // (Stats at once); otherwise it drains the ring on its own timer. No system call on a tick
@@ -411,6 +424,15 @@ void HapticLoop::publish(const Tick& t) noexcept {
       record_ring_.commit();
     }
   }
+}
+
+// The structure layers' outputs: the pulse's clock always, the forces when they were written.
+void HapticLoop::publish_pulse(const Tick& t, Snapshot& s) const noexcept {
+  const State& state = current_->state;
+  s.pulse_wave = static_cast<float>(state.pulse_wave);
+  s.pulse_force_N = t.state ? static_cast<float>(norm(state.f_pulse)) : 0.0f;
+  s.organ_force_N = t.state ? static_cast<float>(norm(state.f_organ)) : 0.0f;
+  s.pulse_bpm = static_cast<float>(pulse_bpm_.load(std::memory_order_relaxed));
 }
 
 void HapticLoop::account(std::int64_t begin_ns) noexcept {

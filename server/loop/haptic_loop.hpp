@@ -58,6 +58,11 @@
 
 namespace palp::rt {
 
+// The arteries' heart rate a loop takes (bpm; 0 = no pulse), as ForceParams::pulse_bpm's range.
+inline constexpr double kMaxPulseBpm = 240.0;
+// "" when `bpm` is a rate the loop takes, else why not (for a UsageError or a CommandResult).
+std::string pulse_bpm_refusal(double bpm);
+
 struct LoopConfig {
   double rate_hz = 1000.0;
   bool realtime = true;            // try SCHED_FIFO and mlockall; a warning when not permitted
@@ -141,6 +146,12 @@ class HapticLoop {
   std::shared_ptr<const Model> model() const;
 
   void set_paused(bool paused) { paused_.store(paused, std::memory_order_relaxed); }
+  // Not real time: the arteries' heart rate from the next tick on (State::pulse_bpm, set by the
+  // loop before every tick from this atomic; the contacts and the pulse's phase are kept). Starts
+  // at the first model's ForceParams::pulse_bpm; a swapped-in model does not change it.
+  // UsageError for a rate pulse_bpm_refusal refuses.
+  void set_pulse_bpm(double bpm);
+  double pulse_bpm() const { return pulse_bpm_.load(std::memory_order_relaxed); }
   bool paused() const { return paused_.load(std::memory_order_relaxed); }
   // From the next tick on, records go to record_ring() (or stop going there); a recording starts
   // with the model state reset, so a replay from a fresh state reproduces it. Returns a seq no
@@ -190,6 +201,7 @@ class HapticLoop {
   void zero_on_fault(Tick& t) noexcept;
   void remember(const Tick& t) noexcept;
   void publish(const Tick& t) noexcept;
+  void publish_pulse(const Tick& t, Snapshot& s) const noexcept;
   void account(std::int64_t begin_ns) noexcept;
 
   LoopConfig config_;
@@ -228,6 +240,7 @@ class HapticLoop {
   std::array<std::atomic<double>, 3> home_{};
   std::atomic<std::uint8_t> device_state_{static_cast<std::uint8_t>(DeviceState::Present)};
   std::atomic<bool> paused_{false}, recording_{false}, stop_{false}, finished_{false};
+  std::atomic<double> pulse_bpm_{0.0};  // set_pulse_bpm -> State::pulse_bpm every tick
   std::atomic<int> record_request_{0};  // 1: start recording (reset state), 2: stop
   bool recording_on_ = false;           // loop side
   // set by start() while the DDS and network threads may already read stats()

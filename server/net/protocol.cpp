@@ -49,6 +49,10 @@ void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* ou
   out->set_fault(t.fault);
   out->set_contact_points(snapshot.contact_points);
   out->set_device_state(to_proto(snapshot.device_state));
+  out->set_pulse_wave(snapshot.pulse_wave);
+  out->set_pulse_force(snapshot.pulse_force_N);
+  out->set_organ_force(snapshot.organ_force_N);
+  out->set_pulse_bpm(snapshot.pulse_bpm);
   if (!contacts) return;
   for (std::uint32_t i = 0; i < snapshot.contact_count; ++i) {
     const rt::ContactSnapshot& c = snapshot.contacts[i];

@@ -44,6 +44,7 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
   p->set_bone_fade_mm(fp.bone_fade_mm);
   p->set_bone_along_normal(fp.bone_along_normal);
   p->set_bone_reach_mm(fp.bone_reach_mm);
+  p->set_pulse_bpm(loop.pulse_bpm());  // the loop's, which SetParameter pulse_bpm changes
   si->set_device(scene.device);
   si->set_device_profile(scene.device_profile);
   si->set_device_renders_force(loop.device().renders_force());
@@ -65,6 +66,13 @@ void fill_scene_info(const SceneDescription& scene, const rt::HapticLoop& loop, 
       l->set_coupling_damping_n_s_per_mm(gains.damping_N_s_per_mm);
     }
   }
+  if (scene.structures)
+    for (const StructureLabel& l : scene.structures->structures) {
+      v1::Structure* st = si->add_structures();
+      st->set_label(l.label);
+      st->set_name(l.name);
+      st->set_kind(l.kind);
+    }
   if (scene.placement) {
     const SceneDescription::Placement& pl = *scene.placement;
     v1::Registration* r = si->mutable_registration();
@@ -89,7 +97,9 @@ VolumePlan plan_volume(const SceneDescription& scene, const VolumeRequest& reque
             refinement_between(scene.ct->grid, grid)[0] != 0;  // the maps' grid or one they refine
   plan.bone = request.bone && scene.fields->has_bone();
   plan.deflate = request.deflate;
-  plan.voxel_bytes = sizeof(float) * (plan.bone ? 2 : 1) + (plan.hu ? 3 : 0);
+  plan.labels = request.labels && scene.structures && !scene.structures->structures.empty() &&
+                refinement_between(scene.structures->labels.grid, grid)[0] != 0;
+  plan.voxel_bytes = sizeof(float) * (plan.bone ? 2 : 1) + (plan.hu ? 3 : 0) + (plan.labels ? 1 : 0);
   // The box that goes out: the whole grid, or the crop (clamped to the grid).
   VoxelBox box{{0, 0, 0}, {dims[0], dims[1], dims[2]}};
   if (request.crop && plan.hu && crop && !crop->empty()) {
@@ -166,6 +176,23 @@ std::string as_bytes(const void* data, std::size_t n, bool deflate) {
   std::string raw(static_cast<const char*>(data), n);
   return deflate ? wire::deflate_bytes(raw) : raw;
 }
+
+// The chunk's structure labels: at each sampled voxel the labels' nearest node.
+std::string chunk_labels(const SceneDescription& scene, const VolumePlan& plan,
+                         std::uint32_t k_begin, std::uint32_t k_count) {
+  const Mask& labels = scene.structures->labels;
+  const Refinement r = refinement_between(labels.grid, scene.grid);
+  std::string out(static_cast<std::size_t>(plan.dims[0] * plan.dims[1]) * k_count, '\0');
+  const std::int64_t st = plan.step;
+  std::size_t v = 0;
+  for (std::uint32_t k = 0; k < k_count; ++k)
+    for (std::int64_t j = 0; j < plan.dims[1]; ++j)
+      for (std::int64_t i = 0; i < plan.dims[0]; ++i, ++v)
+        out[v] = static_cast<char>(label_at(labels, r, plan.offset[0] + i * st,
+                                            plan.offset[1] + j * st,
+                                            plan.offset[2] + (k_begin + k) * st));
+  return plan.deflate ? wire::deflate_bytes(out) : out;
+}
 }  // namespace
 
 std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan& plan,
@@ -221,6 +248,7 @@ std::uint32_t fill_volume_chunk(const SceneDescription& scene, const VolumePlan&
     c->set_hu(as_bytes(hu.data(), hu.size() * sizeof(std::int16_t), plan.deflate));
     c->set_body(as_bytes(body.data(), body.size(), plan.deflate));
   }
+  if (plan.labels) c->set_labels(chunk_labels(scene, plan, k_begin, k_count));
   c->set_chunk_index(index);
   c->set_chunk_count(plan.chunks);
   return k_count;

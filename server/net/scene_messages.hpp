@@ -23,6 +23,7 @@ struct VolumeRequest {
   bool bone = true;           // d_bone (when the scene has it)
   bool deflate = false;       // byte fields as zlib streams
   bool crop = false;          // the body's bounding box only (with hu and a crop box)
+  bool labels = false;        // the structures' labels (when the scene has any)
 };
 
 // A box of grid voxels [lo, hi).
@@ -39,6 +40,7 @@ struct VolumePlan {
   std::uint32_t slab = 1;
   std::uint32_t chunks = 0;
   bool hu = false, bone = false, deflate = false;  // what each chunk carries
+  bool labels = false;                             // VolumeChunk.labels
   std::size_t voxel_bytes = 4;                     // raw bytes a voxel (all fields)
 };
 // The largest raw chunk palpd sends: one slice of a step is never more than this (the step

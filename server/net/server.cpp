@@ -303,7 +303,7 @@ class Server::Impl {
     s->history = frame_of(history);
     if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
     plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(),
-                     h.volume_deflate(), h.volume_crop()});
+                     h.volume_deflate(), h.volume_crop(), h.volume_labels()});
     if (s->volume.chunks == 0) became_ready(*s);
     log_client(who(*s) + " joined");
     pump(s);

@@ -35,6 +35,7 @@
 #include "model/field_sampler.hpp"
 #include "net/control_target.hpp"
 #include "net/frame_pump.hpp"
+#include "scene/structure_labels.hpp"
 
 namespace palp::tls {
 class ServerContext;
@@ -85,6 +86,9 @@ struct SceneDescription {
   std::shared_ptr<const FieldSampler> fields;  // sampled for the render volume
   std::shared_ptr<const CtVolume> ct;          // the CT's HU on the grid (may be null)
   std::shared_ptr<const Mask> body;            // the body mask on the grid (with ct)
+  // The prep directory's structures (vessels, artery, organs) as labels on a grid `grid` refines
+  // (null or empty: none): SceneInfo.structures and, when asked, VolumeChunk.labels.
+  std::shared_ptr<const StructureLabels> structures;
   // The device's registration, for devices placed on the patient (unset: scene-frame devices).
   struct Placement {
     Registration registration;

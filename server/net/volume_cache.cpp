@@ -15,7 +15,8 @@ namespace palp::net {
 namespace {
 bool same_plan(const VolumePlan& a, const VolumePlan& b) {
   return a.step == b.step && a.dims == b.dims && a.offset == b.offset && a.slab == b.slab &&
-         a.chunks == b.chunks && a.hu == b.hu && a.bone == b.bone && a.deflate == b.deflate;
+         a.chunks == b.chunks && a.hu == b.hu && a.bone == b.bone && a.deflate == b.deflate &&
+         a.labels == b.labels;
 }
 }  // namespace
 

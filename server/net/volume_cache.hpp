@@ -27,9 +27,9 @@
 
 namespace palp::net {
 
-// What palpview asks by default (--volume-max-dim 256, the CT without d_bone, deflated, cropped):
-// palpd encodes it at start, so the first station need not wait for it.
-inline constexpr VolumeRequest kViewerDefaultRequest{0, 256, true, false, true, true};
+// What palpview asks by default (--volume-max-dim 256, the CT without d_bone, deflated, cropped,
+// with the structures' labels): palpd encodes it at start, so the first station need not wait.
+inline constexpr VolumeRequest kViewerDefaultRequest{0, 256, true, false, true, true, true};
 
 class VolumeCache {
  public:

@@ -62,6 +62,11 @@ struct Snapshot {
   std::uint32_t contact_points = 0;                 // points of the tool this tick
   std::uint32_t contact_count = 0;                  // entries valid in `contacts` (<= its capacity)
   std::vector<ContactSnapshot> contacts;            // capacity fixed at construction
+  // The structure layers (model/structure_layers.hpp) at this tick, alongside (not recorded):
+  float pulse_wave = 0;     // State::pulse_wave, 0 (diastole) .. 1 (systole)
+  float pulse_force_N = 0;  // |State::f_pulse| (0 when the force was not written)
+  float organ_force_N = 0;  // |State::f_organ| (likewise)
+  float pulse_bpm = 0;      // the heart rate the loop gave this tick (HapticLoop::set_pulse_bpm)
 };
 
 class SnapshotRing {

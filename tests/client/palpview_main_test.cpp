@@ -1,7 +1,8 @@
 // palpview's command line end to end: help and usage errors; an unreachable server in screenshot
 // mode (exit 1 after --timeout); a screenshot of palpd's sphere scene (the PNG has the asked size
 // and is not uniform); and a controller run whose scripted poses drive palpd's `remote` device
-// (palpd reports the pose back and finds the pad in contact). Rendering needs an X display
+// (palpd reports the pose back and finds the pad in contact); a prep directory's structures drawn
+// by the vessels preset and not by the skin one. Rendering needs an X display
 // (CTest runs this under xvfb-run -a where DISPLAY is unset); without one those tests skip.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -25,6 +26,7 @@
 #include <set>
 #include <thread>
 
+#include "io/ct_io.hpp"
 #include "scene/trajectory.hpp"
 #include "support/cli_test_util.hpp"
 #include "support/outside_address.hpp"
@@ -263,6 +265,58 @@ TEST(Palpview, ScreenshotOfTheLiveStream) {
   EXPECT_EQ(j.at("render_ms").at("n").get<int>(), 5);
   EXPECT_EQ(j.at("width").get<int>(), 320);
   EXPECT_TRUE(j.at("last_frame_valid").get<bool>());
+}
+
+// Pixels of an RGB image that are clearly red (the artery) or clearly blue (the vessels).
+std::size_t count_pixels(const std::vector<std::uint8_t>& rgb, bool red) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const int r = rgb[i], g = rgb[i + 1], b = rgb[i + 2];
+    n += red ? (r > 2 * g + 20 && r > 2 * b + 20) : (b > r + 40 && b > g + 20);
+  }
+  return n;
+}
+
+// The structures end to end: a prep directory of the sphere phantom with a tube "artery" inside
+// a "vessel" mask written here -> palpd (SceneInfo.structures, VolumeChunk.labels) -> palpview's
+// vessels preset draws red and blue; its skin preset, on the same stream, neither.
+TEST(Palpview, TheVesselsPresetShowsThePrepDirectorysStructures) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  const fs::path dir = test_dir(), prep = dir / "prep";
+  fs::remove_all(prep);
+  const auto prepped = testing::run_palp_cli("prep phantom:sphere --out " + prep.string(), dir);
+  ASSERT_EQ(prepped.exit_code, 0) << prepped.output;
+  // The sphere: radius 30 mm about the centre of its 100^3 grid of 1 mm. A tube of radius 5 mm
+  // along k, 12 mm beside the centre, is the artery; the vessels are that tube and another.
+  const Mask body = read_nifti_mask((prep / "body.nii.gz").string());
+  Mask artery(body.grid), vessel(body.grid);
+  for (std::int64_t k = 25; k <= 75; ++k)
+    for (std::int64_t j = 0; j < 100; ++j)
+      for (std::int64_t i = 0; i < 100; ++i) {
+        const bool tube = std::pow(i - 37.5, 2) + std::pow(j - 49.5, 2) <= 25;
+        artery.at(i, j, k) = tube;
+        vessel.at(i, j, k) = tube || std::pow(i - 62.0, 2) + std::pow(j - 55.0, 2) <= 16;
+      }
+  write_nifti((prep / "artery.nii.gz").string(), artery);
+  write_nifti((prep / "vessel.nii.gz").string(), vessel);
+  Palpd palpd("--scene " + prep.string() + " --device sim --port 0 --no-realtime --duration 300",
+              dir);
+  ASSERT_GT(palpd.port(), 0) << palpd.log();
+  EXPECT_NE(palpd.log().find("structures for the clients: vessel, artery"), std::string::npos);
+  std::map<std::string, std::vector<std::uint8_t>> shots;
+  for (const std::string preset : {"vessels", "skin"}) {
+    const fs::path png = dir / (preset + ".png");
+    const auto r = run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) +
+                                " --preset " + preset + " --screenshot " + png.string() +
+                                " --frames 3 --width 320 --height 240 --timeout 120 --follow 0"
+                                " --no-overlays --no-tool");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    shots[preset] = read_rgb(png);
+  }
+  EXPECT_GT(count_pixels(shots["vessels"], true), 200u);   // the artery: ~10 x 50 mm
+  EXPECT_GT(count_pixels(shots["vessels"], false), 100u);  // the other vessel: ~8 x 50 mm
+  EXPECT_EQ(count_pixels(shots["skin"], true), 0u);
+  EXPECT_EQ(count_pixels(shots["skin"], false), 0u);
 }
 
 // A stream lost before the screenshot's frames arrived: exit 1 at once, no picture of the stale

@@ -19,6 +19,9 @@ TEST(KeyBindings, ViewKeys) {
   EXPECT_EQ(view_key(GLFW_KEY_H), ViewKey::Recentre);
   EXPECT_EQ(view_key(GLFW_KEY_O), ViewKey::ToggleRecording);
   EXPECT_EQ(view_key(GLFW_KEY_V), ViewKey::NextView);
+  EXPECT_EQ(view_key(GLFW_KEY_COMMA), ViewKey::PulseSlower);
+  EXPECT_EQ(view_key(GLFW_KEY_PERIOD), ViewKey::PulseFaster);
+  EXPECT_EQ(view_key(GLFW_KEY_B), ViewKey::PulseToggle);
   EXPECT_FALSE(view_key(GLFW_KEY_W));
   EXPECT_FALSE(view_key(GLFW_KEY_X));
 }

@@ -137,6 +137,26 @@ TEST(Hud, ControllerSeesItsKeysRecordingAndTheLastAnswer) {
   EXPECT_NE(banner_text(s).find("RECORDING"), std::string::npos);
 }
 
+// The pulse's line: from a palpd that reports the rate, with what is felt of it when non-zero;
+// none from one that does not; the controller's keys name , . B.
+TEST(Hud, ThePulsesLine) {
+  LatestState s = live_state();
+  EXPECT_EQ(hud_text(s, {}).find("pulse"), std::string::npos);
+  s.frame.pulse_bpm = 72.0;
+  EXPECT_NE(hud_text(s, {}).find("pulse 72 bpm\n"), std::string::npos) << hud_text(s, {});
+  s.frame.pulse_force = 0.25;
+  s.frame.organ_force = 1.5;
+  EXPECT_NE(hud_text(s, {}).find("pulse 72 bpm   felt 0.25 N   organ 1.50 N"), std::string::npos)
+      << hud_text(s, {});
+  s.frame.pulse_force = 0.004;  // would read 0.00: not shown
+  EXPECT_EQ(hud_text(s, {}).find("felt"), std::string::npos);
+  s.frame.pulse_bpm = 0.0;
+  EXPECT_NE(hud_text(s, {}).find("pulse off"), std::string::npos);
+  HudInputs in;
+  in.controller = true;
+  EXPECT_NE(hud_text(s, in).find(",/. pulse -/+  B pulse on/off"), std::string::npos);
+}
+
 TEST(Hud, TextShowsRatesAndForceRendering) {
   LatestState s = live_state();
   s.frame.n_contact = 7;

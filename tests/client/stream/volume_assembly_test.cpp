@@ -11,12 +11,14 @@
 #include "net/scene_messages.hpp"
 #include "stream/protocol_checks.hpp"
 #include "support/palpd_test_util.hpp"
+#include "wire/volume_codec.hpp"
 
 namespace palp::view::net {
 namespace {
 
 using palp::net::SceneDescription;
 using palp::net::VolumePlan;
+using palp::StructureLabels;
 
 // The 32^3 ball scene (2 mm voxels) with HU that encode the voxel index and a body box
 // i in [9, 21), j in [5, 27), k in [12, 30).
@@ -150,6 +152,99 @@ TEST(VolumeAssembly, ACropLeavingTheGridIsRefused) {
   chunk.clear_offset();
   chunk.add_offset(9);
   EXPECT_THROW(assembly.add(chunk, 64, &grid), ProtocolViolation);  // 1 offset, not 3
+}
+
+// ------------------------------------------------------------------ structure labels
+
+// The boxed scene with two structures on its grid: a "vessel" slab (i in [4, 8)) and an "artery"
+// ball of radius 3 voxels about voxel (16, 16, 16) over it.
+SceneDescription labelled_scene() {
+  SceneDescription scene = boxed_scene();
+  auto labels = std::make_shared<StructureLabels>();
+  labels->labels = Mask(scene.grid);
+  for (std::int64_t k = 0; k < 32; ++k)
+    for (std::int64_t j = 0; j < 32; ++j)
+      for (std::int64_t i = 0; i < 32; ++i) {
+        const std::int64_t r2 = (i - 16) * (i - 16) + (j - 16) * (j - 16) + (k - 16) * (k - 16);
+        labels->labels.at(i, j, k) = r2 <= 9 ? 2 : (i >= 4 && i < 8) ? 1 : 0;
+      }
+  labels->structures = {{1, "vessel", "vessel"}, {2, "artery", "artery"}};
+  scene.structures = labels;
+  return scene;
+}
+
+// The labels go out with the volume when asked for, voxel for voxel the scene's at every step,
+// raw or deflated, whole or cropped; not asked for (an older client), none come.
+TEST(VolumeAssembly, StructureLabelsRoundTrip) {
+  const SceneDescription scene = labelled_scene();
+  const palp::net::VoxelBox box = palp::net::body_box(*scene.body, 5.0);
+  const SceneGrid grid{scene.grid.dims, {2.0, 2.0, 2.0}, 2};
+  for (const bool deflate : {false, true})
+    for (const bool crop : {false, true})
+      for (const std::uint32_t step : {1u, 2u}) {
+        SCOPED_TRACE(std::to_string(step) + (deflate ? " deflated" : " raw") +
+                     (crop ? " cropped" : ""));
+        const VolumePlan plan = palp::net::plan_volume(
+            scene, {step, 0, true, false, deflate, crop, true}, 4096, &box);
+        ASSERT_TRUE(plan.labels);
+        VolumeAssembly assembly;
+        std::shared_ptr<RenderVolume> v;
+        std::uint32_t k = 0;
+        for (std::uint32_t c = 0; c < plan.chunks; ++c) {
+          v1::VolumeChunk chunk;
+          k += palp::net::fill_volume_chunk(scene, plan, k, c, &chunk);
+          v = assembly.add(chunk, 64, &grid).volume;
+        }
+        ASSERT_TRUE(v);
+        ASSERT_EQ(v->labels.size(), v->d_surf.size());
+        std::size_t artery = 0;
+        for (std::int64_t kk = 0; kk < v->dims[2]; ++kk)
+          for (std::int64_t j = 0; j < v->dims[1]; ++j)
+            for (std::int64_t i = 0; i < v->dims[0]; ++i) {
+              const std::uint8_t got =
+                  v->labels[static_cast<std::size_t>(i + v->dims[0] * (j + v->dims[1] * kk))];
+              ASSERT_EQ(got, scene.structures->labels.at(plan.offset[0] + i * step,
+                                                         plan.offset[1] + j * step,
+                                                         plan.offset[2] + kk * step));
+              artery += got == 2;
+            }
+        EXPECT_GT(artery, 0u);
+      }
+  const VolumePlan unasked = palp::net::plan_volume(scene, {1, 0, true, false, true}, 4096);
+  EXPECT_FALSE(unasked.labels);
+  v1::VolumeChunk chunk;
+  palp::net::fill_volume_chunk(scene, unasked, 0, 0, &chunk);
+  EXPECT_TRUE(chunk.labels().empty());
+}
+
+// A label volume over its bound is refused before it is spent: a raw field a byte longer than
+// its slices, a zlib stream that inflates past them, a label SceneInfo did not list, labels
+// when SceneInfo listed no structures.
+TEST(VolumeAssembly, AnOversizeOrUnlistedLabelVolumeIsRefused) {
+  const SceneDescription scene = labelled_scene();
+  const SceneGrid grid{scene.grid.dims, {2.0, 2.0, 2.0}, 2};
+  const auto chunk0 = [&](bool deflate) {
+    const VolumePlan plan =
+        palp::net::plan_volume(scene, {1, 0, false, false, deflate, false, true}, 1 << 20);
+    v1::VolumeChunk chunk;
+    palp::net::fill_volume_chunk(scene, plan, 0, 0, &chunk);
+    return chunk;
+  };
+  v1::VolumeChunk raw = chunk0(false);
+  ASSERT_EQ(raw.labels().size(), 32u * 32u * raw.k_count());
+  raw.mutable_labels()->push_back('\0');
+  EXPECT_THROW(VolumeAssembly().add(raw, 64, &grid), ProtocolViolation);
+  v1::VolumeChunk zipped = chunk0(true);
+  std::string longer(32u * 32u * zipped.k_count() + 1, '\0');
+  zipped.set_labels(palp::wire::deflate_bytes(longer));
+  EXPECT_THROW(VolumeAssembly().add(zipped, 64, &grid), ProtocolViolation);
+  v1::VolumeChunk unlisted = chunk0(false);
+  (*unlisted.mutable_labels())[5] = 3;  // SceneInfo lists labels 1 and 2
+  EXPECT_THROW(VolumeAssembly().add(unlisted, 64, &grid), ProtocolViolation);
+  const SceneGrid none{scene.grid.dims, {2.0, 2.0, 2.0}, 0};
+  EXPECT_THROW(VolumeAssembly().add(chunk0(false), 64, &none), ProtocolViolation);
+  EXPECT_THROW(VolumeAssembly().add(chunk0(false), 64, nullptr), ProtocolViolation);
+  EXPECT_NO_THROW(VolumeAssembly().add(chunk0(false), 64, &grid));
 }
 
 }  // namespace

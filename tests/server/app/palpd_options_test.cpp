@@ -52,6 +52,22 @@ TEST(PalpdOptions, Defaults) {
   EXPECT_EQ(o.duration_s, 0.0);
   EXPECT_EQ(o.record_dir, ".");
   EXPECT_EQ(o.stats_json, "");
+  EXPECT_EQ(o.params.pulse_bpm, 72.0);  // a resting adult's heart rate
+}
+
+// --pulse-bpm: the arteries' heart rate, 0 (no pulse) .. 240, refused outside with its range.
+TEST(PalpdOptions, ThePulseRate) {
+  EXPECT_EQ(parse({"--pulse-bpm", "90"}).params.pulse_bpm, 90.0);
+  EXPECT_EQ(parse({"--pulse-bpm", "0"}).params.pulse_bpm, 0.0);
+  EXPECT_EQ(parse({"--pulse-bpm", "240"}).params.pulse_bpm, 240.0);
+  std::vector<std::string> argv = kBase;
+  argv.insert(argv.end(), {"--pulse-bpm", "241"});
+  EXPECT_EQ(refusal(argv), "--pulse-bpm must be in [0, 240]");
+  argv.back() = "-5";
+  EXPECT_EQ(refusal(argv), "--pulse-bpm must be in [0, 240]");
+  argv.back() = "fast";
+  EXPECT_EQ(refusal(argv), "--pulse-bpm needs a number, got 'fast'");
+  EXPECT_NE(palpd_help().find("--pulse-bpm N"), std::string::npos);
 }
 
 TEST(PalpdOptions, WhatEachSets) {

@@ -10,6 +10,7 @@
 #include "rt/recording.hpp"
 #include "support/cli_test_util.hpp"
 #include "support/outside_address.hpp"
+#include "support/net_test_client.hpp"
 #include "support/palpd_process.hpp"
 
 namespace palp {
@@ -80,6 +81,42 @@ TEST(CmdCtl, ATrialFromOneConsole) {
   r = run_palp_cli(at + "resume", cache);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("now: running"), std::string::npos) << r.output;
+  EXPECT_TRUE(testing::wait_palpd_exit(log)) << read_text(log);
+}
+
+// The pulse rate from the console: palp ctl pulse -> palpd's loop -> every frame's pulse_bpm
+// (and SceneInfo's, which ctl prints as the change); out of [0, 240] refused.
+TEST(CmdCtl, ThePulseRateReachesTheFrames) {
+  const fs::path dir = shared_cli_dir() / "ctl-pulse";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path log = dir / "palpd.log";
+  const int port = testing::start_palpd(
+      "--scene phantom:sphere --device sim --port 0 --duration 20 --no-realtime --pulse-bpm 60",
+      log);
+  ASSERT_GT(port, 0) << read_text(log);
+  const std::string at = "ctl 127.0.0.1:" + std::to_string(port) + " ";
+  const fs::path cache = dir / "cache";
+  auto r = run_palp_cli(at + "pulse 90", cache);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("pulse 90: ok"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("changed: pulse_bpm 60 -> 90"), std::string::npos) << r.output;
+  r = run_palp_cli(at + "pulse 300", cache);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("pulse 300: refused: pulse_bpm must be in [0, 240]"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(run_palp_cli(at + "pulse", cache).exit_code, 2);
+  EXPECT_EQ(run_palp_cli(at + "pulse fast", cache).exit_code, 2);
+
+  testing::TestClient observer(static_cast<std::uint16_t>(port));
+  observer.hello(v1::OBSERVER, "", wire::kProtocolVersion, 0, 50.0);
+  v1::ServerMessage m;
+  ASSERT_TRUE(observer.wait_for_case(v1::ServerMessage::kFrame, m));
+  ASSERT_TRUE(m.frame().has_pulse_bpm());
+  EXPECT_EQ(m.frame().pulse_bpm(), 90.0f);
+  EXPECT_GE(m.frame().pulse_wave(), 0.0f);
+  EXPECT_LE(m.frame().pulse_wave(), 1.0f);
+  observer.close();
   EXPECT_TRUE(testing::wait_palpd_exit(log)) << read_text(log);
 }
 

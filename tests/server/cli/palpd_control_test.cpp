@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 
 #include "base/errors.hpp"
@@ -86,6 +88,83 @@ TEST(PalpdControl, ARecordingLocksToolAndParametersAndKeepsThemInItsMetadata) {
   EXPECT_EQ(r.metadata.at("started-by"), "controller 1");
   EXPECT_EQ(r.metadata.at("param.k"), number_text(s.model->params().k));
   EXPECT_EQ(control.set_tool("finger:1"), "");  // unlocked again
+}
+
+// The newest snapshot the loop published (the ring drained).
+rt::Snapshot newest(rt::HapticLoop& loop) {
+  rt::Snapshot last;
+  while (const rt::Snapshot* s = loop.net_ring().front()) {
+    last.tick = s->tick;
+    last.pulse_bpm = s->pulse_bpm;
+    last.pulse_wave = s->pulse_wave;
+    loop.net_ring().pop();
+  }
+  return last;
+}
+
+// ctl -> loop -> snapshot: SetParameter pulse_bpm goes to the loop's atomic, the next tick runs
+// at it and its snapshot says so; the model is not swapped (the contacts stay), and a rate out of
+// [0, 240] is refused with the range.
+TEST(PalpdControl, ThePulseRateReachesTheLoopBetweenTicks) {
+  SteppedLoop s;
+  PalpdControl control(*s.loop, s.model->fields_ptr(), s.device, {}, "/nonexistent");
+  for (int i = 0; i < 3; ++i) s.step();
+  rt::Snapshot before = newest(*s.loop);
+  EXPECT_EQ(before.pulse_bpm, 72.0f);  // ForceParams' default
+  ASSERT_GT(before.tick.n_contact, 0);  // pressing: the pad is in contact
+  EXPECT_EQ(control.set_parameter("pulse_bpm", 96.0), "");
+  EXPECT_EQ(s.loop->pulse_bpm(), 96.0);
+  s.step();
+  const rt::Snapshot after = newest(*s.loop);
+  EXPECT_EQ(after.pulse_bpm, 96.0f);
+  EXPECT_EQ(after.tick.n_contact, before.tick.n_contact);  // still in contact: no restart
+  EXPECT_EQ(s.loop->model(), s.model);                     // the same model, not a swapped one
+  const std::string range = "pulse_bpm must be in [0, 240] beats per minute (0: no pulse)";
+  EXPECT_EQ(control.set_parameter("pulse_bpm", 241.0), range);
+  EXPECT_EQ(control.set_parameter("pulse_bpm", -1.0), range);
+  EXPECT_EQ(control.set_parameter("pulse_bpm", std::nan("")), range);
+  EXPECT_EQ(control.set_parameter("pulse_bpm", 0.0), "");  // off
+  s.step();
+  EXPECT_EQ(newest(*s.loop).pulse_bpm, 0.0f);
+}
+
+// The snapshots' wave follows the pulse's clock at the rate the control set: over one beat at
+// 60 bpm (1000 ticks of 1 ms) it spans diastole to systole; at 0 bpm it holds.
+TEST(PalpdControl, TheSnapshotsWaveBeatsAtTheRateSet) {
+  SteppedLoop s;
+  PalpdControl control(*s.loop, s.model->fields_ptr(), s.device, {}, "/nonexistent");
+  ASSERT_EQ(control.set_parameter("pulse_bpm", 60.0), "");
+  float lo = 2, hi = -1;
+  for (int i = 0; i < 1000; ++i) {
+    s.step();
+    const float w = newest(*s.loop).pulse_wave;
+    lo = std::min(lo, w), hi = std::max(hi, w);
+  }
+  EXPECT_GE(lo, 0.0f);
+  EXPECT_LT(lo, 0.05f);  // end diastole
+  EXPECT_LE(hi, 1.0f);
+  EXPECT_GT(hi, 0.95f);  // the systolic peak
+  ASSERT_EQ(control.set_parameter("pulse_bpm", 0.0), "");
+  s.step();
+  const float held = newest(*s.loop).pulse_wave;
+  for (int i = 0; i < 200; ++i) {
+    s.step();
+    EXPECT_EQ(newest(*s.loop).pulse_wave, held);
+  }
+}
+
+// The rate is fixed while recording, like the parameters, and kept in the recording's metadata
+// (a replay runs at it: palpd --pulse-bpm from "pulse-bpm").
+TEST(PalpdControl, ARecordingKeepsThePulseRate) {
+  testing::TempDir dir("palpd-control-pulse");
+  SteppedLoop s;
+  PalpdControl control(*s.loop, s.model->fields_ptr(), s.device, {}, dir.path().string());
+  ASSERT_EQ(control.set_parameter("pulse_bpm", 60.0), "");
+  ASSERT_EQ(control.start_recording("trial-p", "controller 1"), "");
+  EXPECT_EQ(control.set_parameter("pulse_bpm", 90.0), PalpdControl::kLockedWhileRecording);
+  for (int i = 0; i < 5; ++i) s.step();
+  EXPECT_EQ(control.stop_recording(), "");
+  EXPECT_EQ(rt::read_recording(dir.file("trial-p")).metadata.at("pulse-bpm"), "60");
 }
 
 }  // namespace

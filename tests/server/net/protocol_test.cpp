@@ -69,6 +69,42 @@ TEST(Protocol, FrameCarriesTheSnapshot) {
   EXPECT_EQ(f.device_state(), v1::DEVICE_FAULT);
 }
 
+// The structure layers ride on every frame: the pulse's wave and rate, |f_pulse| and |f_organ|,
+// through the wire and back (float fields: the values below are exact in float).
+TEST(Protocol, FrameCarriesThePulse) {
+  rt::Snapshot s;
+  s.pulse_wave = 0.375f;
+  s.pulse_force_N = 0.25f;
+  s.organ_force_N = 1.5f;
+  s.pulse_bpm = 84.0f;
+  v1::ServerMessage m;
+  fill_frame(s, false, m.mutable_frame());
+  const std::string frame = wire::encode_frame(m);
+  wire::FrameDecoder d;
+  d.feed(reinterpret_cast<const std::uint8_t*>(frame.data()), frame.size());
+  std::string_view body;
+  ASSERT_EQ(d.next(body), wire::FrameStatus::Ok);
+  v1::ServerMessage back;
+  ASSERT_TRUE(back.ParseFromArray(body.data(), static_cast<int>(body.size())));
+  const v1::HapticFrame& f = back.frame();
+  EXPECT_EQ(f.pulse_wave(), 0.375f);
+  EXPECT_EQ(f.pulse_force(), 0.25f);
+  EXPECT_EQ(f.organ_force(), 1.5f);
+  ASSERT_TRUE(f.has_pulse_bpm());  // said even at 0 (no pulse), unlike an older server
+  EXPECT_EQ(f.pulse_bpm(), 84.0f);
+  s.pulse_bpm = 0;
+  m.Clear();
+  fill_frame(s, false, m.mutable_frame());
+  EXPECT_TRUE(m.frame().has_pulse_bpm());
+  // Four float fields, 4 bytes each after their tags (field 15's tag one byte, 16..18's two:
+  // numbers of 16 and above need a second varint byte): 23 bytes more a frame at most.
+  v1::HapticFrame without = m.frame();
+  without.clear_pulse_wave(), without.clear_pulse_force(), without.clear_organ_force();
+  without.clear_pulse_bpm();
+  m.mutable_frame()->set_pulse_bpm(84.0f);
+  EXPECT_EQ(m.frame().ByteSizeLong() - without.ByteSizeLong(), 23u);
+}
+
 TEST(Protocol, ChecksClientMessages) {
   v1::ClientMessage out;
   const auto check = [&](const v1::ClientMessage& m) {
