@@ -139,17 +139,7 @@ void FieldSampler::build(DistanceMap& surf, DistanceMap* bone) {
   grid_ = surf.grid;
   has_bone_ = bone != nullptr;
 
-  for (int a = 0; a < 3; ++a) {
-    const std::int64_t n = grid_.dims[a];
-    geometry_.spacing[a] = grid_.spacing[a];
-    geometry_.inv_spacing[a] = 1.0 / grid_.spacing[a];
-    geometry_.max_u[a] = static_cast<double>(n - 1);
-    geometry_.max_i0[a] = std::max<std::int64_t>(n - 2, 0);
-  }
-  geometry_.stride[0] = 1;
-  geometry_.stride[1] = static_cast<std::size_t>(grid_.dims[0]);
-  geometry_.stride[2] = static_cast<std::size_t>(grid_.dims[0] * grid_.dims[1]);
-  for (int a = 0; a < 3; ++a) geometry_.step[a] = grid_.dims[a] > 1 ? geometry_.stride[a] : 0;
+  sampling::set_grid(geometry_, grid_);
 
   const double surf_max = max_abs_finite(surf.data, "skin");
   const double bone_max = bone ? max_abs_finite(bone->data, "bone") : 0.0;

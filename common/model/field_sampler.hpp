@@ -78,6 +78,21 @@ struct Geometry {
   std::size_t step[3] = {0, 0, 0};     // neighbour step: stride, or 0 where n == 1
 };
 
+// The geometry of a grid (origin at the scene's 0; the caller places a cropped map's origin).
+inline void set_grid(Geometry& g, const Grid& grid) {
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t n = grid.dims[a];
+    g.spacing[a] = grid.spacing[a];
+    g.inv_spacing[a] = 1.0 / grid.spacing[a];
+    g.max_u[a] = static_cast<double>(n - 1);
+    g.max_i0[a] = std::max<std::int64_t>(n - 2, 0);
+  }
+  g.stride[0] = 1;
+  g.stride[1] = static_cast<std::size_t>(grid.dims[0]);
+  g.stride[2] = static_cast<std::size_t>(grid.dims[0] * grid.dims[1]);
+  for (int a = 0; a < 3; ++a) g.step[a] = grid.dims[a] > 1 ? g.stride[a] : 0;
+}
+
 // A map as laid out in memory: voxel v's value is scale * value[v * value_stride], and (with a
 // precomputed gradient) its gradient component a is grad[v * grad_stride + a].
 template <class T>

@@ -88,17 +88,7 @@ LayerStack::LayerStack(std::vector<StructureLayer> layers) {
     }
     std::vector<float>().swap(layers[i].map.data);  // freed once interleaved
   }
-  for (int a = 0; a < 3; ++a) {
-    const std::int64_t dim = grid_.dims[a];
-    geometry_.spacing[a] = grid_.spacing[a];
-    geometry_.inv_spacing[a] = 1.0 / grid_.spacing[a];
-    geometry_.max_u[a] = static_cast<double>(dim - 1);
-    geometry_.max_i0[a] = std::max<std::int64_t>(dim - 2, 0);
-  }
-  geometry_.stride[0] = 1;
-  geometry_.stride[1] = static_cast<std::size_t>(grid_.dims[0]);
-  geometry_.stride[2] = static_cast<std::size_t>(grid_.dims[0] * grid_.dims[1]);
-  for (int a = 0; a < 3; ++a) geometry_.step[a] = grid_.dims[a] > 1 ? geometry_.stride[a] : 0;
+  sampling::set_grid(geometry_, grid_);
 }
 
 const char* to_string(LayerKind kind) {
