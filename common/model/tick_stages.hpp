@@ -107,6 +107,12 @@ PALP_STAGE double smoothstep(double t) {
   return t * t * (3.0 - 2.0 * t);
 }
 
+// palp: the fade-in of a structure beneath with skin depth, smoothstep(depth / bone_fade_mm)
+// (1 when bone_fade_mm is 0): no step at first touch.
+PALP_STAGE double depth_fade(const ForceParams& prm, double depth_mm) {
+  return prm.bone_fade_mm > 0.0 ? smoothstep(depth_mm / prm.bone_fade_mm) : 1.0;
+}
+
 PALP_STAGE bool pose_usable(const Pose& pose) {
   const Vec3d& x = pose.position;
   if (!(std::fabs(x.x) < kMaxPoseCoordinate && std::fabs(x.y) < kMaxPoseCoordinate &&
@@ -345,7 +351,7 @@ PALP_STAGE void bone_along_normal(const Access& fields, const ForceParams& prm, 
   double reach = dist;
   if (prm.bone_along_normal && fields.beneath.value != nullptr)
     reach = std::max(dist, fields.beneath_at(w.x));
-  const double fade = prm.bone_fade_mm > 0.0 ? smoothstep(w.skin.value / prm.bone_fade_mm) : 1.0;
+  const double fade = depth_fade(prm, w.skin.value);
   const double scale = 5.0 / prm.bone_reach_mm;
   w.f_struct = (bone_force(reach * scale, prm.bone_fmax) * fade) * w.v_s;
   w.k_struct = bone_force_slope(reach * scale, prm.bone_fmax) * scale * fade;
@@ -398,7 +404,7 @@ PALP_STAGE void organ_layer(const ForceParams& prm, const FieldSample& o, PointW
   if (!(g >= prm.grad_epsilon)) return;
   const double cos_o = -dot(o.grad, w.v_s) / g;  // the organ's outward normal . v_s
   if (!(cos_o > 0.0)) return;
-  const double fade = prm.bone_fade_mm > 0.0 ? smoothstep(w.depth / prm.bone_fade_mm) : 1.0;
+  const double fade = depth_fade(prm, w.depth);
   double slope = 0.0;
   const double f = organ_force(prm, -o.value, &slope) * cos_o * fade;
   if (!(f > 0.0)) return;

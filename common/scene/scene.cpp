@@ -19,6 +19,7 @@
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
 #include "prep/maps/map_refine.hpp"
+#include "scene/prep_record.hpp"
 
 namespace palp {
 namespace {
@@ -45,10 +46,8 @@ fs::path prep_into_cache(const std::string& input, const SceneOptions& options, 
 
 // The prep's contrast phase from its prep.json ("" when it records none).
 std::string recorded_contrast_phase(const fs::path& dir) {
-  std::ifstream in(dir / kPrepJsonFile);
-  if (!in) return {};
-  const nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
-  if (!json.is_object()) return {};
+  const nlohmann::json json = scene_detail::read_prep_record(dir, nullptr);
+  if (json.is_discarded()) return {};
   const auto it = json.find("contrast_phase");
   return it != json.end() && it->is_string() ? it->get<std::string>() : std::string();
 }

@@ -17,6 +17,7 @@
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
 #include "prep/prep.hpp"
+#include "scene/prep_record.hpp"
 
 namespace palp {
 namespace {
@@ -24,7 +25,6 @@ namespace {
 namespace fs = std::filesystem;
 
 // prep.json is a few kB; a larger one is not ours and is not parsed.
-constexpr std::uintmax_t kMaxPrepJsonBytes = std::uintmax_t{1} << 20;
 
 std::string describe_grid(const Grid& grid) {
   char text[160];
@@ -63,14 +63,9 @@ struct SkinSurface {
 
 SkinSurface skin_surface(const fs::path& dir) {
   SkinSurface s;
-  const fs::path path = dir / kPrepJsonFile;
-  std::error_code ec;
-  const std::uintmax_t bytes = fs::file_size(path, ec);
-  if (ec) return {0, 0, 0, "no prep.json"};
-  if (bytes > kMaxPrepJsonBytes) return {0, 0, 0, "prep.json over 1 MiB"};
-  std::ifstream in(path);
-  const nlohmann::json json = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (json.is_discarded() || !json.is_object()) return {0, 0, 0, "prep.json unreadable"};
+  std::string why;
+  const nlohmann::json json = scene_detail::read_prep_record(dir, &why);
+  if (json.is_discarded()) return {0, 0, 0, why};
   const nlohmann::json* params =
       json.contains("parameters") && json["parameters"].is_object() ? &json["parameters"] : nullptr;
   if (!params || params->value("surface", std::string()) != "subvoxel")

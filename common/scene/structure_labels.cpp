@@ -11,6 +11,7 @@
 #include "io/ct_io.hpp"
 #include "prep/maps/map_refine.hpp"
 #include "prep/prep.hpp"
+#include "scene/prep_record.hpp"
 
 namespace palp {
 namespace {
@@ -31,11 +32,10 @@ bool plain_mask_name(const std::string& file) {
 // prep.json's organs, by name: {"liver": {"kind": "organ", "files": ["liver.nii.gz", ...]}}.
 std::vector<Candidate> recorded_organs(const fs::path& dir, std::string& note) {
   std::vector<Candidate> out;
-  std::ifstream in(dir / kPrepJsonFile);
-  if (!in) return out;
-  const nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
-  if (json.is_discarded() || !json.is_object()) {
-    note += std::string(kPrepJsonFile) + " unreadable: no organs; ";
+  std::string why;
+  const nlohmann::json json = scene_detail::read_prep_record(dir, &why);
+  if (json.is_discarded()) {
+    if (why != "no prep.json") note += why + ": no organs; ";
     return out;
   }
   const auto it = json.find("structures");
@@ -59,7 +59,8 @@ std::vector<Candidate> recorded_organs(const fs::path& dir, std::string& note) {
 
 // vessel, artery, then the organs; only those whose file is there.
 std::vector<Candidate> candidates(const fs::path& dir, std::string& note) {
-  std::vector<Candidate> all{{"vessel", "vessel", kVesselFile}, {"artery", "artery", "artery.nii.gz"}};
+  std::vector<Candidate> all{{"vessel", "vessel", kVesselFile},
+                             {"artery", "artery", "artery.nii.gz"}};
   for (Candidate& organ : recorded_organs(dir, note))
     if (organ.name != "vessel" && organ.name != "artery") all.push_back(std::move(organ));
   std::vector<Candidate> present;
@@ -78,15 +79,14 @@ void paint(const Mask& mask, Mask& labels, std::uint8_t label) {
     index[a].resize(static_cast<std::size_t>(g.dims[a]));
     for (std::int64_t n = 0; n < g.dims[a]; ++n)
       index[a][static_cast<std::size_t>(n)] = std::clamp<std::int64_t>(
-          std::llround(static_cast<double>(n) * g.spacing[a] / mask.grid.spacing[a]), 0,
-          md[a] - 1);
+          std::llround(static_cast<double>(n) * g.spacing[a] / mask.grid.spacing[a]), 0, md[a] - 1);
   }
   std::size_t v = 0;
   for (std::int64_t k = 0; k < g.dims[2]; ++k)
     for (std::int64_t j = 0; j < g.dims[1]; ++j) {
-      const std::size_t row = static_cast<std::size_t>(
-          md[0] * (index[1][static_cast<std::size_t>(j)] +
-                   md[1] * index[2][static_cast<std::size_t>(k)]));
+      const std::size_t row =
+          static_cast<std::size_t>(md[0] * (index[1][static_cast<std::size_t>(j)] +
+                                            md[1] * index[2][static_cast<std::size_t>(k)]));
       for (std::int64_t i = 0; i < g.dims[0]; ++i, ++v)
         if (mask.data[row + static_cast<std::size_t>(index[0][static_cast<std::size_t>(i)])])
           labels.data[v] = label;
