@@ -81,7 +81,7 @@ TEST(CmdCtl, ATrialFromOneConsole) {
   r = run_palp_cli(at + "resume", cache);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("now: running"), std::string::npos) << r.output;
-  EXPECT_TRUE(testing::wait_palpd_exit(log)) << read_text(log);
+  EXPECT_TRUE(testing::stop_palpd(log)) << read_text(log);
 }
 
 // The pulse rate from the console: palp ctl pulse -> palpd's loop -> every frame's pulse_bpm
@@ -117,7 +117,7 @@ TEST(CmdCtl, ThePulseRateReachesTheFrames) {
   EXPECT_GE(m.frame().pulse_wave(), 0.0f);
   EXPECT_LE(m.frame().pulse_wave(), 1.0f);
   observer.close();
-  EXPECT_TRUE(testing::wait_palpd_exit(log)) << read_text(log);
+  EXPECT_TRUE(testing::stop_palpd(log)) << read_text(log);
 }
 
 TEST(CmdCtl, UsageMistakesAndNoServer) {

@@ -85,7 +85,7 @@ TEST_F(PalpdDds, ProbeGetsEveryTopicAndListsTheRig) {
                                  " --rig other --duration 1 --stall 1 -q");
   EXPECT_EQ(other.exit_code, 1) << other.output;
   EXPECT_EQ(last_json(other.output)["frames"].get<int>(), 0);
-  EXPECT_TRUE(testing::wait_palpd_exit(dir / "palpd.log"));
+  EXPECT_TRUE(testing::stop_palpd(dir / "palpd.log"));
   EXPECT_NE(testing::read_text(dir / "palpd.log").find("DDS rig e2e: "), std::string::npos);
   fs::remove_all(dir);
 }
@@ -131,7 +131,7 @@ TEST_F(PalpdDds, BatchSubscriberGetsEveryFrameContiguous) {
   const std::uint64_t batches = sub.batches();
   EXPECT_GE(frames, 9 * batches) << batches << " batches";
   EXPECT_LE(frames, 10 * batches) << batches << " batches";
-  EXPECT_TRUE(testing::wait_palpd_exit(dir / "palpd.log"));
+  EXPECT_TRUE(testing::stop_palpd(dir / "palpd.log"));
   EXPECT_NE(testing::read_text(dir / "palpd.log").find(" batches, "), std::string::npos)
       << testing::read_text(dir / "palpd.log");
   fs::remove_all(dir);
@@ -189,6 +189,7 @@ TEST_F(PalpdDds, DevicePosesNeedTheToken) {
   EXPECT_NE(
       testing::read_text(dir / "palpd.log").find("DDS device pose refused (wrong rig or token)"),
       std::string::npos);
+  EXPECT_TRUE(testing::stop_palpd(dir / "palpd.log"));
   fs::remove_all(dir);
 }
 
