@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libbenchmark-dev
   libprotobuf-dev protobuf-compiler libasio-dev libtomlplusplus-dev
   libvtk9-dev libglfw3-dev xvfb xauth libgl1-mesa-dri
+  chromium
   libusb-1.0-0-dev libumockdev-dev umockdev
   libssl-dev openssl
   libopenigtlink-dev openigtlink-examples cyclonedds-dev cyclonedds-tools python3

@@ -1,6 +1,6 @@
 // palp run --scene SCENE --tool TOOL --trajectory FILE --out FILE: the offline, deterministic
 // run of the spec: one tick per trajectory row, one force CSV row per tick.
-//   trajectory row (t, pose) -> tick (force model) -> [device profile filters] -> force CSV row
+//   trajectory row (t, pose) -> run_offline (tick, device profile filters) -> force CSV row
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,6 +12,7 @@
 #include "cli/commands.hpp"
 #include "cli/config_file.hpp"
 #include "cli/model_setup.hpp"
+#include "cli/offline_run.hpp"
 #include "model/force_model.hpp"
 #include "safety/safety.hpp"
 #include "scene/trajectory.hpp"
@@ -59,35 +60,6 @@ constexpr const char* kRunOptions =
 void print_usage() {
   std::cout << kRunUsage << kSceneOptionsHelp << kRunOptions;
 }
-
-// Device limits between ticks: the previous output and device position (spec: after the model).
-struct DeviceFilter {
-  const DeviceProfile* profile = nullptr;
-  Vec3d prev_force{};
-  Vec3d prev_position{};
-  double prev_t = 0.0;
-  bool started = false;
-
-  // Filters `record` in place; dt from the trajectory's times (the first tick: `first_dt`).
-  void apply(ForceRecord& record, const Vec3d& position, double first_dt) {
-    if (!profile) return;
-    SafetyInput in;
-    in.force = record.force;
-    in.torque = record.torque;
-    in.prev_force = prev_force;
-    in.position = position;
-    in.prev_position = started ? prev_position : position;
-    in.dt = started ? record.t - prev_t : first_dt;
-    const SafetyOutput out = apply_device_limits(*profile, in);
-    record.force = out.force;
-    record.torque = out.torque;
-    record.safety = out.status;
-    prev_force = out.force;
-    prev_position = position;
-    prev_t = record.t;
-    started = true;
-  }
-};
 
 struct RunSummary {
   std::size_t ticks_in_contact = 0;
@@ -149,24 +121,20 @@ int cmd_run(const Arguments& argv_in) {
   ForceCsvWriter writer(*out);
 
   const auto start = std::chrono::steady_clock::now();
-  const double first_dt = trajectory.size() > 1 ? trajectory[1].t - trajectory[0].t : 0.001;
   RunSummary summary;
-  for (const TrajectorySample& row : trajectory) {
-    // Row -> tick -> record (contact summary) -> device limits -> CSV.
-    tick(model, state, row.pose, row.t);  // the pulse's clock runs on the trajectory's time
-    ForceRecord record = force_record(row.t, state);
-    filter.apply(record, row.pose.position, first_dt);
-    writer.write(record);
-    summary.status_seen |= state.status;
-    if (record.n_contact > 0) {
-      ++summary.ticks_in_contact;
-      summary.contact_points_sum += record.n_contact;
-    }
-    if (const double f = norm(record.force); f > summary.max_force) {
-      summary.max_force = f;
-      summary.max_force_t = row.t;
-    }
-  }
+  summary.status_seen =
+      run_offline(model, state, trajectory, filter,
+                  [&](const TrajectorySample& row, const State&, const ForceRecord& record) {
+                    writer.write(record);
+                    if (record.n_contact > 0) {
+                      ++summary.ticks_in_contact;
+                      summary.contact_points_sum += record.n_contact;
+                    }
+                    if (const double f = norm(record.force); f > summary.max_force) {
+                      summary.max_force = f;
+                      summary.max_force_t = row.t;
+                    }
+                  });
   writer.finish();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
