@@ -39,6 +39,8 @@ Commands:
                             resume, recentre, status
   tune --scene S --tool T --rate HZ
                             the cheapest configuration that feels the same, as a config file
+  landmarks SCENE --out FILE.json
+                            the anatomical landmarks of a scan (vertebrae, ribs, crests, ...)
   version                   print the version
 
 Run `palp <command> --help` for the options of a command.
@@ -62,7 +64,7 @@ int dispatch(int argc, char** argv) {
   const std::map<std::string, std::function<int(const cli::Arguments&)>> commands = {
       {"phantom", cli::cmd_phantom}, {"prep", cli::cmd_prep},   {"run", cli::cmd_run},
       {"traj", cli::cmd_traj},       {"bench", cli::cmd_bench}, {"probe", cli::cmd_probe},
-      {"ctl", cli::cmd_ctl},         {"tune", cli::cmd_tune},
+      {"ctl", cli::cmd_ctl},         {"tune", cli::cmd_tune},   {"landmarks", cli::cmd_landmarks},
   };
   const auto it = commands.find(command);
   if (it == commands.end()) throw UsageError("unknown command '" + command + "' (try palp --help)");
