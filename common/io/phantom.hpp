@@ -100,6 +100,9 @@ struct PhantomOptions {
   int arms = 1;                    // 0, 1 or 2
   bool metal = false;
   bool structures = false;
+  // Any phantom: store it in this axis order (an orientation code, base/axis_order.hpp: "RAS",
+  // "PIL", ...), the same patient in the same LPS world place; absent: the phantom's own order.
+  std::optional<std::string> orient;
 };
 
 // Sets one option from its text: dims and spacing as NXxNYxNZ, contrast, aorta-hu, arms, metal
@@ -113,7 +116,7 @@ struct PhantomSpec {
 };
 PhantomSpec parse_phantom_spec(const std::string& text);
 
-// Names accepted by make_phantom: "cube", "sphere", "torso".
+// Names accepted by make_phantom: "cube", "sphere", "torso", "trunk".
 std::vector<std::string> phantom_names();
 
 // The grid make_phantom(name, options) draws on (defaults with the overrides applied).
@@ -139,6 +142,8 @@ struct PhantomTruth {
   Mask artery;
   Mask metal;
   Mask liver;
+  // The trunk's bones, one label each (phantom_trunk.hpp's trunk_label_name); empty otherwise.
+  Mask bone_label;
 };
 
 // Throws UsageError for an unknown name. When `truth` is given it receives the true masks.
