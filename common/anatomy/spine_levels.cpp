@@ -224,6 +224,29 @@ std::vector<VertebraSegment> split_at_discs(const PatientMask& b,
   return segments;
 }
 
+namespace {
+
+// The sacrum's body centre is S1's: the bone of its top vertebra's height (the median of the
+// vertebrae above), not the centroid of the whole curved sacrum.
+void s1_centre(const std::vector<ProfileSample>& profile, VertebraSegment& sacrum,
+               const std::vector<VertebraSegment>& segments) {
+  std::vector<double> heights;
+  for (const VertebraSegment& s : segments)
+    if (!s.sacrum) heights.push_back(s.z_hi - s.z_lo);
+  if (heights.empty()) return;
+  std::nth_element(heights.begin(),
+                   heights.begin() + static_cast<std::ptrdiff_t>(heights.size() / 2),
+                   heights.end());
+  const double from = sacrum.z_hi - heights[heights.size() / 2];
+  Vec3d sum{};
+  double n = 0.0;
+  for (const ProfileSample& p : profile)
+    if (p.z >= from && p.z < sacrum.z_hi) sum += p.bone_sum, n += p.bone_points;
+  if (n > 0.0) sacrum.centre = sum * (1.0 / n);
+}
+
+}  // namespace
+
 Spine find_spine(const PatientMask& bone, const std::vector<SliceBody>& bodies) {
   Spine spine;
   spine.column = find_column(bone, bodies);
@@ -236,6 +259,8 @@ Spine find_spine(const PatientMask& bone, const std::vector<SliceBody>& bodies) 
   }
   measure_widths(bone, spine.column, spine.segments);
   find_sacrum(spine);
+  if (spine.sacrum >= 0)
+    s1_centre(profile, spine.segments[static_cast<std::size_t>(spine.sacrum)], spine.segments);
   find_spinous_tips(bone, spine.column, spine.segments);
   return spine;
 }

@@ -52,6 +52,9 @@ inline constexpr double kMinBodyWidthMm = 18.0;
 // The sacrum with its alae, joined to the ilia at the sacroiliac joints, is at least this many
 // times as wide as the lumbar bodies above it (100-130 mm against 40-55 mm).
 inline constexpr double kSacrumWidthRatio = 1.6;
+// A sacrum at least twice as tall as the median vertebra (S1-S5 fused, 90-110 mm along its
+// curve) need only be this many times as wide.
+inline constexpr double kFusedSacrumWidthRatio = 1.3;
 
 // The column, its vertebrae and their spinous tips; no names yet.
 Spine find_spine(const PatientMask& bone, const std::vector<SliceBody>& bodies);

@@ -53,7 +53,10 @@ void measure_widths(const PatientMask& bone, const std::vector<ColumnSlice>& col
       if (z < 0 || z >= bone.dims[2]) continue;
       const ColumnSlice& c = column[static_cast<std::size_t>(z)];
       double w = 0.0;
-      for (std::int64_t dy = -1; dy <= 1; ++dy)
+      // The rows of the body's middle 70 % (the alae lie level with S1's body, the lumbar
+      // transverse processes behind their bodies).
+      const auto reach = std::max<std::int64_t>(1, std::lround(0.35 * c.depth));
+      for (std::int64_t dy = -reach; dy <= reach; ++dy)
         w = std::max(w, bridged_width(bone, std::lround(c.x), std::lround(c.y) + dy, z));
       widths.push_back(w);
     }
@@ -80,8 +83,21 @@ void find_sacrum(Spine& spine) {
   const double reference = widths[(widths.size() - 1) * 3 / 10];  // the narrower bodies
   // The lowest wide segment among the lowest three (below it: the coccyx at most).
   std::size_t first = segs.size();
+  std::vector<double> heights;
+  for (const VertebraSegment& s : segs) heights.push_back(s.height_mm);
+  std::nth_element(heights.begin(),
+                   heights.begin() + static_cast<std::ptrdiff_t>(heights.size() / 2),
+                   heights.end());
+  const double median_height = heights[heights.size() / 2];
+  // Wide with its alae, or, a narrower sacrum (alae apart from the ilia in the body's rows), the
+  // five fused sacral vertebrae: at least twice a vertebra's height and still wider.
+  const auto sacral = [&](const VertebraSegment& s) {
+    return s.width_mm >= kSacrumWidthRatio * reference ||
+           (s.width_mm >= kFusedSacrumWidthRatio * reference && !s.cut &&
+            s.height_mm >= 2.0 * median_height);
+  };
   for (std::size_t s = 0; s < std::min<std::size_t>(3, segs.size()); ++s)
-    if (segs[s].width_mm >= kSacrumWidthRatio * reference) {
+    if (sacral(segs[s])) {
       first = s;
       break;
     }
@@ -116,7 +132,7 @@ void find_sacrum(Spine& spine) {
   spine.sacrum = 0;
   // Confidence in the sacrum: its width ratio from the threshold (0) to 2.2 (1).
   const double ratio = sacrum.width_mm / std::max(reference, 1e-9);
-  spine.segments[0].confidence = std::clamp((ratio - 1.3) / (2.2 - 1.3), 0.0, 1.0);
+  spine.segments[0].confidence = std::clamp((ratio - 1.2) / (2.2 - 1.2), 0.0, 1.0);
 }
 
 void name_vertebrae(Spine& spine, std::optional<int> lowest_rib) {
