@@ -32,7 +32,8 @@ const fs::path kBuildDir = fs::path(PALP_CLI_PATH).parent_path().parent_path();
 const std::map<std::string, fs::path>& commands() {
   static const std::map<std::string, fs::path> list = [] {
     std::map<std::string, fs::path> m;
-    for (const char* sub : {"phantom", "prep", "run", "traj", "bench", "probe", "ctl", "tune"})
+    for (const char* sub :
+         {"phantom", "prep", "run", "traj", "bench", "probe", "ctl", "tune", "landmarks"})
       m[std::string("palp ") + sub] = PALP_CLI_PATH;
     m["palpd"] = kBuildDir / "server" / "palpd";
     m["palpview"] = kBuildDir / "client" / "palpview";
