@@ -413,9 +413,9 @@ class Session {
 }  // namespace
 
 int cmd_ctl(const Arguments& argv) {
-  const Args args(
-      argv, {"help"},
-      {"token", "config", "name", "timeout", "tls-ca", "tls-pin", "tls-cert", "tls-key"});
+  const Args args(argv, {"help"},
+                  {"token", "config", "name", "timeout", "tls-ca", "tls-pin", "tls-cert", "tls-key",
+                   "side", "space", "interspace"});
   if (args.has("help")) {
     std::cout << kCtlUsage;
     return 0;
@@ -429,7 +429,14 @@ int cmd_ctl(const Arguments& argv) {
   std::string host = target.substr(0, colon);
   if (host.size() > 2 && host.front() == '[' && host.back() == ']')
     host = host.substr(1, host.size() - 2);
-  const Action action = parse_action({pos.begin() + 1, pos.end()});
+  std::vector<std::string> words(pos.begin() + 1, pos.end());
+  for (const char* option : {"side", "space", "interspace"})  // task start's (ctl_task.hpp)
+    if (const auto value = args.get(option)) {
+      if (words.size() < 2 || words[0] != "task" || words[1] != "start")
+        throw UsageError(std::string("--") + option + " is for ctl task start");
+      words.insert(words.end(), {std::string("--") + option, *value});
+    }
+  const Action action = parse_action(words);
   const double timeout = args.number("timeout", 5.0);
   if (!(timeout > 0.0 && timeout <= 3600.0)) throw UsageError("--timeout must be in (0, 3600] s");
   std::string token = args.get("token").value_or("");
