@@ -7,6 +7,7 @@
 // convert from the scene frame with the grid's placement.
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -88,5 +89,61 @@ struct TrialScore {
 // sample times.
 TrialScore score_trial(const TaskTarget& target, const anatomy::Landmarks& landmarks,
                        const std::vector<TrialSample>& samples, const std::vector<Mark>& marks);
+
+// --- Added by the task implementation (task.cpp); docs/tasks.md defines each. ---
+
+// The metrics, sample by sample i (docs/tasks.md "Metrics"): path_length_mm sums
+// |skin_point[i] - skin_point[i-1]| over consecutive samples both in contact; time_in_contact_s
+// sums t[i+1] - t[i] over samples i in contact (the interval a sample begins); peak_force_n is the
+// largest normal_force, mean_force_n its mean over samples in contact; duration_s is the last
+// sample's t minus the first's; time_to_first_mark_s the earliest mark's t. Marks are scored in
+// time order (a stable sort by t).
+
+// Bounds score_trial enforces (InputError beyond them): ten minutes at 1 kHz, 1000 marks.
+inline constexpr std::size_t kMaxTrialSamples = 600000;
+inline constexpr std::size_t kMaxTrialMarks = 1000;
+
+// The classification's anatomy (docs/tasks.md "Where a mark lies"):
+// a rib's half width about its centre line (ribs are 10-15 mm wide at the mid-axillary line):
+// a mark within this of a rib's centre line, superior-inferior, is on the rib ("rib 9");
+inline constexpr double kRibHalfWidthMm = 6.0;
+// a spinous process's tip, half its superior-inferior height (lumbar tips are ~15 mm tall);
+inline constexpr double kSpinousHalfHeightMm = 7.5;
+// how far from the midline (the line through the spinous tips) a lumbar mark may lie and still be
+// in the target (a midline needle enters within a few millimetres of it);
+inline constexpr double kMidlineToleranceMm = 10.0;
+// femoral: the common femoral artery is ~8-10 mm across (radius ~4.5 mm) and a fingertip's pad
+// ~15 mm wide (half 7.5 mm): a pad centred within 12 mm of the pulse point lies over the lumen.
+inline constexpr double kFemoralPulseRadiusMm = 12.0;
+
+// The view from the task's side: origin at the target point, `normal` the target's outward
+// normal (towards the viewer), `up` the patient's superior projected perpendicular to it,
+// `across` = up x normal (the viewer's right, looking at the skin). Reports draw in it; ptcd
+// and lumbar classify marks by their `up` coordinate against the ribs' and tips'.
+struct TaskView {
+  Vec3d origin{};
+  Vec3d normal{0.0, 0.0, 1.0};
+  Vec3d up{0.0, 1.0, 0.0};
+  Vec3d across{1.0, 0.0, 0.0};
+};
+TaskView task_view(const TaskTarget& target);
+struct ViewPoint {
+  double across = 0.0;  // mm
+  double up = 0.0;      // mm
+};
+ViewPoint project(const TaskView& view, const Vec3d& point);
+
+// The mark at time t of a trial: the skin point of the last sample at or before t (the first
+// sample when t precedes them all). InputError for no samples or a non-finite t.
+Mark mark_at(const std::vector<TrialSample>& samples, double t);
+
+// Where `point` lies in the task's anatomy, as MarkScore::where and in_target: the
+// classification score_trial gives each mark.
+struct Placement {
+  std::string where;
+  bool in_target = false;
+};
+Placement classify(const TaskTarget& target, const anatomy::Landmarks& landmarks,
+                   const Vec3d& point);
 
 }  // namespace palp::training
