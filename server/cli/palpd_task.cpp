@@ -4,12 +4,13 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <utility>
 #include <vector>
 
 #include "base/errors.hpp"
 #include "rt/recording.hpp"
+#include "training/cohort_csv.hpp"
+#include "training/report.hpp"
 
 namespace palp::cli {
 
@@ -105,30 +106,22 @@ std::unique_ptr<net::TaskSession> task_beside(TaskOptions o, const Grid& grid,
   return task;
 }
 
-// The session report. The task-scoring branch's writer (HTML with charts, a cohort CSV appended
-// per trial) replaces this body when it is merged; until then one CSV row per trial.
+// The session report (training/report.hpp): DIR/task-STAMP/report.html, and the session's
+// trials appended to the cohort CSV DIR/cohort.csv.
 std::string write_task_report(const net::TaskSessionRecord& record, const std::string& dir) {
-  std::filesystem::create_directories(dir);
-  const std::string path = (std::filesystem::path(dir) / ("task-" + utc_stamp() + ".csv")).string();
-  std::ofstream out(path);
-  if (!out) throw Error(path + ": cannot write the task report");
-  out << "trial,task,marks,distance_mm,in_target,where,time_to_first_mark_s,peak_force_n,"
-         "mean_force_n,path_length_mm,time_in_contact_s,duration_s\n";
-  for (const net::ScoredTrial& t : record.trials) {
-    const training::TrialScore& s = t.score;
-    out << t.number << ',' << training::describe(record.target.spec) << ',' << s.marks.size()
-        << ',';
-    if (s.marks.empty())
-      out << ",,,";
-    else
-      out << s.marks.back().distance_mm << ',' << (s.marks.back().in_target ? 1 : 0) << ','
-          << s.marks.back().where << ',';
-    if (s.time_to_first_mark_s) out << *s.time_to_first_mark_s;
-    out << ',' << s.peak_force_n << ',' << s.mean_force_n << ',' << s.path_length_mm << ','
-        << s.time_in_contact_s << ',' << s.duration_s << '\n';
+  training::Session session;
+  session.id = "task-" + utc_stamp();
+  session.target = record.target;
+  if (record.landmarks) {
+    session.landmarks = *record.landmarks;
+    session.scene = record.landmarks->scene;
   }
-  if (!out.flush()) throw Error(path + ": writing the task report failed");
-  return path;
+  for (const net::ScoredTrial& t : record.trials)
+    session.trials.push_back({t.number, t.samples, t.marks, t.score});
+  const std::string page =
+      training::write_report((std::filesystem::path(dir) / session.id).string(), session);
+  training::append_cohort_csv((std::filesystem::path(dir) / "cohort.csv").string(), session);
+  return page;
 }
 
 }  // namespace palp::cli

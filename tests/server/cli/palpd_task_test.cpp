@@ -1,7 +1,8 @@
 // Training tasks end to end (issue 40): palpd with a landmarks file and a scripted device that
 // presses on the sphere phantom's right side, the instructor's console starting a ptcd task,
-// marking and stopping it; the score in TaskStatus and in the session report; an observer that
-// may not start or mark; oversized landmarks refused at start; the marks kept beside a recording.
+// marking and stopping it; the score in TaskStatus, the session report and the cohort CSV; an
+// observer that may not start or mark; oversized landmarks refused at start; the marks kept beside
+// a recording.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -144,9 +145,9 @@ TEST(PalpdTask, AScriptedTraineeMarksTheSpaceAndIsScored) {
   std::smatch report;
   const std::string out = r.output;
   ASSERT_TRUE(std::regex_search(out, report, std::regex("report +(\\S+)"))) << out;
-  const std::string csv = read_text(report[1].str());
-  EXPECT_NE(csv.find("\n1,ptcd right 9/10,1,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find(",1,target,"), std::string::npos) << csv;
+  EXPECT_NE(read_text(report[1].str()).find("ptcd right 9/10"), std::string::npos);
+  const std::string cohort = read_text(reports / "cohort.csv");
+  EXPECT_NE(cohort.find(",1,1,target,1,"), std::string::npos) << cohort;  // trial 1, in target
   r = run_palp_cli(at + "record stop", cache);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   const auto marks = rt::read_recording_marks((dir / "rec" / "trial.marks.csv").string());
