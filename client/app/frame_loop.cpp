@@ -72,6 +72,10 @@ void FrameLoop::send_requests() {
     p_.client.recentre();
     p_.requests.recentre = false;
   }
+  if (p_.requests.task_mark) {
+    p_.client.task_mark();
+    p_.requests.task_mark = false;
+  }
   if (p_.requests.record_toggle) {
     // named by the time it starts, as palp ctl does; palpd refuses a name that exists
     if (state_.link.server_recording) {

@@ -15,7 +15,8 @@ std::optional<ViewKey> view_key(int glfw_key) {
       {GLFW_KEY_HOME, ViewKey::ResetCamera},       {GLFW_KEY_H, ViewKey::Recentre},
       {GLFW_KEY_O, ViewKey::ToggleRecording},      {GLFW_KEY_V, ViewKey::NextView},
       {GLFW_KEY_COMMA, ViewKey::PulseSlower},      {GLFW_KEY_PERIOD, ViewKey::PulseFaster},
-      {GLFW_KEY_B, ViewKey::PulseToggle}};
+      {GLFW_KEY_B, ViewKey::PulseToggle},          {GLFW_KEY_M, ViewKey::TaskMark},
+      {GLFW_KEY_L, ViewKey::ToggleLandmarks}};
   for (const auto& [key, action] : kKeys)
     if (key == glfw_key) return action;
   return std::nullopt;

@@ -23,6 +23,8 @@ enum class ViewKey {
   PulseSlower,      // ,  (controller) the arteries' heart rate down (pulse_keys.hpp)
   PulseFaster,      // .  (controller) and up
   PulseToggle,      // B  (controller) the pulse off, and back on
+  TaskMark,         // M  (controller) mark the spot of a training task (palpd scores it)
+  ToggleLandmarks,  // L  show the landmarks (never to the trainee while a task runs)
 };
 
 // The view's action for a GLFW key (GLFW_KEY_*), if it has one.

@@ -26,7 +26,8 @@ void apply_view_key(ViewKey key, ViewWindow& window, RenderScene& scene, bool co
       window.request_close();
       return;
     case ViewKey::NextPreset:
-      scene.set_preset(static_cast<PresetId>((static_cast<int>(scene.preset()) + 1) % kPresetCount));
+      scene.set_preset(
+          static_cast<PresetId>((static_cast<int>(scene.preset()) + 1) % kPresetCount));
       return;
     case ViewKey::LevelDown:
       scene.adjust_window(-20.0, 1.0);
@@ -52,6 +53,12 @@ void apply_view_key(ViewKey key, ViewWindow& window, RenderScene& scene, bool co
     case ViewKey::PulseSlower:
     case ViewKey::PulseFaster:
       if (controller_mode) requests.pulse.steps += key == ViewKey::PulseFaster ? 1 : -1;
+      return;
+    case ViewKey::TaskMark:
+      if (controller_mode) requests.task_mark = true;  // sent from the frame loop
+      return;
+    case ViewKey::ToggleLandmarks:
+      scene.set_landmarks_wanted(!scene.landmarks_wanted());
       return;
     case ViewKey::PulseToggle:
       if (controller_mode) requests.pulse.toggle = !requests.pulse.toggle;

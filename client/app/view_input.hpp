@@ -14,6 +14,7 @@ namespace palp::view {
 struct InputRequests {
   bool recentre = false;       // H (controller): re-centre a registered device
   bool record_toggle = false;  // O (controller): start or stop a recording
+  bool task_mark = false;      // M (controller): mark a training task's spot
   PulseKeys pulse;             // , . B (controller): the heart rate
 };
 

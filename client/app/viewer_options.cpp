@@ -75,12 +75,15 @@ and deforms the skin where the tool presses.
 Mouse: left drag orbits (controller: slides the tool; shift: rotates it), middle drag orbits,
 right drag windows (x: level, y: width), scroll zooms (controller: presses; ctrl: zooms).
 Keys: P next preset, [ ] level, - = width, V next view (anterior, left, posterior, right,
-superior, inferior), Home camera reset, Esc quit; controller: H re-centres a device placed on
+superior, inferior), L the scan's landmarks (palpd --landmarks; never shown to the controller
+while a training task runs), Home camera reset, Esc quit; controller: M marks a training task's
+spot (palpd scores it), H re-centres a device placed on
 the patient (palpd --home), arrows
 slide, W/S press, Q/E R/F Z/C rotate, 1/2/3 finger:37/twofinger:19/probe:9x3, space pause,
 O start / stop a recording (trial-YYYYMMDD-HHMMSS in palpd's --record-dir), , and . the
 arteries' heart rate down / up 6 bpm, B the pulse off / on, backspace start pose. The HUD shows
-RECORDING and PAUSED, the pulse's rate, and palpd's answer to the last command.
+RECORDING and PAUSED, the pulse's rate, palpd's answer to the last command, and the training
+task, its trial and marks (observers: the last mark's score).
 )";
 
 namespace {

@@ -82,6 +82,19 @@ std::string force_text(const LatestState& state) {
   return out;
 }
 
+std::string task_text(const LatestState& state) {
+  if (!state.task || state.task->task.empty()) return {};
+  const TaskInfo& t = *state.task;
+  std::string out = "task " + t.task;
+  if (!t.running) out += " (stopped)";
+  out += "   trial " + std::to_string(t.trial) + "   " + std::to_string(t.marks) +
+         (t.marks == 1 ? " mark" : " marks");
+  if (t.last_distance_mm)
+    out += "   last " + fixed(*t.last_distance_mm, 1) + " mm, " + t.last_where +
+           (t.last_in_target ? " (in target)" : "");
+  return out;
+}
+
 std::string hud_text(const LatestState& state, const HudInputs& inputs) {
   const LinkStats& link = state.link;
   std::ostringstream out;
@@ -116,8 +129,10 @@ std::string hud_text(const LatestState& state, const HudInputs& inputs) {
       out << "   organ " << fixed(state.frame.organ_force, 2) << " N";
     out << "\n";
   }
+  if (const std::string task = task_text(state); !task.empty()) out << task << "\n";
   if (inputs.controller) {
-    out << "keys  1/2/3 tool  space pause  O record  H re-centre  ,/. pulse -/+  B pulse on/off";
+    out << "keys  1/2/3 tool  space pause  O record  H re-centre  ,/. pulse -/+  B pulse on/off"
+        << (state.task ? "  M mark" : "");
     if (link.last_request_id > 0)
       out << "\nlast command " << (link.last_result_ok ? "ok" : "refused")
           << (link.last_result_message.empty() ? "" : ": " + link.last_result_message);

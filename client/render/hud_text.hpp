@@ -27,6 +27,9 @@ struct HudInputs {
 std::string banner_text(const LatestState& state);
 // The HUD's text block: link, rates, latency, delivered fraction, tick rate, tool, contacts.
 std::string hud_text(const LatestState& state, const HudInputs& inputs);
+// The training task's line ("" without a task): the task, the trial, the marks and, for
+// observers, the last mark's score.
+std::string task_text(const LatestState& state);
 // The force line next to the chart, with "force not rendered by the device" when the device does
 // not render force (SceneDescription::device_renders_force false).
 std::string force_text(const LatestState& state);

@@ -25,6 +25,7 @@
 #include "base/errors.hpp"
 #include "render/force_chart.hpp"
 #include "render/hud_layer.hpp"
+#include "render/landmark_layer.hpp"
 #include "render/orientation_marker.hpp"
 #include "render/patient_view.hpp"
 #include "render/shadow.hpp"
@@ -51,6 +52,8 @@ struct RenderScene::Impl {
   ForceChart chart;
   OrientationMarker marker;
   WorkspaceBox workspace;
+  LandmarkLayer landmarks{renderer};
+  bool landmarks_wanted = false;
   PatientFrame frame;  // of the current scene (its direction matrix)
   std::string orientation = "LPS";
   const SceneDescription* framed_scene = nullptr;
@@ -214,6 +217,7 @@ void RenderScene::update_state(const LatestState& state, const HudInputs& inputs
   s.workspace.update(state.scene.get(), state.link.registration_home, s.tool_glyphs);
   s.shadow.update(state.frame, s.tools.tool_name(), s.volume.source(), s.tool_glyphs);
   s.volume.set_contacts(state.frame);  // for the deformation step
+  s.landmarks.update(state, s.landmarks_wanted);
 
   if (s.overlays) {
     HudInputs shown = inputs;
@@ -319,6 +323,16 @@ void RenderScene::adjust_window(double dlevel, double width_factor) {
 
 Window RenderScene::window() const {
   return impl_->volume.window();
+}
+
+void RenderScene::set_landmarks_wanted(bool wanted) {
+  impl_->landmarks_wanted = wanted;
+}
+bool RenderScene::landmarks_wanted() const {
+  return impl_->landmarks_wanted;
+}
+bool RenderScene::landmarks_visible() const {
+  return impl_->landmarks.visible();
 }
 
 void RenderScene::set_tool_glyphs_visible(bool visible) {

@@ -120,6 +120,10 @@ class RenderScene {
   Window window() const;
 
   void set_tool_glyphs_visible(bool visible);
+  // The landmarks (L): drawn when wanted and palpd allows it (landmark_layer.hpp).
+  void set_landmarks_wanted(bool wanted);
+  bool landmarks_wanted() const;
+  bool landmarks_visible() const;
   void set_overlays_visible(bool visible);
 
   // Display coordinates (pixels, origin bottom left) of a scene point.

@@ -1,4 +1,6 @@
 // StreamClient::Impl's handlers of the server's messages, applied to the shared state.
+#include <cmath>
+
 #include "stream/stream_client_impl.hpp"
 #include "wire/messages.hpp"
 
@@ -54,6 +56,12 @@ void StreamClient::Impl::on_message(const ConnectionPtr& c, const v1::ServerMess
       return;
     case v1::ServerMessage::kHistory:
       on_history(*c, m.history());
+      return;
+    case v1::ServerMessage::kTask:
+      on_task(m.task());
+      return;
+    case v1::ServerMessage::kLandmarks:
+      on_landmarks(m.landmarks());
       return;
     case v1::ServerMessage::MSG_NOT_SET:
       break;
@@ -131,6 +139,35 @@ void StreamClient::Impl::on_history(Connection& c, const v1::ForceHistory& h) {
       throw ProtocolViolation("ForceHistory: a force not finite or times not increasing");
     c.joined_history.push_back({0.0, f, h.server_time_ns(i)});
   }
+}
+
+void StreamClient::Impl::on_task(const v1::TaskStatus& t) {
+  TaskInfo info;
+  info.running = t.running();
+  info.task = t.task().substr(0, 256);
+  info.trial = t.trial();
+  info.marks = t.marks();
+  info.show_landmarks = t.show_landmarks();
+  if (t.has_last_mark() && std::isfinite(t.last_mark().distance_mm())) {
+    info.last_distance_mm = t.last_mark().distance_mm();
+    info.last_in_target = t.last_mark().in_target();
+    info.last_where = t.last_mark().where().substr(0, 64);
+  }
+  std::lock_guard lock(shared_mutex);
+  shared.task = std::move(info);
+}
+
+// The landmarks to draw: a set over kMaxLandmarks, or with a point not finite, is dropped.
+void StreamClient::Impl::on_landmarks(const v1::LandmarkSet& set) {
+  if (set.landmarks_size() > kMaxLandmarks) return;
+  auto points = std::make_shared<std::vector<LandmarkPoint>>();
+  for (const v1::Landmark& l : set.landmarks()) {
+    const Vec3d p{l.point().x(), l.point().y(), l.point().z()};
+    if (!is_finite(p)) return;
+    points->push_back({l.name().substr(0, 64), l.kind().substr(0, 32), p});
+  }
+  std::lock_guard lock(shared_mutex);
+  shared.landmarks = std::move(points);
 }
 
 void StreamClient::Impl::on_frame(Connection& c, const v1::HapticFrame& f, std::int64_t now) {

@@ -505,6 +505,12 @@ std::uint64_t StreamClient::stop_recording() {
   return impl_->queue_command(m, "");
 }
 
+std::uint64_t StreamClient::task_mark() {
+  v1::ClientMessage m;
+  m.mutable_command()->mutable_task_mark();
+  return impl_->queue_command(m, "");
+}
+
 std::string connect_refusal(const StreamOptions& o) {
   if (o.dds || o.token.empty()) return "";
   asio::io_context io;

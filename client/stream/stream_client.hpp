@@ -196,6 +196,25 @@ struct LinkStats {
   std::string last_result_message;
 };
 
+// The training task as palpd tells this client (TaskStatus; none from a palpd without tasks).
+// The trainee's controller gets no score and show_landmarks false while a task runs.
+struct TaskInfo {
+  bool running = false;
+  std::string task;  // "ptcd right 9/10"; empty before any task
+  std::uint32_t trial = 0, marks = 0;
+  bool show_landmarks = false;
+  std::optional<double> last_distance_mm;  // the last mark's score (observers)
+  bool last_in_target = false;
+  std::string last_where;
+};
+// A landmark to draw (LandmarkSet), scene frame mm; at most kMaxLandmarks (a larger set is
+// dropped).
+struct LandmarkPoint {
+  std::string name, kind;
+  Vec3d point{};
+};
+inline constexpr int kMaxLandmarks = 1024;
+
 struct LatestState {
   std::uint64_t connection = 0;  // changes on every (re)connection: rebuild the scene
   std::shared_ptr<const SceneDescription> scene;  // null until SceneInfo
@@ -203,6 +222,8 @@ struct LatestState {
   FrameState frame;
   LinkStats link;
   std::vector<ForceSample> force_history;  // oldest first, force_history_s long
+  std::optional<TaskInfo> task;
+  std::shared_ptr<const std::vector<LandmarkPoint>> landmarks;  // null: none received
 };
 
 class StreamClient {
@@ -233,6 +254,8 @@ class StreamClient {
   // Start a recording named `name` in palpd's --record-dir (refused when it exists), or stop it.
   std::uint64_t start_recording(const std::string& name);
   std::uint64_t stop_recording();
+  // The training task: mark the spot (TaskMark; palpd scores it).
+  std::uint64_t task_mark();
 
   const StreamOptions& options() const { return options_; }
 

@@ -101,6 +101,8 @@ struct StreamClient::Impl {
   void on_frame(Connection& c, const v1::HapticFrame& f, std::int64_t now);
   void on_stats(Connection& c, const v1::Stats& s);
   void on_history(Connection& c, const v1::ForceHistory& h);
+  void on_task(const v1::TaskStatus& t);
+  void on_landmarks(const v1::LandmarkSet& set);
   void on_error(const ConnectionPtr& c, const v1::Error& e);
   void on_pong(Connection& c, const v1::Pong& p, std::int64_t now);
 

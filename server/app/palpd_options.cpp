@@ -113,6 +113,16 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
                           is refused, never written over
   --record-dir DIR        where StartRecording commands (palp ctl record start) write, made at
                           start when missing (default: the current directory)
+  --landmarks FILE        the scan's landmarks (palp landmarks --out FILE): training tasks score
+                          against them, and observers may show them
+  --task KIND             a training task from the start: ptcd, lumbar or femoral (a controller
+                          starts, marks and stops tasks too: palp ctl HOST:PORT task ...);
+                          needs --landmarks
+  --task-side SIDE        ptcd, femoral: right (default) or left
+  --task-space N          ptcd: the intercostal space below rib N (9: the 9th/10th; 1..11)
+  --task-interspace NAME  lumbar: L3/L4 (default) or L4/L5
+  --task-report-dir DIR   where each session's report goes when it ends (task stop, palpd's
+                          exit; default: --record-dir)
   --watchdog-ms MS        a tick starting MS later than its deadline zeroes the force (5; 0 off;
                           at most 1000)
   --device-timeout-ms MS  a device silent for MS zeroes the force (100; 0 = off; at most 10000)
@@ -165,7 +175,13 @@ const std::vector<std::string> kValued = {"device",
                                           "tls-client-ca",
                                           "tls-controllers",
                                           "tune-budget-s",
-                                          "map-window"};
+                                          "map-window",
+                                          "landmarks",
+                                          "task",
+                                          "task-side",
+                                          "task-space",
+                                          "task-interspace",
+                                          "task-report-dir"};
 const std::vector<std::string> kValuedAll =
     interop::with_igtl_options(cli::with_dds_options(kValued));
 
@@ -317,6 +333,7 @@ std::optional<PalpdOptions> parse_palpd_options(cli::Arguments argv) {
   o.duration_s = option_within(args, "duration", 0, 0, 1e7);
   o.record_dir = args.get("record-dir").value_or(".");
   make_record_dir(o.record_dir);
+  o.task = cli::task_options(args, o.record_dir);
   o.stats_json = args.get("stats-json").value_or("");
   (void)cli::scene_options(args);
   return o;

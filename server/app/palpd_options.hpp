@@ -10,6 +10,7 @@
 
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli/palpd_task.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
 #include "net/server.hpp"
@@ -42,6 +43,7 @@ struct PalpdOptions {
   double duration_s = 0;  // 0: until SIGINT / SIGTERM
   std::string record_dir;
   std::string stats_json;  // "" : none
+  cli::TaskOptions task;   // --landmarks, --task*: training tasks (palpd_task.hpp)
 };
 
 // nullopt: --help was asked for (the caller prints palpd_help()).

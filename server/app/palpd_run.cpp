@@ -93,7 +93,8 @@ std::shared_ptr<const StructureLabels> read_structures(const PalpdOptions& o, co
     std::fprintf(stderr, "palpd: warning: structures: %s\n", labels->note.c_str());
   if (!o.quiet && !labels->structures.empty()) {
     std::string names;
-    for (const StructureLabel& l : labels->structures) names += (names.empty() ? "" : ", ") + l.name;
+    for (const StructureLabel& l : labels->structures)
+      names += (names.empty() ? "" : ", ") + l.name;
     std::printf("palpd: structures for the clients: %s\n", names.c_str());
   }
   return labels;
@@ -137,11 +138,12 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
     throw InputError("device " + o.device_spec + ": " + device.last_error());
   auto maps =
       cli::maps_at_start(o.args, o.device_spec, device.kind(), scene, placement, o.tool, o.quiet);
-  if (maps.windowed) model = std::make_shared<const Model>(maps.haptic, o.tool, o.params, scene.layers);
+  if (maps.windowed)
+    model = std::make_shared<const Model>(maps.haptic, o.tool, o.params, scene.layers);
   device_config.fields.reset();  // the whole maps' gradient fields go with the last holder
   auto structures = read_structures(o, scene);
-  return Built{std::move(scene), std::move(tuning), std::move(model), placement, std::move(maps),
-               std::move(structures)};
+  return Built{std::move(scene), std::move(tuning), std::move(model),
+               placement,        std::move(maps),   std::move(structures)};
 }
 
 rt::RecordingMetadata recording_metadata(const PalpdOptions& o, const Built& b) {
@@ -255,6 +257,15 @@ void print_end(const PalpdOptions& o, const rt::LoopStats& s, const net::ServerC
                  static_cast<unsigned long long>(s.record_dropped));
 }
 
+// A running training session ends with palpd: scored, its report written and named.
+void finish_task(const PalpdOptions& o, net::TaskSession& task) {
+  task.finish();
+  if (!task.view().report.empty() && !o.quiet)
+    std::printf("palpd: task report %s\n", task.view().report.c_str());
+  if (!task.view().note.empty() && !o.quiet)
+    std::fprintf(stderr, "palpd: task: %s\n", task.view().note.c_str());
+}
+
 // The loop, the server and its bridges, from start to stop.
 int serve(PalpdOptions& o, rt::Device& device, Built& b) {
   const sigset_t signals = block_stop_signals();
@@ -266,6 +277,10 @@ int serve(PalpdOptions& o, rt::Device& device, Built& b) {
   const auto igtl = interop::igtl_beside(o.args, b.scene.grid, o.loop.rate_hz, server, o.quiet);
   const auto dds =
       cli::dds_beside(o.args, description, loop, control, server, o.tool.name, o.quiet);
+  const std::string replay_path =
+      o.device_spec.rfind("replay:", 0) == 0 ? o.device_spec.substr(7) : std::string();
+  const auto task =
+      cli::task_beside(std::move(o.task), b.scene.grid, app, server, replay_path, o.quiet);
 
   if (const auto record = o.args.get("record")) {
     const std::string failure = app.start(*record, "palpd --record");
@@ -283,7 +298,8 @@ int serve(PalpdOptions& o, rt::Device& device, Built& b) {
     nanosleep(&pause, nullptr);
   }
   server.stop();
-  loop.stop();  // the device gets zero force
+  loop.stop();                      // the device gets zero force
+  if (task) finish_task(o, *task);  // the io thread has stopped: the session is this thread's
   if (app.recording()) app.stop_recording();
   device.deactivate();
 

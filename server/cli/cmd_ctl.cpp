@@ -17,6 +17,7 @@
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/config_file.hpp"
+#include "cli/ctl_task.hpp"
 #include "cli/server_link.hpp"
 #include "cli/tls_options.hpp"
 #include "net/protocol.hpp"
@@ -46,6 +47,14 @@ Actions:
   tool TOOL               finger:N, twofinger:N or probe:NXxNY
   pause | resume          zero force and the model held, or ticking again (force ramps back in)
   recentre                move the device's home to where it is now (usb-haptic, spacemouse)
+  task start KIND [--side right|left] [--space N] [--interspace L3/L4|L4/L5]
+                          start a training task (ptcd: the space below rib N, 9 by default, on
+                          a side; lumbar: an interspace; femoral: the pulse on a side), trial 1
+  task mark               mark the spot: the trainee's finger now (palpd scores it)
+  task next               score this trial and start the next one
+  task stop               score this trial, end the session and write its report
+  task status             the task, the trial, its marks and the last mark's score, as the
+                          instructor sees it (connects as an observer: no token needed)
 Options:
   --token TOKEN           palpd's token (default: the 'token' key of --config); sent only over
                           TLS or loopback: to another machine without --tls-ca/--tls-pin ctl
@@ -70,6 +79,8 @@ struct Action {
   std::vector<v1::Command> commands;
   std::vector<std::string> what;  // one line per command, for people
   bool status = false;
+  bool task = false;      // a task action: the TaskStatus that follows is printed
+  bool observer = false;  // task status: as an observer
 };
 
 // A number for `what` (a parameter's or the pulse's value); UsageError otherwise.
@@ -157,9 +168,16 @@ Action parse_action(const std::vector<std::string>& words) {
     c.mutable_recentre();
     a.commands.push_back(c);
     a.what.push_back("recentre");
+  } else if (verb == "task") {
+    CtlTaskAction t = parse_ctl_task(words);
+    a.commands = std::move(t.commands);
+    a.what = std::move(t.what);
+    a.task = true;
+    a.observer = t.observer;
   } else {
     throw UsageError("unknown ctl action '" + verb +
-                     "' (status, record start|stop, set, pulse, tool, pause, resume, recentre)");
+                     "' (status, record start|stop, set, pulse, tool, pause, resume, recentre, "
+                     "task)");
   }
   for (std::size_t i = 0; i < a.commands.size(); ++i) a.commands[i].set_request_id(i + 1);
   return a;
@@ -238,7 +256,7 @@ class Session {
     switch (m.msg_case()) {
       case v1::ServerMessage::kWelcome:
         welcomed_ = true;
-        if (m.welcome().role() != v1::CONTROLLER)
+        if (m.welcome().role() != (action_.observer ? v1::OBSERVER : v1::CONTROLLER))
           return fail("palpd admitted this client as an observer, not the controller");
         next_command();
         break;
@@ -250,6 +268,10 @@ class Session {
       case v1::ServerMessage::kStats:
         stats_ = m.stats();
         if (waiting_for_after_) after_stats_ = true;
+        break;
+      case v1::ServerMessage::kTask:
+        task_ = m.task();
+        if (waiting_for_after_) after_task_ = true;
         break;
       case v1::ServerMessage::kResult: {
         const v1::CommandResult& r = m.result();
@@ -281,7 +303,11 @@ class Session {
       default:
         break;
     }
-    if (waiting_for_after_ && after_stats_ && (after_scene_ || !changes_scene())) report();
+    if (!waiting_for_after_) return;
+    // a task action: the TaskStatus after it (or, from a palpd without tasks, the Stats alone)
+    if (action_.task ? after_task_ || (after_stats_ && !task_)
+                     : after_stats_ && (after_scene_ || !changes_scene()))
+      report();
   }
 
   bool changes_scene() const {
@@ -291,6 +317,13 @@ class Session {
   }
 
   void report() {
+    if (action_.task) {
+      if (task_)
+        std::printf("%s", task_status_text(*task_).c_str());
+      else
+        std::printf("task       this palpd runs no training tasks (start it with --landmarks)\n");
+      return finish();
+    }
     if (action_.status) print_status();
     if (changes_scene() && scene_before_ && any_ok_) print_changes();
     if (!action_.status && stats_)
@@ -369,6 +402,8 @@ class Session {
   std::size_t next_ = 0;
   bool welcomed_ = false, refused_ = false, any_ok_ = false;
   bool waiting_for_after_ = false, after_scene_ = false, after_stats_ = false;
+  bool after_task_ = false;
+  std::optional<v1::TaskStatus> task_;
   std::optional<v1::SceneInfo> scene_before_;
   v1::SceneInfo scene_now_;
   std::optional<v1::Stats> stats_;
@@ -378,9 +413,9 @@ class Session {
 }  // namespace
 
 int cmd_ctl(const Arguments& argv) {
-  const Args args(
-      argv, {"help"},
-      {"token", "config", "name", "timeout", "tls-ca", "tls-pin", "tls-cert", "tls-key"});
+  const Args args(argv, {"help"},
+                  {"token", "config", "name", "timeout", "tls-ca", "tls-pin", "tls-cert", "tls-key",
+                   "side", "space", "interspace"});
   if (args.has("help")) {
     std::cout << kCtlUsage;
     return 0;
@@ -394,7 +429,14 @@ int cmd_ctl(const Arguments& argv) {
   std::string host = target.substr(0, colon);
   if (host.size() > 2 && host.front() == '[' && host.back() == ']')
     host = host.substr(1, host.size() - 2);
-  const Action action = parse_action({pos.begin() + 1, pos.end()});
+  std::vector<std::string> words(pos.begin() + 1, pos.end());
+  for (const char* option : {"side", "space", "interspace"})  // task start's (ctl_task.hpp)
+    if (const auto value = args.get(option)) {
+      if (words.size() < 2 || words[0] != "task" || words[1] != "start")
+        throw UsageError(std::string("--") + option + " is for ctl task start");
+      words.insert(words.end(), {std::string("--") + option, *value});
+    }
+  const Action action = parse_action(words);
   const double timeout = args.number("timeout", 5.0);
   if (!(timeout > 0.0 && timeout <= 3600.0)) throw UsageError("--timeout must be in (0, 3600] s");
   std::string token = args.get("token").value_or("");
@@ -403,7 +445,7 @@ int cmd_ctl(const Arguments& argv) {
 
   v1::Hello hello;
   hello.set_protocol_version(wire::kProtocolVersion);
-  hello.set_role(v1::CONTROLLER);
+  hello.set_role(action.observer ? v1::OBSERVER : v1::CONTROLLER);
   hello.set_token(token);
   hello.set_client_name(args.get("name").value_or("palp-ctl"));
   hello.set_frame_rate_hz(1.0);  // frames are not what ctl is for

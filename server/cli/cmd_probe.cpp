@@ -208,6 +208,8 @@ class Probe {
       case v1::ServerMessage::kResult:
       case v1::ServerMessage::kPong:
       case v1::ServerMessage::kHistory:  // the force chart's, not the probe's
+      case v1::ServerMessage::kTask:     // the training task: palp ctl task status
+      case v1::ServerMessage::kLandmarks:
       case v1::ServerMessage::MSG_NOT_SET:
         break;
     }

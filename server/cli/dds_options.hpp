@@ -47,6 +47,7 @@ class DdsControlGate : public net::ControlTarget {
     const std::lock_guard lock(mutex_);
     return inner_.set_device_pose(pose, received_ns);
   }
+  net::TaskSession* task() override { return inner_.task(); }
 
  private:
   net::ControlTarget& inner_;

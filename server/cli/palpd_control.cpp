@@ -2,6 +2,7 @@
 #include "cli/palpd_control.hpp"
 
 #include <ctime>
+#include <exception>
 #include <string>
 #include <utility>
 #include <vector>
@@ -123,16 +124,45 @@ std::string PalpdControl::start(const std::filesystem::path& path,
   return {};
 }
 
+namespace {
+
+// The marks of a stopped recording beside it, as its own ticks: "" or why they were not written.
+std::string write_marks(const rt::Recorder& done,
+                        const std::vector<std::pair<std::uint64_t, std::int64_t>>& marks) {
+  std::uint64_t first_seq = 0;
+  std::int64_t first_t_ns = 0;
+  if (marks.empty() || !done.first_recorded(first_seq, first_t_ns)) return {};
+  std::vector<rt::RecordedMark> rows;
+  for (const auto& [seq, t_ns] : marks)
+    if (seq >= first_seq)
+      rows.push_back({static_cast<double>(t_ns - first_t_ns) * 1e-9, seq - first_seq});
+  try {
+    rt::write_recording_marks(rt::marks_path_for(done.path()), rows);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
 std::string PalpdControl::stop_recording() {
   std::unique_ptr<rt::Recorder> done;
+  std::vector<std::pair<std::uint64_t, std::int64_t>> marks;
   {
     const std::lock_guard lock(mutex_);
     if (!recorder_) return "not recording";
     loop_.set_recording(false);
     done = std::move(recorder_);
+    marks = std::exchange(marks_, {});
   }
   done->stop();
-  return {};
+  return write_marks(*done, marks);
+}
+
+void PalpdControl::note_mark(std::uint64_t seq, std::int64_t t_ns) {
+  const std::lock_guard lock(mutex_);
+  if (recorder_ && marks_.size() < rt::kMaxRecordedMarks) marks_.emplace_back(seq, t_ns);
 }
 
 bool PalpdControl::recording() const {

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "devices/device.hpp"
@@ -47,6 +48,12 @@ class PalpdControl final : public net::ControlTarget {
   std::uint64_t record_lost() const override { return loop_.stats().record_dropped; }
   bool set_device_pose(const Pose& pose, std::int64_t received_ns) override;
   std::uint64_t recorded() const;
+  // The training task (palpd_task.hpp), set before the server starts; null: none.
+  void set_task(net::TaskSession* task) { task_ = task; }
+  net::TaskSession* task() override { return task_; }
+  // A training mark at tick `seq` (deadline `t_ns`): kept with the recording that runs, written
+  // beside it when it stops (rt::marks_path_for: NAME.marks.csv).
+  void note_mark(std::uint64_t seq, std::int64_t t_ns);
 
  private:
   rt::HapticLoop& loop_;
@@ -56,6 +63,8 @@ class PalpdControl final : public net::ControlTarget {
   std::string record_dir_;
   mutable std::mutex mutex_;
   std::unique_ptr<rt::Recorder> recorder_;
+  std::vector<std::pair<std::uint64_t, std::int64_t>> marks_;  // seq, t_ns; with recorder_
+  net::TaskSession* task_ = nullptr;
 };
 
 }  // namespace palp::cli

@@ -124,6 +124,10 @@ class Device {
   virtual std::string status_message() const { return {}; }
   // Any thread (atomic loads): the link's counters, for Stats.
   virtual DeviceLinkCounters link_counters() const noexcept { return {}; }
+  // Real time (an atomic load): the buttons held now, bit i = button i (0: none, or a device
+  // without buttons). The loop puts them in every snapshot (Snapshot::buttons); bit 0
+  // (rt::kMarkButton) marks a training task's spot.
+  virtual std::uint32_t buttons() const noexcept { return 0; }
 
   const std::string& last_error() const { return error_; }
 

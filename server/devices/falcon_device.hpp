@@ -75,6 +75,10 @@ class FalconDevice final : public Device {
   DeviceStatus deactivate() override;
   DeviceState state() const noexcept override;
   std::string status_message() const override;
+  // The grip's buttons (bit 0 PLUS marks a training task's spot, rt::kMarkButton).
+  std::uint32_t buttons() const noexcept override {
+    return buttons_.load(std::memory_order_relaxed);
+  }
   // CHAI3D's Falcon class (cFalconDevice): 8 N, 3 N/mm, 20 N s/m.
   DeclaredLimits declared_limits() const noexcept override { return {8.0, 3.0, 0.020}; }
 

@@ -45,6 +45,10 @@ class UsbHapticDevice final : public Device {
   DeviceStatus deactivate() override;
   DeviceState state() const noexcept override;
   std::string status_message() const override;
+  // The buttons the device last reported (bit 0 marks a training task's spot, rt::kMarkButton).
+  std::uint32_t buttons() const noexcept override {
+    return buttons_.load(std::memory_order_relaxed);
+  }
 
   // Counters (any thread).
   struct Counters {

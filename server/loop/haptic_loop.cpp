@@ -408,6 +408,7 @@ void HapticLoop::publish(const Tick& t) noexcept {
       s->contact_count = static_cast<std::uint32_t>(n);
     }
     publish_pulse(t, *s);
+    s->buttons = device_.buttons();  // an atomic load (training marks: a rising edge)
     // The network thread is woken (an eventfd write, never blocking: wake_signal.hpp) only when
     // it waits and a client is due a frame, the ring is half full or the device came or went
     // (Stats at once); otherwise it drains the ring on its own timer. No system call on a tick

@@ -46,4 +46,15 @@ std::optional<Refusal> check_hello(const v1::Hello& h, const HelloFacts& facts,
   return std::nullopt;
 }
 
+std::string pending_refusal(const ServerConfig& config, const std::string& address,
+                            std::size_t pending, std::size_t pending_here) {
+  if (pending_here >= config.max_pending_per_address)
+    return "too many connections from " + address + " waiting to say Hello (at most " +
+           std::to_string(config.max_pending_per_address) + ")";
+  if (pending >= config.max_pending)
+    return "too many connections waiting to say Hello (at most " +
+           std::to_string(config.max_pending) + ")";
+  return {};
+}
+
 }  // namespace palp::net

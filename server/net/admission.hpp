@@ -36,4 +36,9 @@ std::optional<Refusal> check_hello(const v1::Hello& hello, const HelloFacts& fac
                                    const ServerConfig& config, TokenGuard& guard,
                                    std::int64_t now_ns);
 
+// Why a connection that has not said Hello yet is refused ("" : it may wait), from how many
+// others wait (`pending`) and how many of them from its address (`pending_here`).
+std::string pending_refusal(const ServerConfig& config, const std::string& address,
+                            std::size_t pending, std::size_t pending_here);
+
 }  // namespace palp::net

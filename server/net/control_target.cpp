@@ -3,6 +3,8 @@
 
 #include <exception>
 
+#include "net/task_messages.hpp"
+
 namespace palp::net {
 
 std::string apply_command(ControlTarget* target, const v1::Command& c,
@@ -33,6 +35,12 @@ std::string apply_command(ControlTarget* target, const v1::Command& c,
           break;
         case v1::Command::kStopRecording:
           failure = target->stop_recording();
+          break;
+        case v1::Command::kTaskStart:
+        case v1::Command::kTaskMark:
+        case v1::Command::kTaskNextTrial:
+        case v1::Command::kTaskStop:
+          failure = apply_task_command(target->task(), c);
           break;
         case v1::Command::KIND_NOT_SET:
           failure = "empty command";

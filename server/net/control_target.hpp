@@ -9,6 +9,8 @@
 
 namespace palp::net {
 
+class TaskSession;
+
 // What Commands do; palpd wires it to the loop, the recorder and the remote device. Each
 // returns "" on success or the reason for refusing. Called on the io thread.
 class ControlTarget {
@@ -25,6 +27,9 @@ class ControlTarget {
   virtual std::uint64_t record_lost() const = 0;
   // false: there is no remote device to drive.
   virtual bool set_device_pose(const Pose& pose, std::int64_t received_ns) = 0;
+  // The training task (task Commands, TaskStatus and the landmarks to clients); null: palpd
+  // runs none. Used on the io thread only.
+  virtual TaskSession* task() { return nullptr; }
 };
 
 // Runs `command` from the client `requested_by` on `target` (none: the server takes no

@@ -35,6 +35,29 @@ v1::DeviceState to_proto(rt::DeviceState state) {
   return v1::DEVICE_STATE_UNSPECIFIED;
 }
 
+std::shared_ptr<const std::string> welcome_frame(std::uint64_t client_id, v1::Role role,
+                                                 const std::string& server_name, double rate_hz,
+                                                 std::int64_t now_ns) {
+  v1::ServerMessage m;
+  v1::Welcome* w = m.mutable_welcome();
+  w->set_protocol_version(kProtocolVersion);
+  w->set_client_id(client_id);
+  w->set_role(role);
+  w->set_server_name(server_name);
+  w->set_tick_rate_hz(rate_hz);
+  w->set_server_time_ns(now_ns);
+  return frame_of(m);
+}
+
+std::shared_ptr<const std::string> pong_frame(const v1::Ping& ping, std::int64_t now_ns) {
+  v1::ServerMessage m;
+  v1::Pong* p = m.mutable_pong();
+  p->set_id(ping.id());
+  p->set_client_time_ns(ping.client_time_ns());
+  p->set_server_time_ns(now_ns);
+  return frame_of(m);
+}
+
 void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* out) {
   const rt::TickRecord& t = snapshot.tick;
   out->set_seq(t.seq);
@@ -119,9 +142,19 @@ ClientCheck parse_client_message(std::string_view body, v1::ClientMessage& out) 
           if (c.start_recording().name().size() > kMaxNameBytes)
             return bad(v1::Error::BAD_REQUEST, "recording name too long");
           return {};
+        case v1::Command::kTaskStart: {
+          const v1::TaskStart& t = c.task_start();
+          if (t.kind().size() > kMaxNameBytes || t.side().size() > kMaxNameBytes ||
+              t.interspace().size() > kMaxNameBytes)
+            return bad(v1::Error::BAD_REQUEST, "task kind, side or interspace too long");
+          return {};
+        }
         case v1::Command::kPause:
         case v1::Command::kRecentre:
         case v1::Command::kStopRecording:
+        case v1::Command::kTaskMark:
+        case v1::Command::kTaskNextTrial:
+        case v1::Command::kTaskStop:
           return {};
         case v1::Command::KIND_NOT_SET:
           break;

@@ -23,6 +23,12 @@ std::shared_ptr<const std::string> frame_of(const v1::ServerMessage& message);
 std::shared_ptr<const std::string> error_frame(v1::Error::Code code, const std::string& reason,
                                                bool fatal);
 
+// The Welcome for a client, and the Pong for its Ping (`now_ns`: the server's clock).
+std::shared_ptr<const std::string> welcome_frame(std::uint64_t client_id, v1::Role role,
+                                                 const std::string& server_name, double rate_hz,
+                                                 std::int64_t now_ns);
+std::shared_ptr<const std::string> pong_frame(const v1::Ping& ping, std::int64_t now_ns);
+
 // A HapticFrame for a snapshot (device state included), with its contacts when `contacts`.
 void fill_frame(const rt::Snapshot& snapshot, bool contacts, v1::HapticFrame* out);
 

@@ -21,6 +21,7 @@
 #include "net/protocol.hpp"
 #include "net/scene_messages.hpp"
 #include "net/session.hpp"
+#include "net/task_messages.hpp"
 #include "net/tls_accept.hpp"
 #include "net/token_guard.hpp"
 #include "net/volume_cache.hpp"
@@ -100,16 +101,8 @@ class Server::Impl {
   std::uint16_t port() const { return port_; }
   std::size_t client_count() const { return client_count_.load(); }
   ServerCounters counters() const {
-    ServerCounters c;
-    c.accepted = accepted_.load();
-    c.rejected = rejected_.load();
-    c.protocol_errors = protocol_errors_.load();
-    c.frames_sent = frames_sent_.load();
-    c.frames_dropped = frames_dropped_.load();
-    c.timeouts = timeouts_.load();
-    c.overflows = overflows_.load();
-    c.net_wakeups = pump_.wakeups();
-    return c;
+    return {accepted_.load(),       rejected_.load(), protocol_errors_.load(), frames_sent_.load(),
+            frames_dropped_.load(), timeouts_.load(), overflows_.load(),       pump_.wakeups()};
   }
 
   using Session = ServerSession;
@@ -150,15 +143,9 @@ class Server::Impl {
     }
     sessions_.push_back(s);
     client_count_.store(sessions_.size());
-    if (pending_here >= config_.max_pending_per_address || pending >= config_.max_pending) {
-      s->refusal = pending_here >= config_.max_pending_per_address
-                       ? "too many connections from " + s->address +
-                             " waiting to say Hello (at most " +
-                             std::to_string(config_.max_pending_per_address) + ")"
-                       : "too many connections waiting to say Hello (at most " +
-                             std::to_string(config_.max_pending) + ")";
-      if (!config_.tls) return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
-    }
+    s->refusal = pending_refusal(config_, s->address, pending, pending_here);
+    if (!s->refusal.empty() && !config_.tls)
+      return fatal(s, v1::Error::TOO_MANY_CLIENTS, s->refusal);
     if (!config_.tls) return read(s);
     s->handshaking = true;
     tls_accept(s->stream, *config_.tls, [this, s](const TlsAccepted& r) {
@@ -235,15 +222,9 @@ class Server::Impl {
       case v1::ClientMessage::kHello:
         error(s, v1::Error::BAD_REQUEST, "Hello was already received");
         return;
-      case v1::ClientMessage::kPing: {
-        v1::ServerMessage m;
-        v1::Pong* p = m.mutable_pong();
-        p->set_id(msg.ping().id());
-        p->set_client_time_ns(msg.ping().client_time_ns());
-        p->set_server_time_ns(rt::monotonic_ns());
-        send(s, frame_of(m));
+      case v1::ClientMessage::kPing:
+        send(s, pong_frame(msg.ping(), rt::monotonic_ns()));
         return;
-      }
       case v1::ClientMessage::kCommand:
         if (s->role != v1::CONTROLLER) {
           error(s, v1::Error::PERMISSION_DENIED, "observers cannot send commands");
@@ -289,19 +270,15 @@ class Server::Impl {
     s->name = h.client_name();
     s->want_contacts = h.want_contacts();
     s->frames.interval_ns = frame_interval_ns(h.frame_rate_hz());
-    v1::ServerMessage m;
-    v1::Welcome* w = m.mutable_welcome();
-    w->set_protocol_version(kProtocolVersion);
-    w->set_client_id(s->id);
-    w->set_role(s->role);
-    w->set_server_name(config_.server_name);
-    w->set_tick_rate_hz(loop_.config().rate_hz);
-    w->set_server_time_ns(rt::monotonic_ns());
     drain();  // the loop wakes this thread only for due frames: take what the ring holds first
     v1::ServerMessage history;  // the force before it came, after SceneInfo (force_history.hpp)
     force_history_.fill(history.mutable_history());
     s->history = frame_of(history);
-    if (!queue(*s, frame_of(m)) || !queue_scene(*s, scene_frame())) return;
+    if (!queue(*s, welcome_frame(s->id, s->role, config_.server_name, loop_.config().rate_hz,
+                                 rt::monotonic_ns())) ||
+        !queue_scene(*s, scene_frame()))
+      return;
+    if (TaskSession* t = task()) queue_task(*s, *t);
     plan_volume(*s, {h.volume_step(), h.volume_max_dim(), h.volume_hu(), !h.volume_skip_bone(),
                      h.volume_deflate(), h.volume_crop(), h.volume_labels()});
     if (s->volume.chunks == 0) became_ready(*s);
@@ -328,6 +305,22 @@ class Server::Impl {
     r->set_message(failure);
     send(s, frame_of(m));
     if (scene_change) scene_dirty_ = true;  // sent at the next poll, once for a burst of changes
+    if (is_task_command(c)) send_task_to_all();
+  }
+
+  // The training task: TaskStatus to each client as its role may see it (task_messages.hpp).
+  TaskSession* task() { return control_ ? control_->task() : nullptr; }
+  bool queue_task(Session& s, const TaskSession& t) {
+    for (Bytes& b : task_frames(t, s.role == v1::CONTROLLER, s.landmarks_sent))
+      if (!queue(s, std::move(b))) return false;
+    return true;
+  }
+  void send_task_to_all() {
+    if (TaskSession* t = task()) {
+      task_revision_ = t->revision();
+      for (const SessionPtr& s : sessions_)
+        if (s->welcomed && !s->closing && !s->closed && queue_task(*s, *t)) pump(s);
+    }
   }
 
   // One SceneInfo, shared by every welcomed client; it replaces one still queued for a client.
@@ -450,6 +443,7 @@ class Server::Impl {
   void frames_published() {
     if (scene_dirty_) send_scene_to_all();
     drain();
+    if (task() && task()->revision() != task_revision_) send_task_to_all();  // a button's mark
     want_frames();
     graveyard_.free_some(kFreePerPoll);
   }
@@ -581,7 +575,8 @@ class Server::Impl {
   // Queues of dropped clients, freed kFreePerPoll messages per poll.
   static constexpr std::size_t kFreePerPoll = 4096;
   Graveyard graveyard_;
-  bool scene_dirty_ = false;  // the scene changed since SceneInfo was last sent
+  bool scene_dirty_ = false;         // the scene changed since SceneInfo was last sent
+  std::uint64_t task_revision_ = 0;  // the task's revision last sent
   std::uint16_t port_ = 0;
   std::uint64_t next_id_ = 0;
   TokenGuard token_guard_;

@@ -41,6 +41,7 @@ struct ServerSession {
   bool writing = false;
   bool want_contacts = false;
   bool end_logged = false;  // its leaving (or refusal) is in the log
+  bool landmarks_sent = false;  // the training task's landmarks (task_messages.hpp)
   FrameSchedule frames;     // its requested frame rate: which snapshots it takes
   wire::FrameDecoder decoder;
   std::array<std::uint8_t, 8192> rbuf{};

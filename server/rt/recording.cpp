@@ -6,7 +6,9 @@
 #include <bit>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -278,6 +280,11 @@ Recorder::~Recorder() {
 void Recorder::drain() {
   while (const Snapshot* s = ring_.front()) {
     if (s->tick.seq >= first_seq_) {
+      if (!any_recorded_) {
+        any_recorded_ = true;
+        first_rec_seq_ = s->tick.seq;
+        first_rec_t_ns_ = s->tick.t_ns;
+      }
       writer_.write(s->tick);
       count_.fetch_add(1, std::memory_order_relaxed);
     }
@@ -291,6 +298,47 @@ void Recorder::stop() {
   stop_.store(true, std::memory_order_release);
   if (thread_.joinable()) thread_.join();
   writer_.finish();
+}
+
+std::string marks_path_for(const std::string& recording_path) {
+  std::filesystem::path p(recording_path);
+  return p.replace_extension(".marks.csv").string();
+}
+
+void write_recording_marks(const std::string& path, const std::vector<RecordedMark>& marks) {
+  std::FILE* file = create_exclusive(path, "the recording's marks");
+  std::string text = "t,tick\n";
+  for (const RecordedMark& m : marks) {
+    append_number(text, m.t);
+    text += ',' + std::to_string(m.tick) + '\n';
+  }
+  const bool ok = std::fwrite(text.data(), 1, text.size(), file) == text.size();
+  if (std::fclose(file) != 0 || !ok) throw Error(path + ": writing the recording's marks failed");
+}
+
+std::vector<RecordedMark> read_recording_marks(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot read the recording's marks");
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("t,tick", 0) != 0)
+    throw InputError(path + ": not a marks file (its header must start with t,tick)");
+  std::vector<RecordedMark> marks;
+  for (int row = 2; std::getline(in, line); ++row) {
+    if (line.empty()) continue;
+    if (marks.size() == kMaxRecordedMarks)
+      throw InputError(path + ": more than " + std::to_string(kMaxRecordedMarks) + " marks");
+    RecordedMark m;
+    char* end = nullptr;
+    m.t = std::strtod(line.c_str(), &end);
+    const char* tick = end;
+    if (*tick != ',' || !std::isfinite(m.t) || m.t < 0)
+      throw InputError(path + " row " + std::to_string(row) + ": not t,tick");
+    m.tick = std::strtoull(tick + 1, &end, 10);
+    if (end == tick + 1 || (*end != '\0' && *end != ',' && *end != '\r'))
+      throw InputError(path + " row " + std::to_string(row) + ": not t,tick");
+    marks.push_back(m);
+  }
+  return marks;
 }
 
 }  // namespace palp::rt

@@ -99,6 +99,12 @@ class Recorder {
   void stop();
   std::uint64_t count() const { return count_.load(std::memory_order_relaxed); }
   const std::string& path() const { return path_; }
+  // After stop(): the first tick recorded (its seq and deadline), false when none was.
+  bool first_recorded(std::uint64_t& seq, std::int64_t& t_ns) const {
+    seq = first_rec_seq_;
+    t_ns = first_rec_t_ns_;
+    return any_recorded_;
+  }
 
  private:
   void drain();
@@ -111,6 +117,26 @@ class Recorder {
   std::string error_;
   std::thread thread_;
   bool stopped_ = false;
+  // the recorder thread's, read after stop() joined it
+  bool any_recorded_ = false;
+  std::uint64_t first_rec_seq_ = 0;
+  std::int64_t first_rec_t_ns_ = 0;
 };
+
+// The training marks taken while a recording ran (issue 40), in a CSV beside it, so its replay
+// scores the same trials: FILE with its extension replaced by .marks.csv (rec/s1.palprec ->
+// rec/s1.marks.csv; rec/s1 -> rec/s1.marks.csv). Header "t,tick", one mark a row: t in seconds
+// since the recording's first tick (the recording CSV's t), tick the record's index from 0 (the
+// tick a replay reaches it). The recording file itself is unchanged (older ones have no marks).
+struct RecordedMark {
+  double t = 0.0;
+  std::uint64_t tick = 0;
+};
+inline constexpr std::size_t kMaxRecordedMarks = 100000;
+std::string marks_path_for(const std::string& recording_path);
+// Created exclusively (never over an existing file or link); Error when it cannot be written.
+void write_recording_marks(const std::string& path, const std::vector<RecordedMark>& marks);
+// InputError naming the file for a bad header or row, or more than kMaxRecordedMarks rows.
+std::vector<RecordedMark> read_recording_marks(const std::string& path);
 
 }  // namespace palp::rt

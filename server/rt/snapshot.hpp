@@ -67,7 +67,15 @@ struct Snapshot {
   float pulse_force_N = 0;  // |State::f_pulse| (0 when the force was not written)
   float organ_force_N = 0;  // |State::f_organ| (likewise)
   float pulse_bpm = 0;      // the heart rate the loop gave this tick (HapticLoop::set_pulse_bpm)
+  // The device's buttons held at this tick (Device::buttons; not recorded): bit 0 is
+  // kMarkButton.
+  std::uint32_t buttons = 0;
 };
+
+// The button whose press (a rising edge between two snapshots) marks a training task's spot:
+// a Falcon's grip PLUS button (0x01; its centre and forward buttons are the clutch and the
+// re-centre), a usb-haptic device's button 0.
+inline constexpr std::uint32_t kMarkButton = 0x1;
 
 class SnapshotRing {
  public:
