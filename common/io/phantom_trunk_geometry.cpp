@@ -35,20 +35,22 @@ struct VertebraRow {
   double transverse;
 };
 
-// Inferior to superior. Heights and discs of an adult (thoracic bodies 21-25 mm, lumbar 26-28,
-// discs 6-10 mm), a mild lumbar lordosis (the bodies' centres come forward to L3), spinous
-// processes horizontal in the lumbar spine and sloping down (20-50 degrees) in the thoracic.
+// Inferior to superior. Heights and discs of an adult (thoracic bodies 20-24 mm, lumbar 26-28,
+// discs 6-10 mm; T8's top 9.5 mm below the field of view's, so that no bone's marrow runs out
+// through the top slice like a vessel leaving the volume), a mild lumbar lordosis (the bodies'
+// centres come forward to L3), spinous processes horizontal in the lumbar spine and sloping down
+// (20-50 degrees) in the thoracic.
 constexpr std::array<VertebraRow, 10> kVertebrae{
     {{"L5", 28.0, 9.0, 14.0, 25.0, 17.0, 0.0, 46.0, 38.0},
      {"L4", 28.0, 10.0, 8.0, 25.0, 17.0, 0.0, 52.0, 40.0},
      {"L3", 28.0, 10.0, 5.0, 24.0, 17.0, 0.0, 54.0, 42.0},
      {"L2", 27.0, 9.0, 6.0, 23.0, 16.5, 0.0, 54.0, 38.0},
      {"L1", 26.0, 8.0, 9.0, 22.0, 16.0, 0.0, 52.0, 34.0},
-     {"T12", 25.0, 7.0, 12.0, 21.0, 15.0, 20.0, 50.0, 30.0},
-     {"T11", 24.0, 6.0, 15.0, 20.0, 15.0, 30.0, 48.0, 30.0},
-     {"T10", 23.0, 6.0, 18.0, 19.0, 14.0, 40.0, 46.0, 30.0},
-     {"T9", 22.0, 6.0, 20.0, 18.0, 14.0, 45.0, 45.0, 30.0},
-     {"T8", 21.0, 6.0, 22.0, 17.0, 13.0, 50.0, 44.0, 30.0}}};
+     {"T12", 24.0, 7.0, 12.0, 21.0, 15.0, 20.0, 50.0, 30.0},
+     {"T11", 22.0, 6.0, 15.0, 20.0, 15.0, 30.0, 48.0, 30.0},
+     {"T10", 21.0, 6.0, 18.0, 19.0, 14.0, 40.0, 46.0, 30.0},
+     {"T9", 20.0, 6.0, 20.0, 18.0, 14.0, 45.0, 45.0, 30.0},
+     {"T8", 20.0, 6.0, 22.0, 17.0, 13.0, 50.0, 44.0, 30.0}}};
 
 VertebraGeometry make_vertebra(const VertebraRow& row, double z_lo, std::uint8_t label) {
   VertebraGeometry v;

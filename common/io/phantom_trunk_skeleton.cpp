@@ -9,7 +9,9 @@
 namespace palp::phantom_detail::trunk {
 namespace {
 
-constexpr double kCortexHu = 900.0, kMarrowHu = 250.0, kArchHu = 700.0;
+// Cortical bone well above the contrast-filled lumens' HU (prep tells a bone from a lumen by a
+// cortex above about 700 HU), cancellous marrow below it.
+constexpr double kCortexHu = 1000.0, kMarrowHu = 250.0, kArchHu = 850.0;
 
 Vec3 to_array(const Vec3d& v) {
   return {v.x, v.y, v.z};
@@ -191,49 +193,93 @@ void add_spine(std::vector<TrunkLayer>& layers) {
 void add_ribs(std::vector<TrunkLayer>& layers) {
   for (const RibGeometry& rib : ribs()) {
     const std::uint8_t label = rib_label(rib.side, rib.number);
-    add_polyline(layers, rib.points, kRibRadius, 800.0, label);
+    add_polyline(layers, rib.points, kRibRadius, kCortexHu, label);
     add_polyline(layers, rib.points, kRibMarrowRadius, 300.0, label);
   }
 }
 
-void add_sacrum(std::vector<TrunkLayer>& layers) {
-  const PelvisGeometry& p = pelvis();
-  add_bone(layers, FrustumShape{p.sacrum_alae}, 600.0, kLabelSacrum);
-  add_bone(layers, FrustumShape{p.sacrum_body}, 700.0, kLabelSacrum);
-  add_bone(layers, tube(p.s1_crest_start, p.s1_crest_tip, kSpinousRadius), kArchHu, kLabelSacrum);
-  add_bone(layers, tube(p.sacrum_body.b, {0.0, 55.0, -178.0}, 5.0), 600.0, kLabelCoccyx);
+// A frustum's marrow: `inset` mm inside it all round.
+Frustum inset_frustum(const Frustum& f, double inset) {
+  const Vec3d dir = (f.b - f.a) * (1.0 / norm(f.b - f.a));
+  return {f.cx,         f.a + dir * inset, f.b - dir * inset, f.wa - inset,
+          f.wb - inset, f.da - inset,      f.db - inset};
 }
 
-// One side's hip bone (the iliac wing and crest, the acetabulum, pubis and ischium) and femur
-// (head in the acetabulum across a joint space, neck, greater and lesser trochanter, shaft).
-void add_hip(std::vector<TrunkLayer>& layers, int n) {
+// The iliac wing's marrow: a thinner shell inside the cortex, its edges `inset` mm in.
+IliacShell inset_shell(IliacShell s, double inset) {
+  s.half_thickness -= inset;
+  s.z_peak -= inset;
+  s.z_bottom_front += inset;
+  s.z_bottom_back += inset;
+  s.t0 += inset / s.a;
+  s.t1 -= inset / s.a;
+  return s;
+}
+
+void add_sacrum(std::vector<TrunkLayer>& layers) {
+  const PelvisGeometry& p = pelvis();
+  add_bone(layers, FrustumShape{p.sacrum_alae}, kCortexHu, kLabelSacrum);
+  add_bone(layers, FrustumShape{p.sacrum_body}, kCortexHu, kLabelSacrum);
+  add_bone(layers, FrustumShape{inset_frustum(p.sacrum_alae, 2.5)}, kMarrowHu, kLabelSacrum);
+  add_bone(layers, FrustumShape{inset_frustum(p.sacrum_body, 2.5)}, kMarrowHu, kLabelSacrum);
+  add_bone(layers, tube(p.s1_crest_start, p.s1_crest_tip, kSpinousRadius), kArchHu, kLabelSacrum);
+  add_bone(layers, tube(p.sacrum_body.b, {0.0, 55.0, -178.0}, 5.0), kArchHu, kLabelCoccyx);
+}
+
+// A rod of cortex with its marrow.
+void add_rod(std::vector<TrunkLayer>& layers, const Vec3d& a, const Vec3d& b, double radius,
+             std::uint8_t label) {
+  add_bone(layers, tube(a, b, radius), kCortexHu, label);
+  add_bone(layers, tube(a, b, radius - 3.0), kMarrowHu, label);
+}
+
+// An ellipsoid of cortex with its marrow.
+void add_knob(std::vector<TrunkLayer>& layers, const Vec3d& c, const Vec3& semi,
+              std::uint8_t label) {
+  add_bone(layers, Ellipsoid{to_array(c), semi}, kCortexHu, label);
+  add_bone(layers, Ellipsoid{to_array(c), {semi[0] - 3.0, semi[1] - 3.0, semi[2] - 3.0}}, kMarrowHu,
+           label);
+}
+
+// One side's hip bone: the iliac wing and crest, the acetabulum, pubis and ischium.
+void add_hip_bone(std::vector<TrunkLayer>& layers, int n) {
   const PelvisGeometry& p = pelvis();
   const int side = n == 0 ? -1 : 1;
   const double s = static_cast<double>(side);
-  const std::uint8_t hip = hip_label(side), femur = femur_label(side);
-  add_bone(layers, ShellShape{iliac_shell(side)}, 650.0, hip);
-  add_polyline(layers, p.crest[n], kCrestRadius, 750.0, hip);
+  const std::uint8_t hip = hip_label(side);
+  add_bone(layers, ShellShape{iliac_shell(side)}, kCortexHu, hip);
+  add_bone(layers, ShellShape{inset_shell(iliac_shell(side), 2.5)}, kMarrowHu, hip);
+  add_polyline(layers, p.crest[n], kCrestRadius, kCortexHu, hip);
   add_polyline(layers, p.crest[n], kCrestRadius - 2.5, kMarrowHu, hip);
   const Vec3d head = p.femoral_head[n];
-  add_bone(layers, Ellipsoid{{head.x + s * 3.0, head.y + 5.0, head.z + 2.0}, {30.0, 30.0, 30.0}},
-           700.0, hip);
-  add_bone(layers, tube({s * 80.0, -65.0, -150.0}, {s * 18.0, -95.0, -158.0}, 8.0), 650.0, hip);
-  add_bone(layers, Ellipsoid{{s * 12.0, -95.0, -163.0}, {13.0, 10.0, 20.0}}, 650.0, hip);
-  add_bone(layers, tube({s * 14.0, -90.0, -182.0}, {s * 55.0, -30.0, -205.0}, 7.0), 650.0, hip);
-  add_bone(layers, tube({s * 85.0, -30.0, -170.0}, {s * 58.0, -25.0, -205.0}, 9.0), 650.0, hip);
-  add_bone(layers, Ellipsoid{{s * 58.0, -20.0, -208.0}, {14.0, 16.0, 14.0}}, 650.0, hip);
+  add_knob(layers, {head.x + s * 3.0, head.y + 5.0, head.z + 2.0}, {30.0, 30.0, 30.0}, hip);
+  add_rod(layers, {s * 80.0, -65.0, -150.0}, {s * 18.0, -95.0, -158.0}, 8.0, hip);
+  add_knob(layers, {s * 12.0, -95.0, -163.0}, {13.0, 10.0, 20.0}, hip);
+  add_rod(layers, {s * 14.0, -90.0, -182.0}, {s * 55.0, -30.0, -205.0}, 7.0, hip);
+  add_rod(layers, {s * 85.0, -30.0, -170.0}, {s * 58.0, -25.0, -205.0}, 9.0, hip);
+  add_knob(layers, {s * 58.0, -20.0, -208.0}, {14.0, 16.0, 14.0}, hip);
+}
+
+// One side's femur: the head in the acetabulum across a joint space, the neck, the greater and
+// lesser trochanters, the shaft.
+void add_femur(std::vector<TrunkLayer>& layers, int n) {
+  const int side = n == 0 ? -1 : 1;
+  const double s = static_cast<double>(side);
+  const std::uint8_t femur = femur_label(side);
+  const Vec3d head = pelvis().femoral_head[n];
   layers.push_back(
       make_layer(Ellipsoid{to_array(head), {26.5, 26.5, 26.5}}, 40.0, Tissue::kPatient));
-  add_bone(layers, Ellipsoid{to_array(head), {24.0, 24.0, 24.0}}, 700.0, femur);
-  add_bone(layers, Ellipsoid{to_array(head), {20.5, 20.5, 20.5}}, 300.0, femur);
   const Vec3d trochanter{s * 140.0, -40.0, -180.0};
-  add_bone(layers, tube(head, trochanter, 15.0), 700.0, femur);
-  add_bone(layers, Ellipsoid{to_array(trochanter), {17.0, 20.0, 24.0}}, 700.0, femur);
-  add_bone(layers, Ellipsoid{{s * 120.0, -25.0, -215.0}, {9.0, 9.0, 10.0}}, 700.0, femur);
   const Vec3d shaft_top{s * 137.0, -40.0, -190.0}, shaft_bottom{s * 118.0, -50.0, -330.0};
+  add_bone(layers, Ellipsoid{to_array(head), {24.0, 24.0, 24.0}}, kCortexHu, femur);
+  add_bone(layers, tube(head, trochanter, 15.0), kCortexHu, femur);
+  add_bone(layers, Ellipsoid{to_array(trochanter), {17.0, 20.0, 24.0}}, kCortexHu, femur);
+  add_bone(layers, Ellipsoid{{s * 120.0, -25.0, -215.0}, {9.0, 9.0, 10.0}}, kCortexHu, femur);
   add_bone(layers, tube(shaft_top, shaft_bottom, 14.0), kCortexHu, femur);
-  add_bone(layers, tube(head, trochanter, 10.0), kMarrowHu, femur);
-  add_bone(layers, tube(shaft_top, shaft_bottom, 8.0), 200.0, femur);
+  add_bone(layers, Ellipsoid{to_array(head), {21.0, 21.0, 21.0}}, kMarrowHu, femur);
+  add_bone(layers, tube(head, trochanter, 11.0), kMarrowHu, femur);
+  add_bone(layers, Ellipsoid{to_array(trochanter), {14.0, 17.0, 21.0}}, kMarrowHu, femur);
+  add_bone(layers, tube(shaft_top, shaft_bottom, 9.0), 200.0, femur);
 }
 
 }  // namespace
@@ -242,7 +288,8 @@ void add_skeleton(std::vector<TrunkLayer>& layers) {
   add_ribs(layers);
   add_spine(layers);
   add_sacrum(layers);
-  for (int n = 0; n < 2; ++n) add_hip(layers, n);
+  for (int n = 0; n < 2; ++n) add_hip_bone(layers, n);
+  for (int n = 0; n < 2; ++n) add_femur(layers, n);
   // the pubic symphysis: fibrocartilage between the two pubic bodies
   layers.push_back(
       make_layer(Box{-1.5, 1.5, -106.0, -84.0, -185.0, -141.0}, 70.0, Tissue::kPatient));

@@ -154,7 +154,7 @@ TrunkTruth trunk_truth(const PhantomOptions& options) {
   add_ribs_and_spaces(map, t);
   add_pelvis(map, t);
   t.notes = {
-      "the trunk phantom's field of view starts at T8's superior endplate: no vertebra, rib, "
+      "the trunk phantom ends 9.5 mm above T8's superior endplate: no vertebra, rib, "
       "sternum or costal cartilage above it is drawn",
       "ribs 8-10 end in front without costal cartilage; rib 11 ends 12 degrees in front of the "
       "mid-axillary line, rib 12 34 degrees behind it (no 11th intercostal space at the "
