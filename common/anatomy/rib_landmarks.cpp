@@ -3,6 +3,7 @@
 // edge cuts it) takes its order among numbered ribs of its side at an angle they share; the
 // spaces lie on the skin at the mid-axillary line midway between consecutive ribs.
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -35,7 +36,7 @@ std::optional<Vec3d> crossing(const ScanContext& scan, const std::vector<Vec3d>&
 }
 
 std::string join(const std::string& a, const std::string& b) {
-  return a.empty() ? b : b.empty() ? a : a + "; " + b;
+  return a.empty() || a == b ? b : b.empty() ? a : a + "; " + b;
 }
 
 // The number of a rib whose head is in the scan, from its vertebra's name.
@@ -64,6 +65,10 @@ void number_by_head(const Spine& spine, const RibTrace& t, Rib& rib) {
                " rib, or a transitional vertebra (the count then is one off)";
 }
 
+// Two ribs are compared where both run over at least this many degrees about the body's centre
+// (8 mm of a 150 mm radius: two centre line samples).
+constexpr double kMinSharedDeg = 3.0;
+
 // Numbers headless ribs by their order at an angle shared with a numbered rib of their side:
 // the ribs of a side run roughly parallel, so at one angle behind the MAL they stack in order,
 // the lower the higher-numbered. Repeats while a rib gains a number.
@@ -80,7 +85,7 @@ void number_by_order(const ScanContext& scan, std::vector<Numbered>& ribs) {
             std::min(u.angle_hi, r.angle_hi) - std::max(u.angle_lo, r.angle_lo);
         if (overlap > best_overlap) best = &r, best_overlap = overlap;
       }
-      if (!best || best_overlap < 5.0) continue;
+      if (!best || best_overlap < kMinSharedDeg) continue;
       const double angle = 0.5 * (std::max(u.angle_lo, best->angle_lo) +
                                   std::min(u.angle_hi, best->angle_hi));
       const auto zu = crossing(scan, u.trace->line, angle);
@@ -100,10 +105,9 @@ void number_by_order(const ScanContext& scan, std::vector<Numbered>& ribs) {
       char where[96];
       std::snprintf(where, sizeof where, "%.0f degrees behind the mid-axillary line",
                     angle);
-      u.rib.reason = join("its head is outside the scan: numbered by its order " +
-                              std::string(zu->z < zr->z ? "below" : "above") + " rib " +
-                              std::to_string(*best->rib.number) + " at " + where,
-                          best->rib.reason);
+      u.rib.reason = "its head is outside the scan: numbered by its order " +
+                     std::string(zu->z < zr->z ? "below" : "above") + " rib " +
+                     std::to_string(*best->rib.number) + " at " + where;
       changed = true;
     }
   }
@@ -135,7 +139,9 @@ IntercostalSpace space_between(const ScanContext& scan, const std::vector<Number
         std::snprintf(text, sizeof text, "%s ends %.0f degrees behind the mid-axillary line",
                       name.c_str(), pair[k]->angle_lo);
       else
-        std::snprintf(text, sizeof text, "%s lies in front of the mid-axillary line in the scan",
+        std::snprintf(text, sizeof text,
+                      "%s is in the scan only in front of the mid-axillary line (the scan's edge "
+                      "cuts it behind)",
                       name.c_str());
       s.reason = text;
       return s;

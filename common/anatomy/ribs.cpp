@@ -154,7 +154,12 @@ std::optional<RibTrace> trace_piece(const ScanContext& scan, const Spine& spine,
     const Vec3d c = column_at(scan, spine, std::lround(q.z));
     return std::hypot((q.x - c.x) * m.spacing[0], (q.y - c.y) * m.spacing[1]);
   };
-  const std::size_t head = from_column(a) <= from_column(b) ? a : b;
+  // The head end: the end nearest the column when it reaches the column's band, else (a piece
+  // the scan's edge cuts off its head) the end farther behind the mid-axillary line.
+  const double near = std::min(from_column(a), from_column(b));
+  std::size_t head = from_column(a) <= from_column(b) ? a : b;
+  if (near > kColumnHalfWidthMm + kHeadReachMm)
+    head = angle_behind_mal(scan, g.point(a)) >= angle_behind_mal(scan, g.point(b)) ? a : b;
   RibTrace rib;
   const Vec3d column = column_at(scan, spine, std::lround(p.centroid.z));
   rib.side = p.centroid.x < column.x ? 0 : 1;

@@ -268,5 +268,44 @@ TEST(Ribs, TrunkPhantomStoredPermutedRibsAndSpacesMatchTheTruth) {
   expect_ribs_match_truth("SLP");
 }
 
+// --- the shared CT --------------------------------------------------------------------------
+
+// The lower chest of a real CT (ribs 7-12, the scan's top at T12): the 12th ribs' heads at
+// T12, the ribs above cut by the scan's top edge and numbered by their order; spaces on the skin.
+TEST(Ribs, SharedCtRibsNumberedOnBothSidesAndSpacesOnTheSkin) {
+  const std::string ct = std::string(PALP_SHARED_DATA_DIR) + "/ct_abdomen_3mm.nii.gz";
+  if (!std::filesystem::exists(ct)) GTEST_SKIP() << ct << " absent";
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / "palp-ribs-shared-ct").string();
+  run_prep(ct, dir, PrepParams{});
+  const LandmarkInputs in = read_landmark_inputs(dir, ct);
+  const Landmarks lm = find_landmarks(in);
+  for (Side side : {Side::right, Side::left}) {
+    for (int n : {10, 11, 12}) {
+      const Rib* r = find_rib(lm, side, n);
+      EXPECT_NE(r, nullptr) << side_name(side) << " rib " << n;
+      if (r) std::printf("%s rib %d: %zu points, confidence %.2f\n", side_name(side), n,
+                         r->points.size(), r->confidence);
+    }
+  }
+  // The 12th ribs' heads lie at T12 (the count from the sacrum holds): no note says otherwise.
+  for (const std::string& note : lm.notes) EXPECT_EQ(note.find("lowest rib"), std::string::npos);
+  int on_skin = 0;
+  for (const IntercostalSpace& s : lm.intercostal_spaces) {
+    if (!s.skin_point) {
+      EXPECT_FALSE(s.reason.empty());
+      continue;
+    }
+    ++on_skin;
+    const Vec3d scene = scene_of_world(in.d_surf.grid, *s.skin_point);
+    const auto i = std::lround(scene.x / in.d_surf.grid.spacing[0]);
+    const auto j = std::lround(scene.y / in.d_surf.grid.spacing[1]);
+    const auto k = std::lround(scene.z / in.d_surf.grid.spacing[2]);
+    EXPECT_LE(std::fabs(in.d_surf.at(i, j, k)), 2.0 + in.d_surf.grid.max_spacing());
+    std::printf("%s space %d on the skin\n", side_name(s.side), *s.upper_rib);
+  }
+  EXPECT_GE(on_skin, 1);
+}
+
 }  // namespace
 }  // namespace palp::anatomy
