@@ -173,10 +173,15 @@ void add_pelvis(const ScanContext& scan, const Spine& spine, const Pelvis& pelvi
   t.confidence = std::min(t.confidence, seg.confidence);
 }
 
-std::optional<int> lowest_rib_vertebra(const std::vector<RibTrace>& ribs) {
+// The lowest vertebra a rib's head lies at. Without a sacrum it is T12 only when the scan shows
+// a vertebra below it without ribs (else a thin slab's lowest rib may be any rib).
+std::optional<int> lowest_rib_vertebra(const std::vector<RibTrace>& ribs, const Spine& spine) {
   std::optional<int> lowest;
   for (const RibTrace& r : ribs)
     if (r.vertebra >= 0 && (!lowest || r.vertebra < *lowest)) lowest = r.vertebra;
+  if (lowest && spine.sacrum < 0 && *lowest == 0) {
+    return std::nullopt;
+  }
   return lowest;
 }
 
@@ -197,7 +202,7 @@ Landmarks find_landmarks(const LandmarkInputs& inputs, const LandmarkProgress& p
   scan.midline_x = midline(scan, spine);
   step("ribs");
   const std::vector<RibTrace> ribs = find_ribs(scan, spine);
-  name_vertebrae(spine, lowest_rib_vertebra(ribs));
+  name_vertebrae(spine, lowest_rib_vertebra(ribs, spine));
   add_vertebrae(scan, spine, out);
   rib_landmarks(scan, spine, ribs, out);
   step("pelvis");
