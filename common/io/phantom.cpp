@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <string_view>
 
+#include "base/axis_order.hpp"
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
 #include "io/phantom_shapes.hpp"
@@ -31,6 +32,7 @@ PhantomDefaults defaults_for(const std::string& name) {
   if (name == "cube") return {{140, 140, 140}, {1.0, 1.0, 1.0}};
   if (name == "sphere") return {{100, 100, 100}, {1.0, 1.0, 1.0}};
   if (name == "torso") return {{384, 256, 96}, {1.25, 1.25, 2.0}};
+  if (name == "trunk") return {{160, 120, 187}, {2.5, 2.5, 3.0}};
   std::string known;
   for (const auto& n : phantom_names()) known += (known.empty() ? "" : ", ") + n;
   throw UsageError("unknown phantom '" + name + "' (known: " + known + ")");
@@ -92,14 +94,20 @@ bool parse_switch(const std::string& text, const std::string& key) {
 }
 
 void check_options(const std::string& name, const PhantomOptions& o) {
-  if (name != "torso" && (o.contrast || o.aorta_hu || o.arms != 1 || o.metal || o.structures))
+  if (name == "trunk" && (o.arms != 1 || o.metal))
+    throw UsageError("phantom trunk has no arms or metal (torso only)");
+  if (name != "torso" && name != "trunk" &&
+      (o.contrast || o.aorta_hu || o.arms != 1 || o.metal || o.structures))
     throw UsageError("phantom " + name +
-                     " has no contrast, aorta-hu, arms, metal or structures (torso only)");
+                     " has no contrast, aorta-hu, arms, metal or structures (torso and trunk)");
   if (o.arms < 0 || o.arms > 2)
     throw UsageError("phantom option arms needs 0, 1 or 2, got " + std::to_string(o.arms));
   if (o.aorta_hu && !(*o.aorta_hu >= -1000.0 && *o.aorta_hu <= 3000.0))
     throw UsageError("phantom option aorta-hu needs a value in [-1000, 3000] HU");
 }
+
+Grid own_grid(const std::string& name, const PhantomOptions& options);
+CtVolume draw_phantom(const std::string& name, const PhantomOptions& options, PhantomTruth* truth);
 
 }  // namespace
 
@@ -135,9 +143,13 @@ void set_phantom_option(PhantomOptions& options, const std::string& key, const s
     options.metal = parse_switch(value, key);
   } else if (key == "structures") {
     options.structures = parse_switch(value, key);
+  } else if (key == "orient") {
+    axis_reorder(Grid{{1, 1, 1}, {1.0, 1.0, 1.0}, {}}, value);  // UsageError for a bad code
+    options.orient = value;
   } else {
     throw UsageError("unknown phantom option '" + key +
-                     "' (known: dims, spacing, contrast, aorta-hu, arms, metal, structures)");
+                     "' (known: dims, spacing, contrast, aorta-hu, arms, metal, structures, "
+                     "orient)");
   }
   check_options("torso", options);
 }
@@ -169,10 +181,18 @@ PhantomSpec parse_phantom_spec(const std::string& text) {
 }
 
 std::vector<std::string> phantom_names() {
-  return {"cube", "sphere", "torso"};
+  return {"cube", "sphere", "torso", "trunk"};
 }
 
 Grid phantom_grid(const std::string& name, const PhantomOptions& options) {
+  const Grid grid = own_grid(name, options);
+  return options.orient ? axis_reorder(grid, *options.orient).grid : grid;
+}
+
+namespace {
+
+// The phantom's grid in its own axis order (LPS for the sphere, torso and trunk, ILA for the cube).
+Grid own_grid(const std::string& name, const PhantomOptions& options) {
   const PhantomDefaults d = defaults_for(name);
   Grid grid;
   grid.dims = options.dims.value_or(d.dims);
@@ -193,6 +213,8 @@ Grid phantom_grid(const std::string& name, const PhantomOptions& options) {
   return grid;
 }
 
+}  // namespace
+
 SphereGeometry sphere_geometry(const Grid& grid) {
   return {grid_centre(grid), 30.0 * fit_scale(grid, {100.0, 100.0, 100.0}, 3)};
 }
@@ -212,9 +234,26 @@ BoxGeometry cube_geometry(const Grid& grid) {
 }
 
 CtVolume make_phantom(const std::string& name, const PhantomOptions& options, PhantomTruth* truth) {
-  const Grid grid = phantom_grid(name, options);
   check_options(name, options);
+  if (!options.orient) return draw_phantom(name, options, truth);
+  PhantomOptions own = options;
+  own.orient.reset();
+  CtVolume ct = draw_phantom(name, own, truth);
+  const AxisReorder reorder = axis_reorder(ct.grid, *options.orient);
+  if (truth) {
+    for (Mask* m : {&truth->body, &truth->bone, &truth->equipment, &truth->vessel, &truth->artery,
+                    &truth->metal, &truth->liver, &truth->bone_label})
+      if (!m->data.empty()) *m = reorder_volume(*m, reorder, "phantom truth");
+  }
+  return reorder_volume(ct, reorder, "phantom");
+}
+
+namespace {
+
+CtVolume draw_phantom(const std::string& name, const PhantomOptions& options, PhantomTruth* truth) {
+  const Grid grid = own_grid(name, options);
   if (name == "torso") return draw_torso(grid, options, truth);
+  if (name == "trunk") return draw_trunk(grid, options, truth);
   if (name == "sphere") {
     const SphereGeometry s = sphere_geometry(grid);
     return draw_crisp(grid, truth, [s](const Vec3& p) {
@@ -229,5 +268,7 @@ CtVolume make_phantom(const std::string& name, const PhantomOptions& options, Ph
     return true;
   });
 }
+
+}  // namespace
 
 }  // namespace palp

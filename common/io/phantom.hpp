@@ -13,19 +13,37 @@
 //            and a CT table below: a gel pad pressed against the back, a carbon board crossing the
 //            whole width, and a cable lying on the pad. Edges carry partial-volume blending and a
 //            deterministic +-10 HU noise. Default grid 384 x 256 x 96 at 1.25 x 1.25 x 2 mm.
+//   trunk  — a supine adult trunk whose landmarks are known exactly (issue 40; its truth and the
+//            definitions of every point: phantom_trunk.hpp): vertebrae T8..L5 (cortex 1000 HU,
+//            marrow 250) with discs, arches, transverse and spinous processes, the sacrum and
+//            coccyx; ribs 8-12 on both sides, each from its own vertebra around the side and
+//            forward, descending (11 and 12 floating, 12 ending behind the mid-axillary line);
+//            iliac wings with crests topping at the L4/L5 disc, anterior superior iliac spines,
+//            pubic bones meeting at the symphysis, acetabula, femoral heads and proximal femora;
+//            skin, fat and muscle (narrower at the waist), the lungs' bases, the liver under the
+//            right lower ribs, kidneys, bowel gas; the aorta dividing on L4 into the iliac
+//            arteries, the common femoral arteries under the inguinal ligament at the
+//            mid-inguinal point 15 mm under the skin, femoral veins; a CT table (board and pad)
+//            under the back. From 9.5 mm above T8's top to 130 mm below the femoral heads' centres:
+//            default grid 160 x 120 x 187 at 2.5 x 2.5 x 3 mm (400 x 300 x 561 mm). Like the
+//            torso, a smaller field of view in x and y scales it down, z never does; above T8
+//            nothing but soft tissue is drawn. PhantomTruth::bone_label labels every bone.
 //
-// Orientation: sphere and torso are stored LPS: i = patient right -> left, j = anterior ->
+// Orientation: sphere, torso and trunk are stored LPS: i = patient right -> left, j = anterior ->
 // posterior (the table is at large j), k = inferior -> superior; Grid::world has the identity
 // direction. The cube lies like a supine patient with its top face up: it is stored "ILA" (i =
 // superior -> inferior, j = right -> left, k = posterior -> anterior), so its top face (+z) is
-// its anterior and --side auto presses it. Every origin centres the volume on the isocentre.
+// its anterior and --side auto presses it. Every origin centres the volume on the isocentre. The
+// `orient` option (any phantom) stores the same voxels in another axis order afterwards, the
+// truth masks with them: the same patient at the same LPS world positions.
 // Anatomy is defined in mm; when the grid's field of view is smaller than the default one the
 // anatomy is scaled down uniformly to fit (never up), so any dims/spacing override still shows the
 // whole phantom. Only x and y are fitted: along z the anatomy keeps its size in mm whatever the
 // slice count or thickness, so a thin slab (e.g. dims 384x256x20) is the middle 20 slices' worth of
 // the same torso, centred on the same level, and 5 mm slices (spacing 1.25x1.25x5) show more of it.
 //
-// Torso options (PhantomOptions; default: none of them, the scene above byte for byte):
+// Torso options (PhantomOptions; default: none of them, the scene above byte for byte; the trunk
+// takes contrast, aorta_hu and structures too, the last only asking prep for its truth masks):
 //   contrast      none | arterial | portal-venous: draws the vessel tree at that phase's levels
 //                 instead of the lone aorta: the aorta down to its bifurcation (z = -68 mm) and
 //                 the common iliac arteries, the coeliac trunk and superior mesenteric artery
@@ -73,8 +91,8 @@
 //                 Everything else (and every slice above z = 20 mm) is the torso without it.
 // On the command line: palp phantom torso --contrast arterial --aorta-hu 400 --arms 2 --metal
 // --structures. In a CT input or scene (parse_phantom_spec): phantom:NAME[,KEY=VALUE...] with the
-// keys dims, spacing, contrast, aorta-hu, arms, metal, structures (metal or structures alone
-// means =1), e.g. phantom:torso,contrast=arterial,arms=2 or
+// keys dims, spacing, contrast, aorta-hu, arms, metal, structures, orient (metal or structures
+// alone means =1), e.g. phantom:torso,contrast=arterial,arms=2, phantom:trunk,orient=RAS or
 // phantom:torso,dims=384x256x20,spacing=1.25x1.25x1.5 or phantom:torso,structures.
 #pragma once
 
@@ -100,6 +118,9 @@ struct PhantomOptions {
   int arms = 1;                    // 0, 1 or 2
   bool metal = false;
   bool structures = false;
+  // Any phantom: store it in this axis order (an orientation code, base/axis_order.hpp: "RAS",
+  // "PIL", ...), the same patient in the same LPS world place; absent: the phantom's own order.
+  std::optional<std::string> orient;
 };
 
 // Sets one option from its text: dims and spacing as NXxNYxNZ, contrast, aorta-hu, arms, metal
@@ -113,7 +134,7 @@ struct PhantomSpec {
 };
 PhantomSpec parse_phantom_spec(const std::string& text);
 
-// Names accepted by make_phantom: "cube", "sphere", "torso".
+// Names accepted by make_phantom: "cube", "sphere", "torso", "trunk".
 std::vector<std::string> phantom_names();
 
 // The grid make_phantom(name, options) draws on (defaults with the overrides applied).
@@ -139,6 +160,8 @@ struct PhantomTruth {
   Mask artery;
   Mask metal;
   Mask liver;
+  // The trunk's bones, one label each (phantom_trunk.hpp's trunk_label_name); empty otherwise.
+  Mask bone_label;
 };
 
 // Throws UsageError for an unknown name. When `truth` is given it receives the true masks.

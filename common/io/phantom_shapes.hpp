@@ -320,5 +320,7 @@ inline PhantomTruth empty_truth(const Grid& grid, const char* name) {
 }
 
 CtVolume draw_torso(const Grid& grid, const PhantomOptions& options, PhantomTruth* truth);
+// The trunk on its LPS grid (phantom_trunk.cpp); make_phantom applies `orient` afterwards.
+CtVolume draw_trunk(const Grid& grid, const PhantomOptions& options, PhantomTruth* truth);
 
 }  // namespace palp::phantom_detail

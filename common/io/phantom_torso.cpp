@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "base/parallel.hpp"
+#include "io/phantom_paint.hpp"
 #include "io/phantom_torso_anatomy.hpp"
 
 namespace palp::phantom_detail {
@@ -246,17 +247,6 @@ bool takes_streaks(Tissue t) {
   return t != Tissue::kOutside && t != Tissue::kEquipment && t != Tissue::kMetal;
 }
 
-// Maps voxel indices to the anatomy frame: anatomy = (scene - centre) / scale.
-struct AnatomyFrame {
-  Vec3 centre;
-  double scale;
-  Vec3 spacing;
-  double coord(int axis, std::int64_t index) const {
-    return (static_cast<double>(index) * spacing[axis] - centre[axis]) / scale;
-  }
-  Vec3 voxel_size() const { return {spacing[0] / scale, spacing[1] / scale, spacing[2] / scale}; }
-};
-
 // Puts the torso in the middle of the grid, with the pad's top face snapped halfway between two
 // voxel rows so that neither the back nor the pad shares a voxel with the other.
 AnatomyFrame torso_frame(const Grid& grid) {
@@ -265,50 +255,6 @@ AnatomyFrame torso_frame(const Grid& grid) {
   const double snapped = (std::round(pad_top / grid.spacing[1] - 0.5) + 0.5) * grid.spacing[1];
   f.centre[1] += snapped - pad_top;
   return f;
-}
-
-struct RowBuffers {
-  std::vector<double> hu;
-  std::vector<Tissue> tissue;
-};
-
-template <class S>
-void paint_shape_row(const S& shape, const Layer& layer, const RowContext& row,
-                     const AnatomyFrame& frame, RowBuffers& buf) {
-  const RowSpans spans = shape.spans(row);
-  const std::int64_t nx = static_cast<std::int64_t>(buf.hu.size());
-  const double sx = frame.spacing[0] / frame.scale;
-  const double x0 = frame.coord(0, 0);
-  for (int s = 0; s < spans.count; ++s) {
-    const double last = static_cast<double>(nx - 1);
-    const auto lo = static_cast<std::int64_t>(
-        std::clamp(std::ceil((spans.spans[s][0] - x0) / sx), 0.0, last + 1.0));
-    const auto hi = static_cast<std::int64_t>(
-        std::clamp(std::floor((spans.spans[s][1] - x0) / sx), -1.0, last));
-    for (std::int64_t i = lo; i <= hi; ++i) {
-      const double x = x0 + static_cast<double>(i) * sx;
-      const double a = (x >= spans.full_lo && x <= spans.full_hi)
-                           ? spans.row_factor
-                           : shape.coverage(x, row, spans.row_factor);
-      if (a <= 0.0) continue;
-      buf.hu[i] += (layer.hu - buf.hu[i]) * a;
-      if (a >= 0.5) buf.tissue[i] = layer.tissue;
-    }
-  }
-}
-
-void write_truth(const RowBuffers& buf, std::size_t base, PhantomTruth& truth) {
-  for (std::size_t i = 0; i < buf.tissue.size(); ++i) {
-    const Tissue t = buf.tissue[i];
-    const bool artery = t == Tissue::kArteryContrast || t == Tissue::kArteryPlain;
-    truth.body.data[base + i] = t != Tissue::kOutside && t != Tissue::kEquipment;
-    truth.bone.data[base + i] = t == Tissue::kBone || t == Tissue::kMetal;
-    truth.equipment.data[base + i] = t == Tissue::kEquipment;
-    truth.vessel.data[base + i] = t == Tissue::kArteryContrast || t == Tissue::kVeinContrast;
-    truth.artery.data[base + i] = artery;
-    truth.metal.data[base + i] = t == Tissue::kMetal;
-    truth.liver.data[base + i] = t == Tissue::kLiver;
-  }
 }
 
 void add_streaks(const Streaks& streaks, const RowContext& row, const AnatomyFrame& frame,
@@ -331,15 +277,18 @@ CtVolume draw_torso(const Grid& grid, const PhantomOptions& options, PhantomTrut
   if (truth) *truth = empty_truth(grid, "torso truth");
   const std::int64_t nx = grid.dims[0], ny = grid.dims[1];
   parallel_for_chunks(grid.dims[2], 1, [&](std::int64_t k_begin, std::int64_t k_end) {
-    RowBuffers buf{std::vector<double>(nx), std::vector<Tissue>(nx)};
+    RowBuffers buf{std::vector<double>(nx), std::vector<Tissue>(nx), {}};
     for (std::int64_t k = k_begin; k < k_end; ++k) {
       for (std::int64_t j = 0; j < ny; ++j) {
         std::fill(buf.hu.begin(), buf.hu.end(), kAirHu);
         std::fill(buf.tissue.begin(), buf.tissue.end(), Tissue::kOutside);
         const RowContext row{frame.coord(1, j), frame.coord(2, k), frame.voxel_size()};
         for (const Layer& layer : layers) {
-          std::visit([&](const auto& s) { paint_shape_row(s, layer, row, frame, buf); },
-                     layer.shape);
+          std::visit(
+              [&](const auto& s) {
+                paint_shape_row(s, layer.hu, layer.tissue, 0, row, frame, buf);
+              },
+              layer.shape);
         }
         if (streaks) add_streaks(*streaks, row, frame, buf);
         const std::size_t base = grid.linear(0, j, k);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "base/axis_order.hpp"
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
 #include "base/patient_frame.hpp"
@@ -138,61 +139,8 @@ CtVolume resample(const CtVolume& ct, const Grid& g) {
 }
 
 CtVolume reorder_axes(const CtVolume& ct, std::string_view code) {
-  const PatientFrame frame = patient_frame(ct.grid);
-  if (frame.obliquity_deg() > kAxisAlignedToleranceDeg)
-    throw InputError("cannot reorder the axes of an oblique volume");
-  const auto bad = [&] {
-    return UsageError("orientation '" + std::string(code) +
-                      "': expected three letters from L/R, P/A, S/I, one of each pair (LPS, RAS)");
-  };
-  if (code.size() != 3) throw bad();
-  // For each new axis: the source axis along the same patient axis, and whether it is reversed.
-  int source[3];
-  bool reversed[3];
-  bool used[3] = {false, false, false};
-  for (int a = 0; a < 3; ++a) {
-    Anatomy want{};
-    if (!parse_anatomy(std::string_view(&code[static_cast<std::size_t>(a)], 1), &want)) throw bad();
-    int found = -1;
-    for (int b = 0; b < 3; ++b) {
-      const Anatomy has = frame.axis_direction(b);
-      if (has == want || has == opposite(want)) found = b, reversed[a] = has != want;
-    }
-    if (found < 0 || used[found]) throw bad();
-    used[found] = true;
-    source[a] = found;
-  }
-  const Grid& g = ct.grid;
-  Grid out_grid;
-  Vec3d first_voxel{};  // scene position, in the source, of the new voxel (0, 0, 0)
-  for (int a = 0; a < 3; ++a) {
-    const int b = source[a];
-    out_grid.dims[static_cast<std::size_t>(a)] = g.dims[static_cast<std::size_t>(b)];
-    out_grid.spacing[static_cast<std::size_t>(a)] = g.spacing[static_cast<std::size_t>(b)];
-    const Vec3d c = column(g.world.direction, b) * (reversed[a] ? -1.0 : 1.0);
-    out_grid.world.direction[static_cast<std::size_t>(a)] = c.x;
-    out_grid.world.direction[static_cast<std::size_t>(3 + a)] = c.y;
-    out_grid.world.direction[static_cast<std::size_t>(6 + a)] = c.z;
-    if (reversed[a]) {
-      const double last = static_cast<double>(g.dims[static_cast<std::size_t>(b)] - 1);
-      if (b == 0) first_voxel.x = last;
-      if (b == 1) first_voxel.y = last;
-      if (b == 2) first_voxel.z = last;
-    }
-  }
-  out_grid.world.origin = to_vec3(to_world(g, first_voxel));
-  CtVolume out(out_grid, std::int16_t{0}, "reordered CT");
-  std::int64_t src[3];
-  for (std::int64_t k = 0; k < out_grid.dims[2]; ++k)
-    for (std::int64_t j = 0; j < out_grid.dims[1]; ++j)
-      for (std::int64_t i = 0; i < out_grid.dims[0]; ++i) {
-        const std::int64_t idx[3] = {i, j, k};
-        for (int a = 0; a < 3; ++a)
-          src[source[a]] =
-              reversed[a] ? g.dims[static_cast<std::size_t>(source[a])] - 1 - idx[a] : idx[a];
-        out.at(i, j, k) = ct.at(src[0], src[1], src[2]);
-      }
-  return out;
+  static_assert(kAxisAlignedToleranceDeg == 0.05, "axis_reorder's tolerance follows it");
+  return reorder_volume(ct, axis_reorder(ct.grid, code), "reordered CT");
 }
 
 }  // namespace palp

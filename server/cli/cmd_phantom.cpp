@@ -19,12 +19,16 @@ Writes a synthetic CT in Hounsfield units as NIfTI (.nii or .nii.gz).
                         sphere  soft-tissue ball of analytic radius, 1 mm grid
                         torso   the default scene: body, ribs, liver, spine, lungs, bowel gas,
                                 a 250 HU aorta, kidneys, an arm and a CT table with pad and cable
+                        trunk   T8 to the proximal femora with known landmarks: vertebrae
+                                T8-L5 and the sacrum, ribs 8-12, iliac crests, femoral
+                                arteries, liver, a CT table (its truth: io/phantom_trunk.hpp)
 Options:
   --out FILE            output file (required)
   --dims NXxNYxNZ       grid size in voxels (default: the phantom's own); x and y scale the
                         anatomy down to fit, z never does (--dims 384x256x20: a thin slab)
   --spacing SXxSYxSZ    voxel size in mm (default: the phantom's own)
-Torso only (the same in a CT input: phantom:torso,contrast=arterial,arms=2,metal,structures):
+Torso (and trunk: contrast, aorta-hu, structures; in a CT input also orient=CODE, e.g.
+phantom:trunk,orient=RAS; phantom:torso,contrast=arterial,arms=2,metal,structures):
   --contrast PHASE      none, arterial or portal-venous: the vessel tree (aorta to its
                         bifurcation, coeliac, SMA, renal and iliac arteries, IVC, renal and
                         portal veins) at that phase's HU instead of the lone 250 HU aorta
@@ -38,7 +42,8 @@ Torso only (the same in a CT input: phantom:torso,contrast=arterial,arms=2,metal
                         the truth masks (artery, liver) prep writes as artery.nii.gz, liver.nii.gz
   --orientation CODE    store the voxels in another axis order, the same patient in the same
                         place: three letters naming where each index axis grows toward, e.g.
-                        RAS (NIfTI's canonical order) or LPS (DICOM's; torso and sphere default)
+                        RAS (NIfTI's canonical order) or LPS (DICOM's; torso, trunk and
+                        sphere default)
   -h, --help            show this help
 )";
 
@@ -52,7 +57,7 @@ int cmd_phantom(const Arguments& argv) {
     return 0;
   }
   if (args.positional().size() != 1)
-    throw UsageError("phantom needs one NAME (cube, sphere, torso)");
+    throw UsageError("phantom needs one NAME (cube, sphere, torso, trunk)");
   const auto out = args.get("out");
   if (!out) throw UsageError("phantom needs --out FILE");
   PhantomOptions options;
