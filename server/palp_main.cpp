@@ -41,6 +41,8 @@ Commands:
                             the cheapest configuration that feels the same, as a config file
   task ptcd|lumbar|femoral --scene S --landmarks F --trajectory F
                             a training task scored offline: report page, cohort CSV
+  landmarks SCENE --out FILE.json
+                            the anatomical landmarks of a scan (vertebrae, ribs, crests, ...)
   version                   print the version
 
 Run `palp <command> --help` for the options of a command.
@@ -62,9 +64,11 @@ int dispatch(int argc, char** argv) {
     return 0;
   }
   const std::map<std::string, std::function<int(const cli::Arguments&)>> commands = {
-      {"phantom", cli::cmd_phantom}, {"prep", cli::cmd_prep},   {"run", cli::cmd_run},
-      {"traj", cli::cmd_traj},       {"bench", cli::cmd_bench}, {"probe", cli::cmd_probe},
-      {"ctl", cli::cmd_ctl},         {"tune", cli::cmd_tune},   {"task", cli::cmd_task},
+      {"phantom", cli::cmd_phantom}, {"prep", cli::cmd_prep},
+      {"run", cli::cmd_run},         {"traj", cli::cmd_traj},
+      {"bench", cli::cmd_bench},     {"probe", cli::cmd_probe},
+      {"ctl", cli::cmd_ctl},         {"tune", cli::cmd_tune},
+      {"task", cli::cmd_task},       {"landmarks", cli::cmd_landmarks},
   };
   const auto it = commands.find(command);
   if (it == commands.end()) throw UsageError("unknown command '" + command + "' (try palp --help)");

@@ -18,5 +18,6 @@ int cmd_probe(const Arguments& args);    // cmd_probe.cpp (palpd observer)
 int cmd_ctl(const Arguments& args);      // cmd_ctl.cpp (palpd controller console)
 int cmd_tune(const Arguments& args);     // cmd_tune.cpp (the cheapest configuration that feels the same)
 int cmd_task(const Arguments& args);     // cmd_task.cpp (a training task scored offline)
+int cmd_landmarks(const Arguments& args);  // cmd_landmarks.cpp (the anatomical landmarks of a scan)
 
 }  // namespace palp::cli

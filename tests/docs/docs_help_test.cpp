@@ -33,7 +33,7 @@ const std::map<std::string, fs::path>& commands() {
   static const std::map<std::string, fs::path> list = [] {
     std::map<std::string, fs::path> m;
     for (const char* sub :
-         {"phantom", "prep", "run", "traj", "bench", "probe", "ctl", "tune", "task"})
+         {"phantom", "prep", "run", "traj", "bench", "probe", "ctl", "tune", "task", "landmarks"})
       m[std::string("palp ") + sub] = PALP_CLI_PATH;
     m["palpd"] = kBuildDir / "server" / "palpd";
     m["palpview"] = kBuildDir / "client" / "palpview";
