@@ -207,6 +207,38 @@ TEST(CmdTrajSearch, FemoralLeftAndAMarkTwentyMillimetresAbove) {
   EXPECT_EQ(rows[1].where, "off the pulse");
 }
 
+// The whole chain on the phantom: palp landmarks finds the landmarks, the trainee searches with
+// them, and palp task scores the run against the truth: the detected interspace and pulse point
+// are the truth's (ribs are not detected yet: no ptcd here).
+TEST(CmdTrajSearch, DetectedLandmarksLeadTheTraineeToTheTruthsTarget) {
+  const fs::path dir = shared_cli_dir() / "detected";
+  fs::create_directories(dir);
+  const std::string detected = (dir / "landmarks.json").string();
+  const auto l = run_palp_cli("landmarks phantom:trunk -q --out " + detected, cache());
+  ASSERT_EQ(l.exit_code, 0) << l.output;
+  for (const std::string task : {"lumbar --interspace L3/L4", "femoral --side right"}) {
+    const std::string traj = (dir / "run.csv").string(), marks = (dir / "marks.csv").string();
+    const std::string csv = (dir / "cohort.csv").string();
+    fs::remove(csv);
+    const auto r =
+        run_palp_cli("traj search -q --scene phantom:trunk --task " + task + " --landmarks " +
+                         detected + " --out " + traj + " --marks " + marks,
+                     cache());
+    ASSERT_EQ(r.exit_code, 0) << task << "\n" << r.output;
+    const auto t =
+        run_palp_cli("task " + task + " -q --scene phantom:trunk --landmarks " + trunk_landmarks() +
+                         " --trajectory " + traj + " --marks " + marks + " --csv " + csv,
+                     cache());
+    ASSERT_EQ(t.exit_code, 0) << task << "\n" << t.output;
+    std::ifstream in(csv);
+    std::string header, row;
+    std::getline(in, header), std::getline(in, row);
+    const ScoredRow scored = scored_row(row);
+    EXPECT_EQ(scored.where, "target") << task << "\n" << row;
+    EXPECT_LT(scored.distance_mm, 4.0) << task << "\n" << row;
+  }
+}
+
 TEST(CmdTrajSearch, TheSameBytesTwiceAndOneLineMistakes) {
   const std::string common = " --scene phantom:trunk --landmarks " + trunk_landmarks();
   const fs::path traj = shared_cli_dir() / "s.csv", marks = shared_cli_dir() / "s_marks.csv";
