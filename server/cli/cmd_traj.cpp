@@ -1,7 +1,6 @@
 // palp traj KIND --scene SCENE --out FILE: writes one of the paper's device trajectories for a
 // scene as a trajectory CSV (see common/scene/trajectory_gen.hpp for the definitions).
 //   scene -> anchor on the skin (flat paths) or body axis (ribs) -> generator -> CSV
-#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -14,6 +13,7 @@
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/model_setup.hpp"
+#include "cli/task_options.hpp"
 #include "scene/search_path.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
@@ -175,26 +175,7 @@ struct TrajRequest {
 void parse_search(const Args& args, double rate, TrajRequest* r) {
   const auto task = args.get("task");
   if (!task) throw UsageError("traj search needs --task ptcd|lumbar|femoral");
-  const auto kind = training::parse_task_kind(*task);
-  if (!kind) throw UsageError("unknown task '" + *task + "' (ptcd, lumbar or femoral)");
-  training::TaskSpec& t = r->task;
-  t.kind = *kind;
-  if (const auto side = args.get("side")) {
-    const auto parsed = anatomy::parse_side(*side);
-    if (!parsed) throw UsageError("--side is right or left for traj search, got '" + *side + "'");
-    if (t.kind == training::TaskKind::lumbar)
-      throw UsageError("--side is for ptcd and femoral (lumbar is on the midline)");
-    t.side = *parsed;
-  }
-  const double space = args.number("space", 9.0);
-  if (space != std::floor(space)) throw UsageError("--space needs a whole number");
-  t.space = static_cast<int>(std::clamp(space, -1.0, 99.0));
-  if (args.has("space") && t.kind != training::TaskKind::ptcd)
-    throw UsageError("--space is for ptcd");
-  if (const auto interspace = args.get("interspace")) t.interspace = *interspace;
-  if (args.has("interspace") && t.kind != training::TaskKind::lumbar)
-    throw UsageError("--interspace is for lumbar");
-  validate(t);
+  r->task = parse_task_spec(*task, args);
   if (!args.get("landmarks"))
     throw UsageError("traj search needs --landmarks FILE (palp landmarks SCENE --out FILE)");
   SearchSpec& spec = r->search;
