@@ -64,10 +64,11 @@ int dispatch(int argc, char** argv) {
     return 0;
   }
   const std::map<std::string, std::function<int(const cli::Arguments&)>> commands = {
-      {"phantom", cli::cmd_phantom}, {"prep", cli::cmd_prep},   {"run", cli::cmd_run},
-      {"traj", cli::cmd_traj},       {"bench", cli::cmd_bench}, {"probe", cli::cmd_probe},
-      {"ctl", cli::cmd_ctl},         {"tune", cli::cmd_tune},   {"task", cli::cmd_task},
-      {"landmarks", cli::cmd_landmarks},
+      {"phantom", cli::cmd_phantom}, {"prep", cli::cmd_prep},
+      {"run", cli::cmd_run},         {"traj", cli::cmd_traj},
+      {"bench", cli::cmd_bench},     {"probe", cli::cmd_probe},
+      {"ctl", cli::cmd_ctl},         {"tune", cli::cmd_tune},
+      {"task", cli::cmd_task},       {"landmarks", cli::cmd_landmarks},
   };
   const auto it = commands.find(command);
   if (it == commands.end()) throw UsageError("unknown command '" + command + "' (try palp --help)");

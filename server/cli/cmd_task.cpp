@@ -2,8 +2,6 @@
 // scored offline, deterministically, from a recorded or scripted run (docs/tasks.md).
 //   landmarks + spec -> target;  trajectory -> run_offline (palp run's loop) -> samples (LPS)
 //   -> trials split by the marks file -> score_trial each -> report.html, cohort CSV, summary
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -16,6 +14,7 @@
 #include "cli/commands.hpp"
 #include "cli/model_setup.hpp"
 #include "cli/offline_run.hpp"
+#include "cli/task_options.hpp"
 #include "training/cohort_csv.hpp"
 #include "training/marks_file.hpp"
 #include "training/report.hpp"
@@ -67,27 +66,7 @@ constexpr const char* kTaskOptions =
 TaskSpec task_spec(const Args& args) {
   if (args.positional().size() != 1)
     throw UsageError("task needs one task: ptcd, lumbar or femoral");
-  TaskSpec spec;
-  const auto kind = parse_task_kind(args.positional()[0]);
-  if (!kind)
-    throw UsageError("unknown task '" + args.positional()[0] + "' (ptcd, lumbar or femoral)");
-  spec.kind = *kind;
-  if (const auto side = args.get("side")) {
-    const auto parsed = anatomy::parse_side(*side);
-    if (!parsed) throw UsageError("--side is right or left, got '" + *side + "'");
-    spec.side = *parsed;
-  }
-  const double space = args.number("space", 9.0);
-  if (space != std::floor(space)) throw UsageError("--space needs a whole number");
-  spec.space = static_cast<int>(std::clamp(space, -1.0, 99.0));
-  if (const auto interspace = args.get("interspace")) spec.interspace = *interspace;
-  if (args.has("space") && spec.kind != TaskKind::ptcd) throw UsageError("--space is for ptcd");
-  if (args.has("interspace") && spec.kind != TaskKind::lumbar)
-    throw UsageError("--interspace is for lumbar");
-  if (args.has("side") && spec.kind == TaskKind::lumbar)
-    throw UsageError("--side is for ptcd and femoral (lumbar is on the midline)");
-  validate(spec);
-  return spec;
+  return parse_task_spec(args.positional()[0], args);
 }
 
 struct RunResult {

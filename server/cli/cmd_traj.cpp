@@ -8,11 +8,16 @@
 #include <map>
 #include <set>
 
+#include "anatomy/landmarks.hpp"
+#include "base/patient_frame.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/model_setup.hpp"
+#include "cli/task_options.hpp"
+#include "scene/search_path.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
+#include "training/task.hpp"
 
 namespace palp::cli {
 namespace {
@@ -32,6 +37,12 @@ KIND:
   ribs          paper Fig. 5a: slide inferior -> superior across the ribs over the lateral /
                 anterior chest wall at a fixed depth, the tool aligned with the local skin
                 normal (default right side, 30 deg anterior of lateral, 5 mm, 20 mm/s)
+  search        a scripted trainee for palp task (docs/tasks.md): the task's target from
+                --landmarks; per trial, press in --start mm superior of it (along the skin),
+                slide over the skin at --depth to the target moved --miss mm superior, hold
+                (the mark, written to --marks), lift; the tool's +z along the local outward
+                normal. Defaults: start 25, miss 0, depth 4, approach 10, press-time 1,
+                speed 10, hold 1
 The flat paths (slide-*, press-hold) work on a plane through an anchor: the skin point hit along
 the grid's centre line from --side. Patient sides (anterior, posterior, left, right, superior,
 inferior) come from the file's direction matrix, not the voxel order, and slide toward the
@@ -45,7 +56,8 @@ constexpr const char* kTrajOptions = R"(  --out FILE              trajectory CSV
   --tool TOOL             sets the pad offset (default finger:37: 8 mm; probe: 50 mm)
   --rate HZ               rows per second (default 1000)
   --side S                slide-*, press-hold: auto (default), a patient side (anterior, ...)
-                          or a grid face (+x, -x, +y, -y, +z, -z)
+                          or a grid face (+x, -x, +y, -y, +z, -z); search: right (default) or
+                          left (ptcd, femoral)
   --depth MM              final / fixed depth (slide-ramp 6, slide-speed 3, press-hold 4, ribs 5)
   --depth-start MM        slide-ramp: starting depth (default 0)
   --duration S            slide-ramp: duration (default 6)
@@ -63,6 +75,15 @@ constexpr const char* kTrajOptions = R"(  --out FILE              trajectory CSV
   --azimuth DEG           ribs: ray angle from lateral toward anterior (default 30)
   --from F, --to F        ribs: start and end as fractions of the body axis from its inferior
                           end (default 0.25, 0.75)
+  --landmarks FILE        search: the scene's landmarks JSON (palp landmarks SCENE --out FILE)
+  --task T                search: ptcd, lumbar or femoral (required)
+  --space N               search, ptcd: the space below rib N (default 9)
+  --interspace NAME       search, lumbar: L1/L2 .. L5/S1 (default L3/L4)
+  --start MM              search: press in this far from the target along the skin, toward the
+                          patient's superior (negative: inferior; default 25)
+  --miss MM[,MM...]       search: one trial per value, ending this far superior of the target
+                          along the skin (default 0: on it; 20: about a rib or space above)
+  --marks FILE            search: write the marks CSV (trial,t; one mark per trial, mid-hold)
   -q, --quiet             print only errors
   -h, --help              show this help
 )";
@@ -76,6 +97,9 @@ const std::map<std::string, std::set<std::string>>& kind_options() {
        {"side", "depth", "approach", "press-time", "shift", "shift-time", "hold", "jitter",
         "seed"}},
       {"ribs", {"depth", "speed", "press-time", "approach", "body-side", "azimuth", "from", "to"}},
+      {"search",
+       {"landmarks", "task", "side", "space", "interspace", "start", "miss", "marks", "depth",
+        "approach", "press-time", "speed", "hold"}},
   };
   return options;
 }
@@ -101,23 +125,24 @@ void check_options_apply(const Args& args, const std::string& kind) {
   }
 }
 
-std::vector<double> parse_speeds(const std::string& text) {
-  std::vector<double> speeds;
+// "A,B,..." for --speeds and --miss.
+std::vector<double> parse_numbers(const std::string& text, const char* option) {
+  std::vector<double> numbers;
   const char* p = text.data();
   const char* end = text.data() + text.size();
+  const std::string error =
+      std::string(option) + " needs numbers separated by commas, got '" + text + "'";
   while (true) {
     double v = 0.0;
     const auto [next, ec] = std::from_chars(p, end, v);
-    if (ec != std::errc() || next == p || !std::isfinite(v))
-      throw UsageError("--speeds needs numbers separated by commas, got '" + text + "'");
-    speeds.push_back(v);
+    if (ec != std::errc() || next == p || !std::isfinite(v)) throw UsageError(error);
+    numbers.push_back(v);
     p = next;
     if (p == end) break;
-    if (*p != ',')
-      throw UsageError("--speeds needs numbers separated by commas, got '" + text + "'");
+    if (*p != ',') throw UsageError(error);
     ++p;
   }
-  return speeds;
+  return numbers;
 }
 
 std::uint64_t parse_seed(const Args& args) {
@@ -142,11 +167,36 @@ struct TrajRequest {
   SlideSpeedSpec speed;
   PressHoldSpec hold;
   RibsSpec ribs;
+  training::TaskSpec task;
+  SearchSpec search;
 };
+
+// search: the task (as palp task takes it) and the path's timing.
+void parse_search(const Args& args, double rate, TrajRequest* r) {
+  const auto task = args.get("task");
+  if (!task) throw UsageError("traj search needs --task ptcd|lumbar|femoral");
+  r->task = parse_task_spec(*task, args);
+  if (!args.get("landmarks"))
+    throw UsageError("traj search needs --landmarks FILE (palp landmarks SCENE --out FILE)");
+  SearchSpec& spec = r->search;
+  spec.rate_hz = rate;
+  spec.start_mm = args.number("start", spec.start_mm);
+  if (const auto miss = args.get("miss")) spec.misses_mm = parse_numbers(*miss, "--miss");
+  spec.depth_mm = args.number("depth", spec.depth_mm);
+  spec.approach_mm = args.number("approach", spec.approach_mm);
+  spec.press_s = args.number("press-time", spec.press_s);
+  spec.speed_mm_s = args.number("speed", spec.speed_mm_s);
+  spec.hold_s = args.number("hold", spec.hold_s);
+  validate(spec);
+}
 
 TrajRequest parse_request(const std::string& kind, const Args& args, double rate) {
   TrajRequest r;
   r.kind = kind;
+  if (kind == "search") {
+    parse_search(args, rate, &r);
+    return r;
+  }
   r.side = parse_approach_side(args.get("side").value_or("auto"));
   if (kind == "slide-ramp") {
     SlideRampSpec& spec = r.ramp;
@@ -161,7 +211,8 @@ TrajRequest parse_request(const std::string& kind, const Args& args, double rate
     spec.rate_hz = rate;
     spec.depth_mm = args.number("depth", spec.depth_mm);
     spec.press_s = args.number("press-time", spec.press_s);
-    if (const auto speeds = args.get("speeds")) spec.speeds_mm_s = parse_speeds(*speeds);
+    if (const auto speeds = args.get("speeds"))
+      spec.speeds_mm_s = parse_numbers(*speeds, "--speeds");
     spec.segment_s = args.number("segment", spec.segment_s);
     spec.hold_s = args.number("hold", spec.hold_s);
     validate(spec);
@@ -207,6 +258,36 @@ void print_vec(const char* label, const Vec3d& v) {
   std::printf("  %-9s (%.4f, %.4f, %.4f)\n", label, v.x, v.y, v.z);
 }
 
+// traj search: landmarks -> the task's target (LPS) -> the path in the scene frame -> CSVs.
+int traj_search(const Args& args, const TrajRequest& request, double offset, bool quiet) {
+  const anatomy::Landmarks landmarks = anatomy::read_landmarks(*args.get("landmarks"));
+  const training::TaskTarget target = training::resolve_target(request.task, landmarks);
+  const Scene scene = load_scene_for(args, "traj", quiet);
+  const SearchPath path =
+      search_path(*scene.fields, {target.point, target.normal}, offset, request.search);
+  const std::string out = *args.get("out");
+  write_trajectory_csv(out, path.trajectory);
+  if (const auto marks = args.get("marks")) write_marks_csv(*marks, path.mark_times_s);
+  if (quiet) return 0;
+  std::printf(
+      "wrote %s: search for %s, %zu trial%s, %zu rows over %.6g s, pad %g mm below the "
+      "device point\n",
+      out.c_str(), training::describe(request.task).c_str(), path.mark_times_s.size(),
+      path.mark_times_s.size() == 1 ? "" : "s", path.trajectory.size(), path.trajectory.back().t,
+      offset);
+  print_vec("target", target.point);
+  for (std::size_t k = 0; k < path.mark_times_s.size(); ++k) {
+    const Vec3d end = world_of_scene(scene.grid, path.end_points_scene[k]);
+    std::printf(
+        "  trial %zu: miss %g mm, mark at t = %.6g s, end (%.4f, %.4f, %.4f) LPS, "
+        "%.1f mm from the target\n",
+        k + 1, request.search.misses_mm[k], path.mark_times_s[k], end.x, end.y, end.z,
+        norm(end - target.point));
+  }
+  if (const auto marks = args.get("marks")) std::printf("  marks %s\n", marks->c_str());
+  return 0;
+}
+
 }  // namespace
 
 int cmd_traj(const Arguments& argv) {
@@ -216,11 +297,11 @@ int cmd_traj(const Arguments& argv) {
     return 0;
   }
   if (args.positional().size() != 1)
-    throw UsageError("traj needs one KIND (slide-ramp, slide-speed, press-hold, ribs)");
+    throw UsageError("traj needs one KIND (slide-ramp, slide-speed, press-hold, ribs, search)");
   const std::string& kind = args.positional()[0];
   if (!kind_options().count(kind))
     throw UsageError("unknown trajectory '" + kind +
-                     "' (slide-ramp, slide-speed, press-hold, ribs)");
+                     "' (slide-ramp, slide-speed, press-hold, ribs, search)");
   check_options_apply(args, kind);
   const auto out = args.get("out");
   if (!out) throw UsageError("traj needs --out FILE");
@@ -231,6 +312,7 @@ int cmd_traj(const Arguments& argv) {
   const TrajRequest request = parse_request(kind, args, rate);
   (void)scene_options(args);
 
+  if (kind == "search") return traj_search(args, request, offset, quiet);
   const Scene scene = load_scene_for(args, "traj", quiet);
   SurfaceAnchor anchor;
   const Trajectory trajectory = generate(request, *scene.fields, offset, &anchor);
