@@ -117,7 +117,7 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
                           against them, and observers may show them
   --task KIND             a training task from the start: ptcd, lumbar or femoral (a controller
                           starts, marks and stops tasks too: palp ctl HOST:PORT task ...);
-                          needs --landmarks
+                          without --landmarks they are found in the scene (palp landmarks)
   --task-side SIDE        ptcd, femoral: right (default) or left
   --task-space N          ptcd: the intercostal space below rib N (9: the 9th/10th; 1..11)
   --task-interspace NAME  lumbar: L3/L4 (default) or L4/L5

@@ -7,10 +7,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "anatomy/landmark_detection.hpp"
 #include "anatomy/landmarks.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli/scene_landmarks.hpp"
 #include "prep/prep.hpp"
 #include "scene/scene.hpp"
 
@@ -38,12 +38,8 @@ Options:
   -h, --help              show this help
 )";
 
-std::string prep_dir_of(const std::string& scene, const Args& args, bool quiet) {
-  if (is_prep_directory(scene)) {
-    if (args.has("labels"))
-      throw UsageError("--labels preps a CT input; " + scene + " is already a prep directory");
-    return scene;
-  }
+// The prep parameters --labels and --labels-map ask for.
+PrepParams prep_params(const Args& args) {
   PrepParams params;
   if (const auto labels = args.get("labels")) {
     if (labels->empty()) throw UsageError("--labels needs a label map");
@@ -53,14 +49,7 @@ std::string prep_dir_of(const std::string& scene, const Args& args, bool quiet) 
     if (params.labels_path.empty()) throw UsageError("--labels-map needs --labels SEG");
     params.labels_map = *map;
   }
-  const std::string cache = args.get("cache-dir").value_or(default_scene_cache_dir());
-  const std::string dir = scene_cache_path(scene, params, cache);
-  const PrepProgress progress = [quiet](const std::string& stage, bool finished, double) {
-    if (!quiet && !finished) std::cerr << "  prep: " << stage << "\n";
-  };
-  const PrepResult r = run_prep(scene, dir, params, progress);
-  if (!quiet) std::cerr << (r.from_cache ? "prep: from the cache " : "prep: into ") << dir << "\n";
-  return dir;
+  return params;
 }
 
 std::string summary(const anatomy::Landmarks& lm) {
@@ -110,11 +99,9 @@ int cmd_landmarks(const Arguments& argv) {
   const bool quiet = args.has("quiet");
   const auto start = std::chrono::steady_clock::now();
   const std::string scene = args.positional().front();
-  const std::string dir = prep_dir_of(scene, args, quiet);
-  const anatomy::LandmarkInputs inputs = anatomy::read_landmark_inputs(dir, scene);
-  const anatomy::Landmarks lm = anatomy::find_landmarks(inputs, [quiet](const std::string& step) {
-    if (!quiet) std::cerr << "  landmarks: " << step << "\n";
-  });
+  const std::string dir = scene_prep_dir(
+      scene, prep_params(args), args.get("cache-dir").value_or(default_scene_cache_dir()), quiet);
+  const anatomy::Landmarks lm = find_landmarks_in(dir, scene, quiet);
   anatomy::write_landmarks(*out, lm);
   if (!quiet) {
     const double s =

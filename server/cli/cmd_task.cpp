@@ -1,4 +1,4 @@
-// palp task ptcd|lumbar|femoral --scene SCENE --landmarks FILE --trajectory FILE: a training task
+// palp task ptcd|lumbar|femoral --scene SCENE [--landmarks FILE] --trajectory FILE: a training task
 // scored offline, deterministically, from a recorded or scripted run (docs/tasks.md).
 //   landmarks + spec -> target;  trajectory -> run_offline (palp run's loop) -> samples (LPS)
 //   -> trials split by the marks file -> score_trial each -> report.html, cohort CSV, summary
@@ -10,10 +10,12 @@
 #include "anatomy/landmarks.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
+#include "scene/scene.hpp"
 #include "cli/cli.hpp"
 #include "cli/commands.hpp"
 #include "cli/model_setup.hpp"
 #include "cli/offline_run.hpp"
+#include "cli/scene_landmarks.hpp"
 #include "cli/task_options.hpp"
 #include "training/cohort_csv.hpp"
 #include "training/marks_file.hpp"
@@ -25,8 +27,7 @@ namespace {
 using namespace palp::training;
 
 constexpr const char* kTaskUsage =
-    R"(usage: palp task ptcd|lumbar|femoral --scene SCENE --landmarks FILE --trajectory FILE
-                 [options]
+    R"(usage: palp task ptcd|lumbar|femoral --scene SCENE --trajectory FILE [options]
 
 Scores a training task offline from a recorded or scripted run: the force model runs over the
 trajectory exactly as in palp run (one tick per row, deterministic), the skin point (the contact
@@ -43,7 +44,8 @@ Options:
 )";
 
 constexpr const char* kTaskOptions =
-    R"(  --landmarks FILE        the scene's landmarks JSON (palp landmarks SCENE --out FILE)
+    R"(  --landmarks FILE        the scene's landmarks JSON (palp landmarks SCENE --out FILE);
+                          without it they are found in the scene as palp landmarks finds them
   --trajectory FILE       trajectory CSV: t,px,py,pz,qw,qx,qy,qz (s, mm, scene frame)
   --marks FILE            marks CSV: a header with t (s, the trajectory's clock) and optionally
                           trial (1, 2, ...), one mark a row (docs/tasks.md); none: one trial
@@ -167,14 +169,17 @@ int cmd_task(const Arguments& argv_in) {
   const auto trajectory_path = args.get("trajectory");
   if (!trajectory_path) throw UsageError("task needs --trajectory FILE");
   const auto landmarks_path = args.get("landmarks");
-  if (!landmarks_path)
-    throw UsageError("task needs --landmarks FILE (palp landmarks SCENE --out FILE)");
   const std::string tool_name = args.get("tool").value_or("finger:7");
   const Tool tool = parse_tool(tool_name);
   (void)scene_options(args);
 
   Session session;
-  session.landmarks = anatomy::read_landmarks(*landmarks_path);
+  // The landmarks from the file, else found in the scene as palp landmarks finds them.
+  session.landmarks =
+      landmarks_path
+          ? anatomy::read_landmarks(*landmarks_path)
+          : scene_landmarks(*args.get("scene"),
+                            args.get("cache-dir").value_or(default_scene_cache_dir()), quiet);
   session.target = resolve_target(spec, session.landmarks);
   const std::vector<MarkRow> marks =
       args.get("marks") ? read_marks_csv(*args.get("marks")) : std::vector<MarkRow>{};

@@ -8,7 +8,9 @@
 #include <vector>
 
 #include "base/errors.hpp"
+#include "cli/scene_landmarks.hpp"
 #include "rt/recording.hpp"
+#include "scene/scene.hpp"
 #include "training/cohort_csv.hpp"
 #include "training/report.hpp"
 
@@ -45,9 +47,16 @@ TaskOptions task_options(const Args& args, const std::string& record_dir) {
   } catch (const Error& e) {
     throw UsageError(std::string("--task: ") + e.what());
   }
-  // Landmark detection (the `landmarks` branch's anatomy::find_landmarks on the scene) goes
-  // here, in task_beside, when palpd is given no --landmarks; until then a task needs the file.
-  if (!o.landmarks) throw UsageError("--task needs --landmarks FILE (palp landmarks writes one)");
+  // No --landmarks: found in the scene as palp landmarks finds them (a second or two on a CT,
+  // once, before the loop starts).
+  if (!o.landmarks) {
+    const auto scene = args.get("scene");
+    if (!scene) throw UsageError("--task needs --landmarks FILE or --scene SCENE");
+    o.landmarks = scene_landmarks(
+        *scene, args.get("cache-dir").value_or(default_scene_cache_dir()), args.has("quiet"));
+    o.landmarks_path = "found in " + *scene;
+    (void)net::wire_landmarks(*o.landmarks, {});
+  }
   o.task = spec;
   return o;
 }

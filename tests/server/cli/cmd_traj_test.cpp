@@ -110,6 +110,10 @@ ScoredRow scored_row(const std::string& line) {
   return {cells[6], cells[7] == "1", std::stod(cells[8])};
 }
 
+// The trunk phantom with its maps on its own 2.5-3 mm grid: refining them to 1.5 mm in memory
+// (palp's default --map-spacing 2) took 7 s of every command here.
+const std::string kTrunkScene = " --scene phantom:trunk --map-spacing 0";
+
 // traj search SEARCH_ARGS with misses 0 and 20, then palp task TASK_ARGS on it: the trials' rows.
 std::vector<ScoredRow> search_and_score(const std::string& name, const std::string& search_args,
                                         const std::string& task_args) {
@@ -117,7 +121,7 @@ std::vector<ScoredRow> search_and_score(const std::string& name, const std::stri
   fs::create_directories(dir);
   const std::string traj = (dir / "run.csv").string(), marks = (dir / "marks.csv").string();
   const std::string csv = (dir / "cohort.csv").string();
-  const std::string common = " --scene phantom:trunk --landmarks " + trunk_landmarks();
+  const std::string common = kTrunkScene + " --landmarks " + trunk_landmarks();
   const auto r = run_palp_cli("traj search" + common + " " + search_args + " --miss 0,20 --out " +
                                   traj + " --marks " + marks,
                               cache());
@@ -209,24 +213,25 @@ TEST(CmdTrajSearch, FemoralLeftAndAMarkTwentyMillimetresAbove) {
 
 // The whole chain on the phantom: palp landmarks finds the landmarks, the trainee searches with
 // them, and palp task scores the run against the truth: the detected interspace and pulse point
-// are the truth's (ribs are not detected yet: no ptcd here).
+// are the truth's.
 TEST(CmdTrajSearch, DetectedLandmarksLeadTheTraineeToTheTruthsTarget) {
   const fs::path dir = shared_cli_dir() / "detected";
   fs::create_directories(dir);
   const std::string detected = (dir / "landmarks.json").string();
   const auto l = run_palp_cli("landmarks phantom:trunk -q --out " + detected, cache());
   ASSERT_EQ(l.exit_code, 0) << l.output;
-  for (const std::string task : {"lumbar --interspace L3/L4", "femoral --side right"}) {
+  for (const std::string task :
+       {"ptcd --side right --space 9", "lumbar --interspace L3/L4", "femoral --side right"}) {
     const std::string traj = (dir / "run.csv").string(), marks = (dir / "marks.csv").string();
     const std::string csv = (dir / "cohort.csv").string();
     fs::remove(csv);
     const auto r =
-        run_palp_cli("traj search -q --scene phantom:trunk --task " + task + " --landmarks " +
-                         detected + " --out " + traj + " --marks " + marks,
+        run_palp_cli("traj search -q --rate 200" + kTrunkScene + " --task " + task +
+                         " --landmarks " + detected + " --out " + traj + " --marks " + marks,
                      cache());
     ASSERT_EQ(r.exit_code, 0) << task << "\n" << r.output;
     const auto t =
-        run_palp_cli("task " + task + " -q --scene phantom:trunk --landmarks " + trunk_landmarks() +
+        run_palp_cli("task " + task + " -q" + kTrunkScene + " --landmarks " + trunk_landmarks() +
                          " --trajectory " + traj + " --marks " + marks + " --csv " + csv,
                      cache());
     ASSERT_EQ(t.exit_code, 0) << task << "\n" << t.output;
@@ -236,11 +241,30 @@ TEST(CmdTrajSearch, DetectedLandmarksLeadTheTraineeToTheTruthsTarget) {
     const ScoredRow scored = scored_row(row);
     EXPECT_EQ(scored.where, "target") << task << "\n" << row;
     EXPECT_LT(scored.distance_mm, 4.0) << task << "\n" << row;
+
+    // Without --landmarks palp task finds them in the scene: the same score as with the file
+    // palp landmarks wrote (to the file's 0.01 mm); once, the runs take seconds each.
+    if (task.rfind("lumbar", 0) != 0) continue;
+    std::string rows[2];
+    for (int found = 0; found < 2; ++found) {
+      fs::remove(csv);
+      const auto s = run_palp_cli("task " + task + " -q" + kTrunkScene +
+                                      (found ? "" : " --landmarks " + detected) +
+                                      " --trajectory " + traj + " --marks " + marks +
+                                      " --csv " + csv + " --session same",
+                                  cache());
+      ASSERT_EQ(s.exit_code, 0) << task << "\n" << s.output;
+      std::ifstream again(csv);
+      std::getline(again, header), std::getline(again, rows[found]);
+    }
+    const ScoredRow with_file = scored_row(rows[0]), found = scored_row(rows[1]);
+    EXPECT_EQ(found.where, with_file.where) << rows[1];
+    EXPECT_NEAR(found.distance_mm, with_file.distance_mm, 0.02) << rows[1];
   }
 }
 
 TEST(CmdTrajSearch, TheSameBytesTwiceAndOneLineMistakes) {
-  const std::string common = " --scene phantom:trunk --landmarks " + trunk_landmarks();
+  const std::string common = kTrunkScene + " --landmarks " + trunk_landmarks();
   const fs::path traj = shared_cli_dir() / "s.csv", marks = shared_cli_dir() / "s_marks.csv";
   const std::string args = "traj search --task ptcd --space 10 --miss -13,0 --rate 200" + common +
                            " --out " + traj.string() + " --marks " + marks.string();
