@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "base/errors.hpp"
+#include "base/file_replace.hpp"
 
 namespace palp::anatomy {
 
@@ -318,16 +319,7 @@ Landmarks landmarks_from_json(std::string_view text, const std::string& name) {
 }
 
 void write_landmarks(const std::string& path, const Landmarks& landmarks) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary);
-    const std::string text = landmarks_to_json(landmarks);
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    if (!out) throw Error(path + ": cannot be written");
-  }
-  std::error_code ec;
-  fs::rename(partial, path, ec);
-  if (ec) throw Error(path + ": cannot be written: " + ec.message());
+  replace_file(path, landmarks_to_json(landmarks));
 }
 
 Landmarks read_landmarks(const std::string& path) {

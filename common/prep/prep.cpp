@@ -32,6 +32,7 @@
 #include <system_error>
 
 #include "base/errors.hpp"
+#include "base/file_replace.hpp"
 #include "base/parallel.hpp"
 #include "base/patient_frame.hpp"
 #include "io/ct_io.hpp"
@@ -235,14 +236,7 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
 
 // Writes `json` to `path` through a .partial file renamed over it.
 void write_json_atomically(const fs::path& path, const nlohmann::json& json) {
-  std::error_code ec;
-  {
-    std::ofstream out(path.string() + ".partial");
-    out << json.dump(2) << '\n';
-    if (!out) throw Error(path.string() + ": cannot be written");
-  }
-  fs::rename(path.string() + ".partial", path, ec);
-  if (ec) throw Error(path.string() + ": cannot be written: " + ec.message());
+  replace_file(path.string(), json.dump(2) + '\n');
 }
 
 }  // namespace

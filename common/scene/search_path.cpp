@@ -10,11 +10,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <string>
 
 #include "base/errors.hpp"
+#include "base/file_replace.hpp"
 #include "base/patient_frame.hpp"
 #include "scene/path_geometry.hpp"
 #include "scene/trajectory_gen.hpp"
@@ -244,16 +243,7 @@ std::string format_marks_csv(const std::vector<double>& mark_times_s) {
 }
 
 void write_marks_csv(const std::string& path, const std::vector<double>& mark_times_s) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary);
-    const std::string text = format_marks_csv(mark_times_s);
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    if (!out) throw Error(path + ": cannot be written");
-  }
-  std::error_code ec;
-  std::filesystem::rename(partial, path, ec);
-  if (ec) throw Error(path + ": cannot be written: " + ec.message());
+  replace_file(path, format_marks_csv(mark_times_s));
 }
 
 }  // namespace palp

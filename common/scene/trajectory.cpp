@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "base/errors.hpp"
+#include "base/file_replace.hpp"
 #include "io/gzip.hpp"
 
 namespace palp {
@@ -181,16 +182,7 @@ std::string format_trajectory_csv(const Trajectory& trajectory) {
 }
 
 void write_trajectory_csv(const std::string& path, const Trajectory& trajectory) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary);
-    const std::string text = format_trajectory_csv(trajectory);
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    if (!out) throw Error(path + ": cannot be written");
-  }
-  std::error_code ec;
-  fs::rename(partial, path, ec);
-  if (ec) throw Error(path + ": cannot be written: " + ec.message());
+  replace_file(path, format_trajectory_csv(trajectory));
 }
 
 ForceRecord force_record(double t, const State& state) {

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 
 #include "base/errors.hpp"
+#include "base/file_replace.hpp"
 #include "training/svg.hpp"
 
 namespace palp::training {
@@ -170,21 +170,7 @@ std::string write_report(const std::string& dir, const Session& session) {
   fs::create_directories(dir, ec);
   if (ec) throw Error(dir + ": cannot create the report's directory: " + ec.message());
   const std::string path = (fs::path(dir) / "report.html").string();
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary);
-    out << report_html(session);
-    out.close();
-    if (!out) {
-      fs::remove(partial, ec);
-      throw Error(partial + ": cannot be written");
-    }
-  }
-  fs::rename(partial, path, ec);
-  if (ec) {
-    fs::remove(partial, ec);
-    throw Error(path + ": cannot be written");
-  }
+  replace_file(path, report_html(session));
   return path;
 }
 
