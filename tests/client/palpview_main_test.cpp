@@ -391,18 +391,20 @@ fs::path write_right_side_landmarks(const fs::path& dir) {
 TEST(Palpview, ShowLandmarksDrawsThemForTheObserverOnly) {
   if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
   const fs::path dir = test_dir();
-  Palpd palpd("--scene phantom:sphere --device remote --port 0 --no-realtime --duration 300 "
-              "--landmarks " + write_right_side_landmarks(dir).string() + " --task ptcd",
-              dir);
+  Palpd palpd(
+      "--scene phantom:sphere --device remote --port 0 --no-realtime --duration 300 "
+      "--landmarks " +
+          write_right_side_landmarks(dir).string() + " --task ptcd",
+      dir);
   ASSERT_GT(palpd.port(), 0) << palpd.log();
   const int width = 400, height = 300;
   const auto shot = [&](const std::string& name, const std::string& options) {
     const fs::path png = dir / (name + ".png");
-    const auto r = run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) + " " +
-                                options + " --preset bone --screenshot " + png.string() +
-                                " --frames 5 --width " + std::to_string(width) + " --height " +
-                                std::to_string(height) +
-                                " --timeout 120 --follow 0 --no-overlays --no-tool");
+    const auto r =
+        run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) + " " + options +
+                     " --preset bone --screenshot " + png.string() + " --frames 5 --width " +
+                     std::to_string(width) + " --height " + std::to_string(height) +
+                     " --timeout 120 --follow 0 --no-overlays --no-tool");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return yellow_pixels(read_rgb(png), width);
   };
