@@ -394,7 +394,7 @@ TEST(Palpview, ShowLandmarksDrawsThemForTheObserverOnly) {
   Palpd palpd(
       "--scene phantom:sphere --device remote --port 0 --no-realtime --duration 300 "
       "--landmarks " +
-          write_right_side_landmarks(dir).string() + " --task ptcd",
+          write_right_side_landmarks(dir).string() + " --task ptcd --record-dir " + dir.string(),
       dir);
   ASSERT_GT(palpd.port(), 0) << palpd.log();
   const int width = 400, height = 300;
