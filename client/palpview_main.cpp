@@ -67,6 +67,7 @@ SceneSettings scene_settings(const Options& o) {
   settings.orientation_marker = o.orientation_marker;
   settings.overlays = o.overlays;
   settings.tool_glyphs = o.tool_glyphs;
+  settings.show_landmarks = o.show_landmarks;
   settings.camera_azimuth_deg = o.az;
   settings.camera_elevation_deg = o.el;
   settings.camera_distance_mm = o.dist;

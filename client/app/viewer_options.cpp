@@ -62,6 +62,9 @@ and deforms the skin where the tool presses.
   --no-orientation-marker hide the patient-axes cube (bottom left)
   --no-overlays           hide the HUD, the chart and the orientation marker
   --no-tool               hide the tool, contacts, proxies, springs, arrow and shadow
+  --show-landmarks        show the scan's landmarks from the start, as key L does (palpd
+                          --landmarks sends them to observers; never to the controller while
+                          a training task runs)
   --screenshot FILE       render --frames N frames from the live stream, write a PNG, exit
   --frames N              frames before the screenshot (default 5)
   --timeout S             how long --screenshot waits for the scene (default 60)
@@ -183,6 +186,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
       o.overlays = false;
     } else if (arg == "--no-tool") {
       o.tool_glyphs = false;
+    } else if (arg == "--show-landmarks") {
+      o.show_landmarks = true;
     } else if (arg == "--camera") {
       const std::string text = value();
       const auto c1 = text.find(','), c2 = text.find(',', c1 == std::string::npos ? 0 : c1 + 1);

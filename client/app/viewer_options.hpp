@@ -39,6 +39,7 @@ struct Options {
   bool orientation_marker = true;
   bool overlays = true;
   bool tool_glyphs = true;
+  bool show_landmarks = false;  // --show-landmarks: as if L were pressed at start
   std::string screenshot;
   int frames = 5;
   double timeout_s = 60.0;

@@ -75,6 +75,7 @@ struct RenderScene::Impl {
         hud(renderer),
         chart(s.chart_seconds),
         workspace(renderer),
+        landmarks_wanted(s.show_landmarks),
         tool_glyphs(s.tool_glyphs),
         overlays(s.overlays) {}
 

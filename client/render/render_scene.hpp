@@ -68,6 +68,9 @@ struct SceneSettings {
   double chart_seconds = 5.0;  // force plot span
   bool overlays = true;        // HUD text, banner and chart
   bool tool_glyphs = true;     // tool, contacts, proxies, springs, arrow, shadow
+  // The landmarks (L) wanted from the start; drawn only when palpd sends them and allows it
+  // (landmark_layer.hpp: never to the trainee's controller while a task runs).
+  bool show_landmarks = false;
   DeformerParams deformer;
 };
 

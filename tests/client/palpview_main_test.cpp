@@ -2,7 +2,8 @@
 // mode (exit 1 after --timeout); a screenshot of palpd's sphere scene (the PNG has the asked size
 // and is not uniform); and a controller run whose scripted poses drive palpd's `remote` device
 // (palpd reports the pose back and finds the pad in contact); a prep directory's structures drawn
-// by the vessels preset and not by the skin one. Rendering needs an X display
+// by the vessels preset and not by the skin one; the landmarks shown from the start to an observer
+// (--show-landmarks), never to the controller while a task runs. Rendering needs an X display
 // (CTest runs this under xvfb-run -a where DISPLAY is unset); without one those tests skip.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -26,6 +27,7 @@
 #include <set>
 #include <thread>
 
+#include "anatomy/landmarks.hpp"
 #include "io/ct_io.hpp"
 #include "scene/trajectory.hpp"
 #include "support/cli_test_util.hpp"
@@ -337,6 +339,83 @@ TEST(Palpview, StreamLostBeforeTheScreenshotFails) {
   EXPECT_NE(r.output.find("was lost after"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(png));
   EXPECT_LT(took, 60.0);  // not the 120 s timeout
+}
+
+// Pixels of the landmarks' colour (yellow spheres and labels): red and green high, blue low.
+struct Yellow {
+  std::size_t n = 0;
+  double mean_column = 0;
+};
+
+Yellow yellow_pixels(const std::vector<std::uint8_t>& rgb, int width) {
+  Yellow out;
+  double columns = 0;
+  for (std::size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const int r = rgb[i], g = rgb[i + 1], b = rgb[i + 2];
+    if (r < 150 || g < 120 || r - b < 90 || g - b < 70) continue;
+    ++out.n;
+    columns += static_cast<double>((i / 3) % static_cast<std::size_t>(width));
+  }
+  if (out.n) out.mean_column = columns / static_cast<double>(out.n);
+  return out;
+}
+
+// The sphere phantom (radius 30 mm about LPS (0, 0, 0)) as a chest wall on the patient's right
+// (LPS -x): ribs 9 and 10 12 mm above and below the equator, the 9/10 space's skin point between.
+fs::path write_right_side_landmarks(const fs::path& dir) {
+  anatomy::Landmarks l;
+  l.scene = "phantom:sphere";
+  anatomy::IntercostalSpace space;
+  space.upper_rib = 9;
+  space.skin_point = Vec3d{-30.0, -10.0, 0.0};
+  space.normal = Vec3d{-1.0, 0.0, 0.0};
+  space.confidence = 1.0;
+  l.intercostal_spaces.push_back(space);
+  for (const int number : {9, 10}) {
+    anatomy::Rib rib;
+    rib.number = number;
+    rib.confidence = 1.0;
+    const double z = number == 9 ? 12.0 : -12.0;
+    for (double y = -25.0; y <= 5.0; y += 5.0)
+      rib.points.push_back({-std::sqrt(900.0 - z * z - y * y), y, z});
+    l.ribs.push_back(rib);
+  }
+  const fs::path path = dir / "landmarks.json";
+  anatomy::write_landmarks(path.string(), l);
+  return path;
+}
+
+// --show-landmarks end to end: palpd --landmarks sends the set, palpview draws it from the start
+// for an observer (yellow, on the patient's right: the image's left from the anterior view), not
+// without the option, and not for the trainee's controller while a task runs.
+TEST(Palpview, ShowLandmarksDrawsThemForTheObserverOnly) {
+  if (!display_available()) GTEST_SKIP() << "no X display (run under xvfb-run -a)";
+  const fs::path dir = test_dir();
+  Palpd palpd(
+      "--scene phantom:sphere --device remote --port 0 --no-realtime --duration 300 "
+      "--landmarks " +
+          write_right_side_landmarks(dir).string() + " --task ptcd --record-dir " + dir.string(),
+      dir);
+  ASSERT_GT(palpd.port(), 0) << palpd.log();
+  const int width = 400, height = 300;
+  const auto shot = [&](const std::string& name, const std::string& options) {
+    const fs::path png = dir / (name + ".png");
+    const auto r =
+        run_palpview("--connect 127.0.0.1:" + std::to_string(palpd.port()) + " " + options +
+                     " --preset bone --screenshot " + png.string() + " --frames 5 --width " +
+                     std::to_string(width) + " --height " + std::to_string(height) +
+                     " --timeout 120 --follow 0 --no-overlays --no-tool");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return yellow_pixels(read_rgb(png), width);
+  };
+  const Yellow shown = shot("observer-shown", "--show-landmarks");
+  const Yellow plain = shot("observer-plain", "");
+  const Yellow trainee = shot("controller-shown", "--controller --show-landmarks");
+  // 15 points of 2.5 mm radius and three labels on a ~120 mm field 300 px high
+  EXPECT_GT(shown.n, 150u);
+  EXPECT_LT(shown.mean_column, 0.5 * width);  // the patient's right
+  EXPECT_LT(plain.n, 5u);
+  EXPECT_LT(trainee.n, 5u);
 }
 
 TEST(Palpview, ControllerScriptDrivesTheRemoteDevice) {

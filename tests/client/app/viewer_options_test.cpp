@@ -51,6 +51,16 @@ TEST(ViewerOptions, SkinHuKeepsTheSkinPresetOnTheCtsHu) {
   EXPECT_TRUE(o->ct);  // the HU are still asked for
 }
 
+TEST(ViewerOptions, ShowLandmarksAsksForThemFromTheStart) {
+  const auto plain = parse({"--connect", "h:1"});
+  ASSERT_TRUE(plain);
+  EXPECT_FALSE(plain->show_landmarks);  // only key L shows them
+  const auto o = parse({"--connect", "h:1", "--show-landmarks"});
+  ASSERT_TRUE(o);
+  EXPECT_TRUE(o->show_landmarks);
+  EXPECT_NE(std::string(kUsage).find("--show-landmarks"), std::string::npos);
+}
+
 TEST(ViewerOptions, ACameraTurnsFollowingOffUnlessAsked) {
   auto o = parse({"--connect", "h:1", "--camera", "30,10,400"});
   ASSERT_TRUE(o);
