@@ -17,6 +17,8 @@ struct ScanContext {
   SkinMap skin;
   std::optional<PatientMask> artery;
   std::string artery_source;
+  std::optional<PatientMask> skeleton;     // labelled vertebrae and ribs: values, not 0/1
+  std::vector<std::string> skeleton_names;  // value v: skeleton_names[v - 1]
   double midline_x = 0.0;  // the column's median x (index), else the body's
 };
 

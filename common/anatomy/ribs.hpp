@@ -39,6 +39,10 @@ struct RibTrace {
   int vertebra = -1;        // the spine segment the head lies at, -1 when none
   double length_mm = 0.0, width_mm = 0.0;
   double confidence = 0.0;  // of being a rib (shape)
+  // The labelled rib it is (skeleton_labels.hpp): number 0 when unlabelled.
+  int label_number = 0;
+  int label_side = 0;
+  std::string label_name;
 };
 
 // The ribs of the scan, each with a head in the scan assigned to a spine segment (before the
