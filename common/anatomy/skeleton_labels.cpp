@@ -2,8 +2,8 @@
 #include "anatomy/skeleton_labels.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <map>
 
 namespace palp::anatomy {
@@ -29,8 +29,7 @@ struct Tally {
 
 const std::string& name_of(const ScanContext& scan, std::uint8_t value) {
   static const std::string none;
-  return value >= 1 && value <= scan.skeleton_names.size() ? scan.skeleton_names[value - 1u]
-                                                           : none;
+  return value >= 1 && value <= scan.skeleton_names.size() ? scan.skeleton_names[value - 1u] : none;
 }
 
 // The vertebra labels over a segment's body.
@@ -50,8 +49,8 @@ Tally vertebra_tally(const ScanContext& scan, const Spine& spine, const Vertebra
         const std::uint8_t v = m.data[m.linear(x, y, z)];
         if (v == 0 || vertebra_of_label(name_of(scan, v)).empty()) continue;
         t.count[v] += 1.0, t.total += 1.0;
-        t.sum[v] = t.sum[v] + Vec3d{static_cast<double>(x), static_cast<double>(y),
-                                    static_cast<double>(z)};
+        t.sum[v] = t.sum[v] +
+                   Vec3d{static_cast<double>(x), static_cast<double>(y), static_cast<double>(z)};
       }
   }
   return t;
@@ -72,7 +71,8 @@ bool parse_rib_label(const std::string& name, int& side, int& number) {
     if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size()) continue;
     const std::string digits = name.substr(prefix.size());
     if (digits.size() > 2 || !std::all_of(digits.begin(), digits.end(),
-                                               [](unsigned char c) { return std::isdigit(c) != 0; })) return false;
+                                          [](unsigned char c) { return std::isdigit(c) != 0; }))
+      return false;
     side = s, number = std::stoi(digits);
     return number >= 1 && number <= 12;
   }

@@ -21,8 +21,8 @@ inline constexpr double kLabelDisagreesConfidence = 0.8;
 // Each spine segment takes the name of the labelled vertebra (or the sacrum: "S") most of the
 // labelled voxels of its body belong to (its slices between its discs, within 25 mm of its
 // centre across and from 30 mm in front of it back to the column's posterior wall), and its body
-// centre becomes that label's centroid there (not the sacrum's: its label is the whole bone). A name the count gave otherwise is noted in
-// spine.notes and the segment's reason.
+// centre becomes that label's centroid there (not the sacrum's: its label is the whole bone). A
+// name the count gave otherwise is noted in spine.notes and the segment's reason.
 void label_vertebrae(const ScanContext& scan, Spine& spine);
 
 // Each rib trace takes the number and side of the labelled rib most of the labelled voxels

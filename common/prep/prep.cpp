@@ -231,7 +231,8 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
       sizes[name] = fs::file_size(dir / name);
   }
   for (const std::string& name : maps.structure_files) sizes[name] = fs::file_size(dir / name);
-  if (!maps.skeleton.is_null()) sizes[kSkeletonLabelsFile] = fs::file_size(dir / kSkeletonLabelsFile);
+  if (!maps.skeleton.is_null())
+    sizes[kSkeletonLabelsFile] = fs::file_size(dir / kSkeletonLabelsFile);
   json["file_bytes"] = sizes;
   return json;
 }
@@ -270,9 +271,9 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   const fs::path dir(out_dir);
   // A failed or interrupted run leaves no temporary file, and no output at all in a directory
   // it created (which is removed).
-  PrepOutputGuard guard(dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile,
-                              kCtFile, kPrepJsonFile, kVesselFile, kVesselDistanceFile,
-                              kSkeletonLabelsFile});
+  PrepOutputGuard guard(
+      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile, kPrepJsonFile,
+            kVesselFile, kVesselDistanceFile, kSkeletonLabelsFile});
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
@@ -393,9 +394,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
     nlohmann::json names = nlohmann::json::object();
     for (std::size_t v = 0; v < labels.skeleton_names.size(); ++v)
       names[std::to_string(v + 1)] = labels.skeleton_names[v];
-    record.skeleton = {{"file", kSkeletonLabelsFile},
-                       {"source", params.labels_path},
-                       {"labels", names}};
+    record.skeleton = {
+        {"file", kSkeletonLabelsFile}, {"source", params.labels_path}, {"labels", names}};
     write_in_background("bg write skeleton labels", kSkeletonLabelsFile,
                         std::make_shared<Mask>(std::move(labels.skeleton)));
   }

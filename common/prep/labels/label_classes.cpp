@@ -303,7 +303,11 @@ std::optional<std::string> vertebral_level(const std::string& token) {
   for (std::size_t i = 1; i < token.size(); ++i)
     if (!std::isdigit(static_cast<unsigned char>(token[i]))) return std::nullopt;
   const int n = std::stoi(token.substr(1));
-  const int most = region == 'C' ? 7 : region == 'T' ? 12 : region == 'L' ? 6 : region == 'S' ? 1 : 0;
+  const int most = region == 'C'   ? 7
+                   : region == 'T' ? 12
+                   : region == 'L' ? 6
+                   : region == 'S' ? 1
+                                   : 0;
   if (n < 1 || n > most) return std::nullopt;
   std::string level(1, region);
   level += std::to_string(n);

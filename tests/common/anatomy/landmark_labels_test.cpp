@@ -91,8 +91,7 @@ TEST(LandmarkLabels, EveryVertebraAndRibNamedFromTheLabels) {
     const Vertebra* v = find_vertebra(lm, *t.name);
     ASSERT_NE(v, nullptr) << *t.name;
     const double body = distance(v->body_centre, t.body_centre);
-    std::printf("labelled %s body %.1f mm confidence %.2f\n", t.name->c_str(), body,
-                v->confidence);
+    std::printf("labelled %s body %.1f mm confidence %.2f\n", t.name->c_str(), body, v->confidence);
     EXPECT_GE(v->confidence, kLabelledConfidence) << *t.name << ": " << v->reason;
     EXPECT_TRUE(v->reason.empty()) << *t.name << ": " << v->reason;
     if (*t.name != "S") {
@@ -133,9 +132,11 @@ TEST(LandmarkLabels, AMislabelledVertebraAndRibKeepTheLabelsWithANote) {
   int notes = 0;
   for (const std::string& note : lm.notes) {
     std::printf("note: %s\n", note.c_str());
-    if (note.find("label map names T1") != std::string::npos && note.find("L3") != std::string::npos)
+    if (note.find("label map names T1") != std::string::npos &&
+        note.find("L3") != std::string::npos)
       ++notes;
-    if (note.find("rib_right_3") != std::string::npos && note.find("rib 9 right") != std::string::npos)
+    if (note.find("rib_right_3") != std::string::npos &&
+        note.find("rib 9 right") != std::string::npos)
       ++notes;
   }
   EXPECT_EQ(notes, 2);

@@ -308,8 +308,7 @@ TEST_F(PrepLabels, RefinedMapsForTheStructuresToo) {
   EXPECT_EQ(read_nifti_mask((out() / "liver.nii.gz").string()).grid.dims, grid_.dims);
   EXPECT_EQ(read_nifti_float((out() / kVesselDistanceFile).string()).grid.dims,
             result.map_grid.dims);
-  EXPECT_EQ(read_nifti_float((out() / "d_artery.nii.gz").string()).grid.dims,
-            result.map_grid.dims);
+  EXPECT_EQ(read_nifti_float((out() / "d_artery.nii.gz").string()).grid.dims, result.map_grid.dims);
 }
 
 TEST_F(PrepLabels, LabelsThatDoNotFitTheCtLeaveNothing) {
