@@ -17,7 +17,9 @@ struct ScanContext {
   SkinMap skin;
   std::optional<PatientMask> artery;
   std::string artery_source;
-  double midline_x = 0.0;  // the column's median x (index), else the body's
+  std::optional<PatientMask> skeleton;      // labelled vertebrae and ribs: values, not 0/1
+  std::vector<std::string> skeleton_names;  // value v: skeleton_names[v - 1]
+  double midline_x = 0.0;                   // the column's median x (index), else the body's
 };
 
 // Index 0 is the patient's right (smaller x in LPS), 1 the left.

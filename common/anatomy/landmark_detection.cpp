@@ -8,6 +8,7 @@
 #include "anatomy/landmark_context.hpp"
 #include "anatomy/pelvis.hpp"
 #include "anatomy/ribs.hpp"
+#include "anatomy/skeleton_labels.hpp"
 #include "anatomy/spine_levels.hpp"
 #include "base/errors.hpp"
 
@@ -37,6 +38,10 @@ ScanContext make_context(const LandmarkInputs& in) {
   if (!in.artery.data.empty()) {
     scan.artery = to_patient_order_like(in.artery, scan.bone);
     scan.artery_source = in.artery_source;
+  }
+  if (!in.skeleton_labels.data.empty() && !in.skeleton_names.empty()) {
+    scan.skeleton = to_patient_order_like(in.skeleton_labels, scan.bone, true);
+    scan.skeleton_names = in.skeleton_names;
   }
   return scan;
 }
@@ -201,8 +206,11 @@ Landmarks find_landmarks(const LandmarkInputs& inputs, const LandmarkProgress& p
   Spine spine = find_spine(scan.bone, scan.bodies);
   scan.midline_x = midline(scan, spine);
   step("ribs");
-  const std::vector<RibTrace> ribs = find_ribs(scan, spine);
+  std::vector<RibTrace> ribs = find_ribs(scan, spine);
   name_vertebrae(spine, lowest_rib_vertebra(ribs, spine));
+  // Labelled vertebrae and ribs (prep --labels) name themselves (skeleton_labels.hpp).
+  label_vertebrae(scan, spine);
+  label_ribs(scan, ribs);
   add_vertebrae(scan, spine, out);
   rib_landmarks(scan, spine, ribs, out);
   step("pelvis");

@@ -28,6 +28,10 @@ struct LandmarkInputs {
   DistanceMap d_surf;
   Mask artery;
   std::string artery_source;  // "artery.nii.gz", "vessel.nii.gz (arterial phase)", ...
+  // prep --labels' labelled vertebrae and ribs (prep.hpp, kSkeletonLabelsFile): value v is
+  // skeleton_names[v - 1] ("vertebrae_L3", "sacrum", "rib_left_9"); empty without.
+  Mask skeleton_labels;
+  std::vector<std::string> skeleton_names;
 };
 
 // Reports a step starting ("spine", "ribs", ...), for a command's progress line.

@@ -22,7 +22,7 @@ Vec3 source_index(const PatientMask& m, const Vec3d& p) {
   return s;
 }
 
-void fill(PatientMask& out, const Mask& mask) {
+void fill(PatientMask& out, const Mask& mask, bool keep_values = false) {
   out.data.assign(static_cast<std::size_t>(out.dims[0] * out.dims[1] * out.dims[2]), 0);
   for (std::int64_t z = 0; z < out.dims[2]; ++z)
     for (std::int64_t y = 0; y < out.dims[1]; ++y)
@@ -33,7 +33,8 @@ void fill(PatientMask& out, const Mask& mask) {
           const int axis = out.axis_of[a];
           s[axis] = out.sign[a] > 0 ? p[a] : mask.grid.dims[axis] - 1 - p[a];
         }
-        out.data[out.linear(x, y, z)] = mask.at(s[0], s[1], s[2]) != 0;
+        const std::uint8_t v = mask.at(s[0], s[1], s[2]);
+        out.data[out.linear(x, y, z)] = keep_values ? v : static_cast<std::uint8_t>(v != 0);
       }
 }
 
@@ -77,11 +78,11 @@ PatientMask to_patient_order(const Mask& mask) {
   return out;
 }
 
-PatientMask to_patient_order_like(const Mask& mask, const PatientMask& like) {
+PatientMask to_patient_order_like(const Mask& mask, const PatientMask& like, bool keep_values) {
   if (mask.grid.dims != like.source.dims)
     throw InputError("a mask of the scene is not on the bone mask's grid");
   PatientMask out = like;
-  fill(out, mask);
+  fill(out, mask, keep_values);
   return out;
 }
 

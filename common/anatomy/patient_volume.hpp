@@ -45,8 +45,10 @@ struct PatientMask {
 
 // Re-stores `mask` in the patient's axis order (its grid's direction, nearest axes).
 PatientMask to_patient_order(const Mask& mask);
-// The same re-storing for another mask on the same grid (one that is not: InputError).
-PatientMask to_patient_order_like(const Mask& mask, const PatientMask& like);
+// The same re-storing for another mask on the same grid (one that is not: InputError); its
+// values as they are with `keep_values` (a label volume), else 0/1.
+PatientMask to_patient_order_like(const Mask& mask, const PatientMask& like,
+                                  bool keep_values = false);
 
 // The body in each axial slice (patient index units): its centroid and its extent from the
 // anterior to the posterior skin. `voxels` 0: no body in that slice.

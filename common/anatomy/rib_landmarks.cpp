@@ -10,6 +10,7 @@
 #include <string>
 
 #include "anatomy/ribs.hpp"
+#include "anatomy/skeleton_labels.hpp"
 
 namespace palp::anatomy {
 namespace {
@@ -167,6 +168,26 @@ IntercostalSpace space_between(const ScanContext& scan, const std::vector<Number
   return s;
 }
 
+// A labelled rib's number and side (skeleton_labels.hpp), over what its head's vertebra said.
+void apply_rib_label(const RibTrace& t, Rib& rib, std::vector<std::string>& notes) {
+  const Side side = side_of(t.label_side);
+  const bool differs = (rib.number && *rib.number != t.label_number) || rib.side != side;
+  if (differs) {
+    const std::string counted =
+        rib.number ? "rib " + std::to_string(*rib.number) + " " + side_name(rib.side)
+                   : std::string("unnumbered");
+    rib.reason = "numbered by the label map (" + t.label_name + "); its head's vertebra says " +
+                 counted;
+    notes.push_back("The label map names " + t.label_name + " the rib counted " + counted +
+                    ": the label map's number is used.");
+  } else {
+    rib.reason.clear();
+  }
+  rib.number = t.label_number;
+  rib.side = side;
+  rib.confidence = differs ? kLabelDisagreesConfidence : kLabelledConfidence;
+}
+
 }  // namespace
 
 void rib_landmarks(const ScanContext& scan, const Spine& spine, const std::vector<RibTrace>& traces,
@@ -184,6 +205,7 @@ void rib_landmarks(const ScanContext& scan, const Spine& spine, const std::vecto
       n.angle_lo = std::min(n.angle_lo, a), n.angle_hi = std::max(n.angle_hi, a);
     }
     if (t.head_in_scan) number_by_head(spine, t, n.rib);
+    if (t.label_number > 0) apply_rib_label(t, n.rib, out.notes);
     ribs.push_back(std::move(n));
   }
   number_by_order(scan, ribs);

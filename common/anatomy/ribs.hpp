@@ -32,13 +32,17 @@ inline constexpr double kRibMaxDepthMm = 60.0;
 inline constexpr double kRibStepMm = 5.0;
 
 struct RibTrace {
-  int side = 0;             // 0 right, 1 left
-  Vec3d head{};             // the end nearest the column (index units)
-  std::vector<Vec3d> line;  // centre line from the head end outward (index units)
+  int side = 0;              // 0 right, 1 left
+  Vec3d head{};              // the end nearest the column (index units)
+  std::vector<Vec3d> line;   // centre line from the head end outward (index units)
   bool head_in_scan = true;  // false: the piece reaches the scan's edge far from the column
-  int vertebra = -1;        // the spine segment the head lies at, -1 when none
+  int vertebra = -1;         // the spine segment the head lies at, -1 when none
   double length_mm = 0.0, width_mm = 0.0;
   double confidence = 0.0;  // of being a rib (shape)
+  // The labelled rib it is (skeleton_labels.hpp): number 0 when unlabelled.
+  int label_number = 0;
+  int label_side = 0;
+  std::string label_name;
 };
 
 // The ribs of the scan, each with a head in the scan assigned to a spine segment (before the

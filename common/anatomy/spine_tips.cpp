@@ -3,9 +3,19 @@
 // interspinous spaces a needle passes); each vertebra takes the peak nearest to where its own
 // process ends: a little below its body's centre (lumbar processes run back and slightly down,
 // the lower thoracic ones further down).
+//
+// The tip is the middle of the process's distal end, not its most posterior point. A horizontal
+// (lumbar) process ends in a vertical face: the profile's plateau at the peak, whose middle is
+// the tip. A thoracic process slopes down 20-50 degrees, so its end faces back and down: its most
+// posterior point is the end's upper corner, and below it the profile comes forward steadily
+// along the end (by tan(slope) per mm) down to the interspinous valley under it. The tip is the
+// middle of that stretch, from the top of the plateau to where the profile stops coming forward
+// (the valley, a turn back, a flat over kLongestFlatMm, or a drop of more than kSteepestEnd per
+// mm of height: off the end to the arch).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "anatomy/spine_internal.hpp"
@@ -19,6 +29,12 @@ constexpr double kSlabHalfWidthMm = 6.0;
 constexpr double kCanalMm = 5.0;
 // Between two processes the profile falls by at least this much (mm).
 constexpr double kInterspinousDropMm = 6.0;
+// Along a process's end the profile comes forward at most this much per mm down (75 degrees
+// from vertical); more is a drop off the end (to the arch, or nothing).
+constexpr double kSteepestEnd = 3.7;
+// A sloping end comes forward at least a voxel within this height (mm); a longer flat is a
+// vertical face (a horizontal process's end, below a one-voxel bump) or the valley's floor.
+constexpr double kLongestFlatMm = 5.0;
 
 struct Peak {
   double z = 0.0, y = 0.0;
@@ -114,6 +130,40 @@ std::vector<int> match_peaks(const std::vector<VertebraSegment*>& verts,
   return match;
 }
 
+// The index z range of the process's distal end whose profile peak is `p`: from the top of the
+// peak's plateau through it and on down while the profile keeps coming forward (no flat longer
+// than kLongestFlatMm), never below index z
+// `valley` (the lowest profile between this peak and the one below).
+std::pair<double, double> end_face(const std::vector<double>& post, const Peak& p, double valley,
+                                   const Vec3& spacing) {
+  const auto size = static_cast<std::int64_t>(post.size());
+  auto top = static_cast<std::int64_t>(std::lround(p.z)), bottom = top;
+  while (top + 1 < size && post[static_cast<std::size_t>(top + 1)] == p.y) ++top;
+  while (bottom > 0 && post[static_cast<std::size_t>(bottom - 1)] == p.y) --bottom;
+  const auto floor = static_cast<std::int64_t>(std::lround(valley));
+  std::int64_t last_forward = bottom;  // the lowest slice reached by coming forward
+  for (std::int64_t z = bottom; z > floor; --z) {
+    const double here = post[static_cast<std::size_t>(z)];
+    const double below = post[static_cast<std::size_t>(z - 1)];
+    if (!std::isfinite(below)) break;
+    const double forward = (here - below) * spacing[1];
+    if (forward < 0.0 || forward > kSteepestEnd * spacing[2]) break;
+    if (forward > 0.0) last_forward = z - 1;
+    if (static_cast<double>(last_forward - (z - 1)) * spacing[2] > kLongestFlatMm) break;
+  }
+  bottom = last_forward;
+  return {static_cast<double>(bottom), static_cast<double>(top)};
+}
+
+// The profile at a fractional index z (linear between slices).
+double profile_at(const std::vector<double>& post, double z) {
+  const auto lo = static_cast<std::size_t>(std::floor(z));
+  const std::size_t hi = std::min(lo + 1, post.size() - 1);
+  const double t = z - static_cast<double>(lo);
+  if (!std::isfinite(post[hi])) return post[lo];
+  return post[lo] + (post[hi] - post[lo]) * t;
+}
+
 }  // namespace
 
 void find_spinous_tips(const PatientMask& bone, const std::vector<ColumnSlice>& column,
@@ -127,15 +177,23 @@ void find_spinous_tips(const PatientMask& bone, const std::vector<ColumnSlice>& 
   const auto half = std::max<std::int64_t>(1, std::lround(kSlabHalfWidthMm / bone.spacing[0]));
   for (std::size_t v = 0; v < verts.size(); ++v) {
     if (match[v] < 0) continue;
-    const Peak& p = peaks[static_cast<std::size_t>(match[v])];
-    const auto z = std::lround(p.z);
+    const auto m = static_cast<std::size_t>(match[v]);
+    const Peak& p = peaks[m];
+    // The valley under the peak: the lowest profile between it and the peak below.
+    double valley = m > 0 ? peaks[m - 1].z : 0.0, low = 1e30;
+    for (auto z = static_cast<std::size_t>(std::lround(valley));
+         z <= static_cast<std::size_t>(std::lround(p.z)); ++z)
+      if (std::isfinite(post[z]) && post[z] <= low) low = post[z], valley = static_cast<double>(z);
+    const auto [bottom, top] = end_face(post, p, valley, bone.spacing);
+    const double tz = 0.5 * (bottom + top), ty = profile_at(post, tz);
+    const auto z = std::lround(tz);
     const ColumnSlice& c = column[static_cast<std::size_t>(z)];
     double sx = 0.0, n = 0.0;
     const auto xc = std::lround(c.x);
     for (std::int64_t x = xc - half; x <= xc + half; ++x)
-      if (bone.at(x, std::lround(p.y), z)) sx += static_cast<double>(x), n += 1.0;
+      if (bone.at(x, std::lround(ty), z)) sx += static_cast<double>(x), n += 1.0;
     // The tip is the bone's posterior surface: half a voxel behind the last bone voxel's centre.
-    verts[v]->spinous_tip = Vec3d{n > 0.0 ? sx / n : c.x, p.y + 0.5, p.z};
+    verts[v]->spinous_tip = Vec3d{n > 0.0 ? sx / n : c.x, ty + 0.5, tz};
   }
 }
 

@@ -119,6 +119,7 @@ struct MapRecord {
   float surf_range[2] = {0, 0}, bone_range[2] = {0, 0}, vessel_range[2] = {0, 0};
   nlohmann::json structures = nlohmann::json::object();  // per structure: its source, voxels
   std::vector<std::string> structure_files;              // a label map's organs' and muscles' files
+  nlohmann::json skeleton;  // the skeleton's labels' name table (prep.hpp), null without
 };
 
 // prep.json's record of the lumens found in the scan.
@@ -196,6 +197,7 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
   }
   json["contrast_phase"] = result.contrast_phase;
   json["structures"] = maps.structures;
+  if (!maps.skeleton.is_null()) json["skeleton_labels"] = maps.skeleton;
   json["voxels"] = {{"total", result.grid.voxel_count()},
                     {"body", result.stats.body_voxels},
                     {"bone", result.stats.bone_voxels},
@@ -230,6 +232,8 @@ nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
       sizes[name] = fs::file_size(dir / name);
   }
   for (const std::string& name : maps.structure_files) sizes[name] = fs::file_size(dir / name);
+  if (!maps.skeleton.is_null())
+    sizes[kSkeletonLabelsFile] = fs::file_size(dir / kSkeletonLabelsFile);
   json["file_bytes"] = sizes;
   return json;
 }
@@ -261,8 +265,9 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   const fs::path dir(out_dir);
   // A failed or interrupted run leaves no temporary file, and no output at all in a directory
   // it created (which is removed).
-  PrepOutputGuard guard(dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile,
-                              kCtFile, kPrepJsonFile, kVesselFile, kVesselDistanceFile});
+  PrepOutputGuard guard(
+      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile, kPrepJsonFile,
+            kVesselFile, kVesselDistanceFile, kSkeletonLabelsFile});
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
@@ -284,7 +289,8 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   // valid cache, whatever happens in between.
   fs::remove(dir / kPrepJsonFile, ec);
   // Structures an earlier run found and this one may not.
-  for (const char* name : {kVesselFile, kVesselDistanceFile}) fs::remove(dir / name, ec);
+  for (const char* name : {kVesselFile, kVesselDistanceFile, kSkeletonLabelsFile})
+    fs::remove(dir / name, ec);
 
   auto stage = [&](const std::string& name, auto&& work) {
     if (progress) progress(name, false, 0.0);
@@ -378,6 +384,15 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   MapRecord record;                    // what prep.json says of the maps
   record.band_mm = band;
   record.projection_mm = projection;
+  if (!labels.skeleton.data.empty()) {  // the labelled vertebrae and ribs, each its own value
+    nlohmann::json names = nlohmann::json::object();
+    for (std::size_t v = 0; v < labels.skeleton_names.size(); ++v)
+      names[std::to_string(v + 1)] = labels.skeleton_names[v];
+    record.skeleton = {
+        {"file", kSkeletonLabelsFile}, {"source", params.labels_path}, {"labels", names}};
+    write_in_background("bg write skeleton labels", kSkeletonLabelsFile,
+                        std::make_shared<Mask>(std::move(labels.skeleton)));
+  }
   // The maps' grid: the CT's, or its aligned refinement (--map-spacing; prep/maps/map_refine.hpp).
   const Refinement& refine = record.refine = map_refinement(result.grid, params.map_spacing_mm);
   result.map_grid = refined_grid(result.grid, refine);

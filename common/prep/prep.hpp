@@ -134,6 +134,10 @@ inline constexpr const char* kPrepJsonFile = "prep.json";
 // Structures beyond bone, when the scan shows them (spec "Files").
 inline constexpr const char* kVesselFile = "vessel.nii.gz";
 inline constexpr const char* kVesselDistanceFile = "d_vessel.nii.gz";
+// With --labels naming vertebrae, the sacrum or ribs: each labelled one its own value (uint8 on
+// the CT's grid), named by prep.json's "skeleton_labels": {"file", "source", "labels": {"1":
+// "vertebrae_L5", ..., "7": "rib_right_9", ...}} (labels::skeleton_name's names).
+inline constexpr const char* kSkeletonLabelsFile = "skeleton_labels.nii.gz";
 // The CT itself (int16 HU, after reorientation: on the masks' grid, which the maps' is or refines),
 // for palpd's render volume.
 inline constexpr const char* kCtFile = "ct.nii.gz";

@@ -293,4 +293,64 @@ std::optional<std::string> structure_file_name(std::string_view name) {
   return file;
 }
 
+namespace {
+
+// A vertebral level "C1".."C7", "T1".."T12", "L1".."L5" (or "L6", a transitional one), "S1";
+// null for anything else.
+std::optional<std::string> vertebral_level(const std::string& token) {
+  if (token.size() < 2 || token.size() > 3) return std::nullopt;
+  const char region = static_cast<char>(std::toupper(static_cast<unsigned char>(token[0])));
+  for (std::size_t i = 1; i < token.size(); ++i)
+    if (!std::isdigit(static_cast<unsigned char>(token[i]))) return std::nullopt;
+  const int n = std::stoi(token.substr(1));
+  const int most = region == 'C'   ? 7
+                   : region == 'T' ? 12
+                   : region == 'L' ? 6
+                   : region == 'S' ? 1
+                                   : 0;
+  if (n < 1 || n > most) return std::nullopt;
+  std::string level(1, region);
+  level += std::to_string(n);
+  return level;
+}
+
+// A rib's number from "9", "9th", "1st", "2nd", "3rd"; null for anything else.
+std::optional<int> rib_number(std::string token) {
+  for (const char* suffix : {"st", "nd", "rd", "th"})
+    if (token.size() > 2 && token.ends_with(suffix)) token.resize(token.size() - 2);
+  if (token.empty() || token.size() > 2) return std::nullopt;
+  for (char c : token)
+    if (!std::isdigit(static_cast<unsigned char>(c))) return std::nullopt;
+  const int n = std::stoi(token);
+  return n >= 1 && n <= 12 ? std::optional<int>(n) : std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> skeleton_name(std::string_view name) {
+  std::vector<std::string> tokens(1);
+  for (char c : name) {
+    if (c == '_' || c == ' ' || c == '-') {
+      if (!tokens.back().empty()) tokens.emplace_back();
+    } else {
+      tokens.back() += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    }
+  }
+  if (tokens.back().empty()) tokens.pop_back();
+  if (tokens.size() == 1 && tokens[0] == "sacrum") return "sacrum";
+  bool vertebra = false, rib = false;
+  std::optional<std::string> level, side;
+  std::optional<int> number;
+  for (const std::string& t : tokens) {
+    vertebra |= t == "vertebra" || t == "vertebrae";
+    rib |= t == "rib" || t == "ribs";
+    if (t == "left" || t == "right") side = t;
+    if (auto l = vertebral_level(t)) level = l;
+    if (auto n = rib_number(t)) number = n;
+  }
+  if (level && !rib && (vertebra || tokens.size() == 1)) return "vertebrae_" + *level;
+  if (rib && !vertebra && side && number) return "rib_" + *side + "_" + std::to_string(*number);
+  return std::nullopt;
+}
+
 }  // namespace palp::labels

@@ -57,4 +57,11 @@ NameMeaning classify_name(std::string_view name);
 // d_*).
 std::optional<std::string> structure_file_name(std::string_view name);
 
+// The skeleton element a bone class names, as TotalSegmentator spells it: "vertebrae_L3",
+// "vertebrae_T12", "vertebrae_S1", "sacrum", "rib_left_9", "rib_right_12"; null for any other
+// bone (or no bone). Read from TotalSegmentator's names and free text alike (3D Slicer's segments:
+// any case, spaces or hyphens for underscores, "L3 vertebra", "left rib 9", "rib 9 right",
+// "9th rib left").
+std::optional<std::string> skeleton_name(std::string_view name);
+
 }  // namespace palp::labels

@@ -38,14 +38,21 @@ std::string joined(const std::vector<std::string>& parts, const char* separator)
 
 LabelBuilder::LabelBuilder(const Grid& ct, std::string path) : ct_(ct), path_(std::move(path)) {}
 
-std::size_t LabelBuilder::structure_of(const ClassMeaning& meaning, const std::string& file) {
+// A labelled vertebra or rib is a structure of its own (its voxels join the bone mask, and its
+// own value the skeleton's labels); every other class of a kind and structure shares one.
+std::size_t LabelBuilder::structure_of(const ClassMeaning& meaning, const std::string& skeleton,
+                                       const std::string& file) {
   for (std::size_t s = 0; s < structures_.size(); ++s)
     if (structures_[s].meaning.kind == meaning.kind &&
-        structures_[s].meaning.structure == meaning.structure)
+        structures_[s].meaning.structure == meaning.structure &&
+        structures_[s].skeleton == skeleton)
       return s;
   if (structures_.size() == 255)
     throw labels_error(file, "more than 255 structures (palp keeps one byte per voxel)");
-  structures_.push_back({meaning, {}, {}});
+  Structure added;
+  added.meaning = meaning;
+  added.skeleton = skeleton;
+  structures_.push_back(std::move(added));
   return structures_.size() - 1;
 }
 
@@ -58,7 +65,11 @@ Mask& LabelBuilder::layer(std::size_t index) {
 LabelCounts LabelBuilder::add(const LabelVolume& volume, const std::vector<FileClass>& classes,
                               const LabelLookup& lookup) {
   std::vector<std::size_t> target;
-  for (const FileClass& cls : classes) target.push_back(structure_of(cls.meaning, volume.name));
+  for (const FileClass& cls : classes) {
+    std::string skeleton;
+    if (cls.meaning.kind == Kind::bone) skeleton = skeleton_name(cls.name).value_or("");
+    target.push_back(structure_of(cls.meaning, skeleton, volume.name));
+  }
   const TargetOfClass target_of = [&](std::int32_t cls) {
     const auto c = static_cast<std::size_t>(cls);
     return ClassTarget{&layer(classes[c].layer), static_cast<std::uint8_t>(target[c] + 1)};
@@ -122,6 +133,7 @@ void LabelBuilder::cut_masks() {
     std::uint8_t& voxel = s.mask->at(i - s.lo[0], j - s.lo[1], k - s.lo[2]);
     s.voxels += voxel == 0 ? 1 : 0;
     voxel = 1;
+    if (s.skeleton_value != 0) skeleton_.at(i, j, k) = s.skeleton_value;
   });
   layers_.clear();
 }
@@ -181,15 +193,29 @@ LabelMaps LabelBuilder::finish() {
         s.mask = &out.organs.back().mask;
         continue;
     }
-    *s.mask = Mask(ct_, 0, "labels: " + s.meaning.structure);
+    if (s.mask->data.empty()) *s.mask = Mask(ct_, 0, "labels: " + s.meaning.structure);
     s.lo = {0, 0, 0};  // the unions lie on the whole CT grid
+    if (!s.skeleton.empty()) {
+      if (skeleton_.data.empty()) skeleton_ = Mask(ct_, 0, "labels: skeleton");
+      out.skeleton_names.push_back(s.skeleton);
+      s.skeleton_value = static_cast<std::uint8_t>(out.skeleton_names.size());
+    }
   }
   cut_masks();
+  out.skeleton = std::move(skeleton_);
   nlohmann::json structures = nlohmann::json::object();
-  for (const Structure& s : structures_)
-    if (s.voxels > 0)
-      structures[s.meaning.structure] = {
-          {"kind", kind_name(s.meaning.kind)}, {"classes", s.classes}, {"voxels", s.voxels}};
+  for (const Structure& s : structures_) {
+    if (s.voxels == 0) continue;
+    nlohmann::json& entry = structures[s.meaning.structure];
+    if (entry.is_null()) {
+      entry = {{"kind", kind_name(s.meaning.kind)},
+               {"classes", nlohmann::json::array()},
+               {"voxels", std::uint64_t{0}}};
+    }
+    for (const std::string& c : s.classes) entry["classes"].push_back(c);
+    // The bone's structures share one mask: each counted only the voxels it added to it.
+    entry["voxels"] = entry["voxels"].get<std::uint64_t>() + s.voxels;
+  }
   if (structures.empty()) throw labels_error(path_, "no labelled voxel lies inside the CT");
   merge_into(out.vessel, out.artery, ct_);
   merge_into(out.vessel, out.vein, ct_);

@@ -44,6 +44,11 @@ struct LabelMaps {
   Mask artery;  // empty grid when none
   Mask vein;    // empty grid when none
   std::vector<LabelledStructure> organs;  // by name
+  // The labelled vertebrae, sacrum and ribs (labels::skeleton_name), each its own value on the
+  // CT's grid (one byte per voxel): value v is skeleton_names[v - 1] ("vertebrae_L3",
+  // "rib_left_9", ...). Empty grid when the file has none. Their voxels are in `bone` too.
+  Mask skeleton;
+  std::vector<std::string> skeleton_names;
   // {"file", "format", "resampled", "structures": {name: {"kind", "classes", "voxels"}}, "notes"}
   nlohmann::json source;
   std::vector<std::string> notes;  // resampling, classes outside the CT, names palp guessed, ...

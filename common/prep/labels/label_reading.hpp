@@ -49,8 +49,11 @@ class LabelBuilder {
     Index3 lo{0, 0, 0}, hi{-1, -1, -1};  // its box of CT voxels (empty: hi < lo)
     Mask* mask = nullptr;                // where finish() cuts it to
     std::uint64_t voxels = 0;            // CT voxels in its mask
+    std::string skeleton;                // a vertebra's or rib's own name (bone kind), or empty
+    std::uint8_t skeleton_value = 0;     // its value in skeleton_ (0: none)
   };
-  std::size_t structure_of(const ClassMeaning& meaning, const std::string& file);
+  std::size_t structure_of(const ClassMeaning& meaning, const std::string& skeleton,
+                           const std::string& file);
   Mask& layer(std::size_t index);
   void check_overlaps(const LabelVolume& volume, const std::vector<FileClass>& classes,
                       const LabelCounts& counts) const;
@@ -73,6 +76,7 @@ class LabelBuilder {
   std::string path_, format_;
   std::vector<Structure> structures_;
   std::vector<Mask> layers_;  // per layer, each CT voxel's structure id (index + 1) or 0
+  Mask skeleton_;             // LabelMaps::skeleton, while cutting
   std::vector<std::string> notes_, resampled_grids_;
   bool resampled_ = false;
 };

@@ -197,7 +197,24 @@ void PrepLabels::expect_abdomen_outputs(const std::string& labels, const std::st
   EXPECT_EQ(recorded,
             (std::set<std::string>{"body.nii.gz", "bone.nii.gz", "d_surf.nii.gz", "d_bone.nii.gz",
                                    "ct.nii.gz", "vessel.nii.gz", "d_vessel.nii.gz", "artery.nii.gz",
-                                   "d_artery.nii.gz", "liver.nii.gz", "d_liver.nii.gz"}));
+                                   "d_artery.nii.gz", "liver.nii.gz", "d_liver.nii.gz",
+                                   kSkeletonLabelsFile}));
+  // The labelled vertebra and rib, each its own value, named in prep.json (landmarks read them).
+  const nlohmann::json& table = json["skeleton_labels"];
+  EXPECT_EQ(table["file"], kSkeletonLabelsFile);
+  EXPECT_EQ(table["source"], labels);
+  ASSERT_EQ(table["labels"].size(), 2u);
+  // (read_nifti_mask makes any value 1: read as floats, the values as they are)
+  const DistanceMap skeleton = read_nifti_float((out() / kSkeletonLabelsFile).string());
+  ASSERT_EQ(skeleton.grid.dims, grid_.dims);
+  for (const auto& [value, name] : table["labels"].items()) {
+    const Labelled& c = name == "vertebrae_L1" ? kVertebra : kRib;
+    EXPECT_TRUE(name == "vertebrae_L1" || name == "rib_left_1") << name;
+    std::uint64_t count = 0;
+    for (float v : skeleton.data) count += v == std::stof(value) ? 1 : 0;
+    EXPECT_EQ(count, c.box.voxels()) << name;
+    EXPECT_EQ(skeleton.data[grid_.linear(c.box.lo[0], c.box.lo[1], c.box.lo[2])], std::stof(value));
+  }
   recorded.insert(kPrepJsonFile);
   EXPECT_EQ(files_in(out()), recorded);
 }
@@ -291,8 +308,7 @@ TEST_F(PrepLabels, RefinedMapsForTheStructuresToo) {
   EXPECT_EQ(read_nifti_mask((out() / "liver.nii.gz").string()).grid.dims, grid_.dims);
   EXPECT_EQ(read_nifti_float((out() / kVesselDistanceFile).string()).grid.dims,
             result.map_grid.dims);
-  EXPECT_EQ(read_nifti_float((out() / "d_artery.nii.gz").string()).grid.dims,
-            result.map_grid.dims);
+  EXPECT_EQ(read_nifti_float((out() / "d_artery.nii.gz").string()).grid.dims, result.map_grid.dims);
 }
 
 TEST_F(PrepLabels, LabelsThatDoNotFitTheCtLeaveNothing) {

@@ -127,5 +127,23 @@ TEST(ClassifyName, FileNames) {
   EXPECT_EQ(structure_file_name("d_liver"), std::nullopt);  // a distance map's name
 }
 
+TEST(LabelClasses, SkeletonNamesFromTotalSegmentatorAndFreeText) {
+  EXPECT_EQ(skeleton_name("vertebrae_L3"), "vertebrae_L3");
+  EXPECT_EQ(skeleton_name("vertebrae_T12"), "vertebrae_T12");
+  EXPECT_EQ(skeleton_name("vertebrae_S1"), "vertebrae_S1");
+  EXPECT_EQ(skeleton_name("sacrum"), "sacrum");
+  EXPECT_EQ(skeleton_name("rib_left_9"), "rib_left_9");
+  EXPECT_EQ(skeleton_name("Rib right 12"), "rib_right_12");
+  EXPECT_EQ(skeleton_name("left rib 9"), "rib_left_9");
+  EXPECT_EQ(skeleton_name("9th rib left"), "rib_left_9");
+  EXPECT_EQ(skeleton_name("L3 vertebra"), "vertebrae_L3");
+  EXPECT_EQ(skeleton_name("T8"), "vertebrae_T8");
+  EXPECT_FALSE(skeleton_name("femur_left"));
+  EXPECT_FALSE(skeleton_name("rib 13 left"));
+  EXPECT_FALSE(skeleton_name("vertebrae_L9"));
+  EXPECT_FALSE(skeleton_name("costal_cartilages"));
+  EXPECT_FALSE(skeleton_name("liver"));
+}
+
 }  // namespace
 }  // namespace palp::labels
