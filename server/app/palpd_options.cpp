@@ -16,7 +16,7 @@
 #include "cli/tls_options.hpp"
 #include "cli/tune_at_start.hpp"
 #include "dds_common.hpp"
-#include "interop/igtl_options.hpp"
+#include "cli/igtl_options.hpp"
 
 namespace palp::app {
 namespace {
@@ -183,7 +183,7 @@ const std::vector<std::string> kValued = {"device",
                                           "task-interspace",
                                           "task-report-dir"};
 const std::vector<std::string> kValuedAll =
-    interop::with_igtl_options(cli::with_dds_options(kValued));
+    cli::with_igtl_options(cli::with_dds_options(kValued));
 
 // What a replay brings: the options not given (--scene=..., ...) and its parameters.
 struct ReplayDefaults {
@@ -271,7 +271,7 @@ void make_record_dir(const std::string& record_dir) {
 
 std::string palpd_help() {
   return std::string(kUsage) + cli::kSceneOptionsHelp + kOptions + cli::kTuneAtStartHelp +
-         cli::kMapWindowHelp + cli::kRtOptionsHelp + interop::kIgtlOptionsHelp +
+         cli::kMapWindowHelp + cli::kRtOptionsHelp + cli::kIgtlOptionsHelp +
          cli::kDdsOptionsHelp;
 }
 

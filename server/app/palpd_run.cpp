@@ -23,7 +23,7 @@
 #include "cli/tls_options.hpp"
 #include "cli/tune_at_start.hpp"
 #include "devices/device.hpp"
-#include "interop/igtl_options.hpp"
+#include "cli/igtl_options.hpp"
 #include "net/client_log.hpp"
 #include "safety/engagement.hpp"
 #include "scene/home_site.hpp"
@@ -274,7 +274,7 @@ int serve(PalpdOptions& o, rt::Device& device, Built& b) {
   const net::SceneDescription description = describe_scene(o, b);
   cli::DdsControlGate control(app);  // palp.v1's and DDS's device poses, one at a time
   net::Server server(o.server, description, loop, &control);
-  const auto igtl = interop::igtl_beside(o.args, b.scene.grid, o.loop.rate_hz, server, o.quiet);
+  const auto igtl = cli::igtl_beside(o.args, b.scene.grid, o.loop.rate_hz, server, o.quiet);
   const auto dds =
       cli::dds_beside(o.args, description, loop, control, server, o.tool.name, o.quiet);
   const std::string replay_path =

@@ -1,10 +1,10 @@
-#include "interop/igtl_options.hpp"
+#include "cli/igtl_options.hpp"
 
 #include <cstdio>
 
 #include "base/errors.hpp"
 
-namespace palp::interop {
+namespace palp::cli {
 
 const char* const kIgtlOptionsHelp =
     R"(OpenIGTLink (3D Slicer's OpenIGTLinkIF; docs/slicer.md), on --bind beside palp.v1:
@@ -40,13 +40,13 @@ bool valid_name(const std::string& s) {
 
 }  // namespace
 
-std::unique_ptr<IgtlConfig> igtl_config_from(const cli::Args& args, double loop_rate_hz) {
+std::unique_ptr<interop::IgtlConfig> igtl_config_from(const Args& args, double loop_rate_hz) {
   if (!args.has("igtl-port")) {
     for (const std::string& key : igtl_valued_options())
       if (args.has(key)) throw UsageError("--" + key + " needs --igtl-port");
     return nullptr;
   }
-  auto config = std::make_unique<IgtlConfig>();
+  auto config = std::make_unique<interop::IgtlConfig>();
   const double port = args.number("igtl-port", 0);
   if (!(port >= 0 && port <= 65535) || port != static_cast<int>(port))
     throw UsageError("--igtl-port must be an integer in 0..65535");
@@ -88,8 +88,9 @@ std::unique_ptr<IgtlConfig> igtl_config_from(const cli::Args& args, double loop_
   return config;
 }
 
-std::shared_ptr<IgtlServer> igtl_beside(const cli::Args& args, const Grid& grid,
-                                        double loop_rate_hz, net::Server& server, bool quiet) {
+std::shared_ptr<interop::IgtlServer> igtl_beside(const Args& args, const Grid& grid,
+                                                 double loop_rate_hz, net::Server& server,
+                                                 bool quiet) {
   const auto config = igtl_config_from(args, loop_rate_hz);
   if (!config) return nullptr;
 #ifndef PALP_HAVE_OPENIGTLINK
@@ -98,7 +99,7 @@ std::shared_ptr<IgtlServer> igtl_beside(const cli::Args& args, const Grid& grid,
       "this palpd was built without OpenIGTLink: install libopenigtlink-dev "
       "(deploy/install-deps.sh) and build again to use --igtl-port");
 #else
-  auto igtl = std::make_shared<IgtlServer>(*config, grid);
+  auto igtl = std::make_shared<interop::IgtlServer>(*config, grid);
   server.add_snapshot_tap([igtl](const rt::Snapshot& s) { igtl->offer(s); }, config->rate_hz);
   igtl->start();
   if (!quiet) {
@@ -112,4 +113,4 @@ std::shared_ptr<IgtlServer> igtl_beside(const cli::Args& args, const Grid& grid,
 #endif
 }
 
-}  // namespace palp::interop
+}  // namespace palp::cli
