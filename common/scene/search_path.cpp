@@ -6,14 +6,12 @@
 #include "scene/search_path.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <string>
 
 #include "base/errors.hpp"
-#include "base/file_replace.hpp"
 #include "base/patient_frame.hpp"
 #include "scene/path_geometry.hpp"
 #include "scene/trajectory_gen.hpp"
@@ -229,21 +227,6 @@ SearchPath search_path(const FieldSampler& fields, const SearchTarget& target, d
   row_count(rows.now(), spec.rate_hz);  // refuses a path too long to write
   path.trajectory = std::move(rows.out);
   return path;
-}
-
-std::string format_marks_csv(const std::vector<double>& mark_times_s) {
-  std::string text = "trial,t\n";
-  for (std::size_t k = 0; k < mark_times_s.size(); ++k) {
-    // The shortest text that reads back to the row's time exactly (as the trajectory's t).
-    char number[32];
-    const auto end = std::to_chars(number, number + sizeof number, mark_times_s[k]).ptr;
-    text += std::to_string(k + 1) + "," + std::string(number, end) + "\n";
-  }
-  return text;
-}
-
-void write_marks_csv(const std::string& path, const std::vector<double>& mark_times_s) {
-  replace_file(path, format_marks_csv(mark_times_s));
 }
 
 }  // namespace palp

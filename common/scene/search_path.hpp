@@ -65,9 +65,4 @@ struct SearchPath {
 SearchPath search_path(const FieldSampler& fields, const SearchTarget& target, double pad_offset,
                        const SearchSpec& spec);
 
-// The marks CSV for the path (docs/tasks.md "The marks file"): `trial,t`, one row per trial.
-std::string format_marks_csv(const std::vector<double>& mark_times_s);
-// Writes it under a temporary name and renames (Error when it cannot be written).
-void write_marks_csv(const std::string& path, const std::vector<double>& mark_times_s);
-
 }  // namespace palp

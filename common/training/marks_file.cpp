@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "base/errors.hpp"
+#include "base/file_replace.hpp"
 
 namespace palp::training {
 namespace {
@@ -71,6 +72,20 @@ MarkRow parse_row(std::string_view line, const Columns& c, const std::string& wh
 }
 
 }  // namespace
+
+std::string format_marks_csv(const std::vector<MarkRow>& marks) {
+  std::string text = "trial,t\n";
+  for (const MarkRow& m : marks) {
+    char number[32];
+    const auto end = std::to_chars(number, number + sizeof number, m.t).ptr;
+    text += std::to_string(m.trial) + "," + std::string(number, end) + "\n";
+  }
+  return text;
+}
+
+void write_marks_csv(const std::string& path, const std::vector<MarkRow>& marks) {
+  replace_file(path, format_marks_csv(marks));
+}
 
 std::vector<MarkRow> parse_marks_csv(std::string_view text, const std::string& name) {
   std::vector<MarkRow> rows;

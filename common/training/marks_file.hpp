@@ -31,6 +31,12 @@ inline constexpr std::uintmax_t kMaxMarksFileBytes = std::uintmax_t{1} << 20;
 std::vector<MarkRow> parse_marks_csv(std::string_view text, const std::string& name);
 std::vector<MarkRow> read_marks_csv(const std::string& path);
 
+// The file for `marks`: header `trial,t`, one row a mark, each time in the shortest text that
+// reads back to the same double (so a trajectory's row time matches exactly).
+std::string format_marks_csv(const std::vector<MarkRow>& marks);
+// Writes it through a renamed partial file (Error when it cannot be written).
+void write_marks_csv(const std::string& path, const std::vector<MarkRow>& marks);
+
 // The trials of a run: `samples` on the run's clock (in time order), `marks` as read. Each
 // trial's samples and marks (placed with mark_at) are rebased to its first row; scores are left
 // empty for score_trial. InputError for a mark outside the run or a trial without rows.

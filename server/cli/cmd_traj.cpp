@@ -17,6 +17,7 @@
 #include "scene/search_path.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"
+#include "training/marks_file.hpp"
 #include "training/task.hpp"
 
 namespace palp::cli {
@@ -267,7 +268,12 @@ int traj_search(const Args& args, const TrajRequest& request, double offset, boo
       search_path(*scene.fields, {target.point, target.normal}, offset, request.search);
   const std::string out = *args.get("out");
   write_trajectory_csv(out, path.trajectory);
-  if (const auto marks = args.get("marks")) write_marks_csv(*marks, path.mark_times_s);
+  if (const auto marks = args.get("marks")) {
+    std::vector<training::MarkRow> rows;  // one trial per miss, its mark at the hold
+    for (std::size_t k = 0; k < path.mark_times_s.size(); ++k)
+      rows.push_back({static_cast<int>(k) + 1, path.mark_times_s[k]});
+    training::write_marks_csv(*marks, rows);
+  }
   if (quiet) return 0;
   std::printf(
       "wrote %s: search for %s, %zu trial%s, %zu rows over %.6g s, pad %g mm below the "

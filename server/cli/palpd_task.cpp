@@ -22,7 +22,7 @@ TaskOptions task_options(const Args& args, const std::string& record_dir) {
   if (const auto path = args.get("landmarks")) {
     o.landmarks_path = *path;
     o.landmarks = anatomy::read_landmarks(*path);
-    (void)net::wire_landmarks(*o.landmarks, {});  // too many points for the clients: refused now
+    (void)net::wire_landmarks(*o.landmarks, Grid{});  // too many points for the clients: refused now
   }
   const bool details =
       args.get("task-side") || args.get("task-space") || args.get("task-interspace");
@@ -55,7 +55,7 @@ TaskOptions task_options(const Args& args, const std::string& record_dir) {
     o.landmarks = scene_landmarks(
         *scene, args.get("cache-dir").value_or(default_scene_cache_dir()), args.has("quiet"));
     o.landmarks_path = "found in " + *scene;
-    (void)net::wire_landmarks(*o.landmarks, {});
+    (void)net::wire_landmarks(*o.landmarks, Grid{});
   }
   o.task = spec;
   return o;
@@ -91,7 +91,7 @@ std::unique_ptr<net::TaskSession> task_beside(TaskOptions o, const Grid& grid,
   const double sample_rate_hz = setup.sample_rate_hz;
   setup.landmarks = std::move(o.landmarks);
   setup.landmarks_source = o.landmarks_path;
-  setup.world = grid.world;
+  setup.grid = grid;
   const std::string dir = o.report_dir;
   setup.write_report = [dir](const net::TaskSessionRecord& r) { return write_task_report(r, dir); };
   setup.on_mark = [&control](std::uint64_t seq, std::int64_t t_ns) {

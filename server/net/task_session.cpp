@@ -7,15 +7,11 @@
 #include <utility>
 
 #include "base/errors.hpp"
+#include "base/patient_frame.hpp"
 
 namespace palp::net {
 
 namespace {
-
-// The placement's direction as columns i, j, k (row-major storage, columns = axes).
-Vec3d column(const WorldPlacement& w, int c) {
-  return {w.direction[0 + c], w.direction[3 + c], w.direction[6 + c]};
-}
 
 std::string side_letter(anatomy::Side side) {
   return side == anatomy::Side::right ? "R" : "L";
@@ -23,32 +19,10 @@ std::string side_letter(anatomy::Side side) {
 
 }  // namespace
 
-Vec3d scene_to_lps(const WorldPlacement& world, const Vec3d& p) {
-  const Vec3d o{world.origin[0], world.origin[1], world.origin[2]};
-  return o + column(world, 0) * p.x + column(world, 1) * p.y + column(world, 2) * p.z;
-}
-
-Vec3d lps_to_scene(const WorldPlacement& world, const Vec3d& lps) {
-  // The inverse of the direction matrix by its adjugate (a resampled grid's is a rotation, but
-  // a file may carry any invertible one).
-  const auto& d = world.direction;
-  const double det = d[0] * (d[4] * d[8] - d[5] * d[7]) - d[1] * (d[3] * d[8] - d[5] * d[6]) +
-                     d[2] * (d[3] * d[7] - d[4] * d[6]);
-  const Vec3d r{lps.x - world.origin[0], lps.y - world.origin[1], lps.z - world.origin[2]};
-  if (std::abs(det) < 1e-12) return r;
-  const double inv[9] = {(d[4] * d[8] - d[5] * d[7]) / det, (d[2] * d[7] - d[1] * d[8]) / det,
-                         (d[1] * d[5] - d[2] * d[4]) / det, (d[5] * d[6] - d[3] * d[8]) / det,
-                         (d[0] * d[8] - d[2] * d[6]) / det, (d[2] * d[3] - d[0] * d[5]) / det,
-                         (d[3] * d[7] - d[4] * d[6]) / det, (d[1] * d[6] - d[0] * d[7]) / det,
-                         (d[0] * d[4] - d[1] * d[3]) / det};
-  return {inv[0] * r.x + inv[1] * r.y + inv[2] * r.z, inv[3] * r.x + inv[4] * r.y + inv[5] * r.z,
-          inv[6] * r.x + inv[7] * r.y + inv[8] * r.z};
-}
-
-std::vector<WireLandmark> wire_landmarks(const anatomy::Landmarks& l, const WorldPlacement& world) {
+std::vector<WireLandmark> wire_landmarks(const anatomy::Landmarks& l, const Grid& grid) {
   std::vector<WireLandmark> out;
   const auto add = [&](std::string name, const char* kind, const Vec3d& lps) {
-    out.push_back({std::move(name), kind, lps_to_scene(world, lps)});
+    out.push_back({std::move(name), kind, scene_of_world(grid, lps)});
   };
   for (const anatomy::IntercostalSpace& s : l.intercostal_spaces)
     if (s.skin_point && s.upper_rib)
@@ -80,7 +54,7 @@ std::vector<WireLandmark> wire_landmarks(const anatomy::Landmarks& l, const Worl
 }
 
 TaskSession::TaskSession(TaskSetup setup) : setup_(std::move(setup)) {
-  if (setup_.landmarks) wire_ = wire_landmarks(*setup_.landmarks, setup_.world);
+  if (setup_.landmarks) wire_ = wire_landmarks(*setup_.landmarks, setup_.grid);
   if (!(setup_.sample_rate_hz > 0.0)) throw UsageError("task sample rate must be > 0");
   samples_.reserve(setup_.max_samples);
   marks_.reserve(setup_.max_marks);
@@ -89,7 +63,7 @@ TaskSession::TaskSession(TaskSetup setup) : setup_(std::move(setup)) {
 
 training::TrialSample TaskSession::sample_of(const rt::Snapshot& snap) const {
   training::TrialSample s;
-  s.device_point = scene_to_lps(setup_.world, snap.tick.pose.position);
+  s.device_point = world_of_scene(setup_.grid, snap.tick.pose.position);
   Vec3d sum{};
   int n = 0;
   for (std::uint32_t i = 0; i < snap.contact_count && i < snap.contacts.size(); ++i) {
@@ -98,7 +72,7 @@ training::TrialSample TaskSession::sample_of(const rt::Snapshot& snap) const {
     ++n;
   }
   s.in_contact = n > 0;
-  s.skin_point = n > 0 ? scene_to_lps(setup_.world, sum * (1.0 / n)) : s.device_point;
+  s.skin_point = n > 0 ? world_of_scene(setup_.grid, sum * (1.0 / n)) : s.device_point;
   s.normal_force = norm(snap.tick.force);
   return s;
 }
@@ -155,7 +129,7 @@ std::string TaskSession::start(const training::TaskSpec& spec) {
   view_.running = true;
   view_.task = training::describe(spec);
   view_.trial = 1;
-  view_.target_scene = lps_to_scene(setup_.world, target_->point);
+  view_.target_scene = scene_of_world(setup_.grid, target_->point);
   for (const std::string& n : target_->notes) view_.note += (view_.note.empty() ? "" : "; ") + n;
   trial_t0_ns_ = session_started_ns_ = 0;
   if (have_latest_) begin_trial(latest_t_ns_);
@@ -193,7 +167,7 @@ void TaskSession::score_last_mark() {
         training::score_trial(*target_, *setup_.landmarks, samples_, marks_);
     if (score.marks.empty()) return;
     view_.last_mark = score.marks.back();
-    view_.last_mark_scene = lps_to_scene(setup_.world, score.marks.back().mark.point);
+    view_.last_mark_scene = scene_of_world(setup_.grid, score.marks.back().mark.point);
   } catch (const std::exception& e) {
     view_.note = std::string("scoring: ") + e.what();
   }

@@ -24,10 +24,6 @@
 
 namespace palp::net {
 
-// Scene frame (mm) <-> the patient's LPS world frame (mm), through the grid's placement.
-Vec3d scene_to_lps(const WorldPlacement& world, const Vec3d& scene);
-Vec3d lps_to_scene(const WorldPlacement& world, const Vec3d& lps);
-
 // One trial as scored at its end, with what it was scored from (the session report draws it).
 struct ScoredTrial {
   int number = 0;  // 1, 2, ...
@@ -53,13 +49,12 @@ struct WireLandmark {
 inline constexpr std::size_t kMaxWireLandmarks = 1024;
 // The landmarks as points for the clients (ribs: at most 8 points each); UsageError past
 // kMaxWireLandmarks.
-std::vector<WireLandmark> wire_landmarks(const anatomy::Landmarks& landmarks,
-                                         const WorldPlacement& world);
+std::vector<WireLandmark> wire_landmarks(const anatomy::Landmarks& landmarks, const Grid& grid);
 
 struct TaskSetup {
   std::optional<anatomy::Landmarks> landmarks;  // none: every task start is refused
   std::string landmarks_source;                 // the file (or scene) they came from
-  WorldPlacement world;                         // the grid's placement: scene -> LPS
+  Grid grid;  // the scene's grid: its placement maps scene -> LPS (world_of_scene)
   double sample_rate_hz = 100.0;                // TrialSamples kept per second
   std::size_t max_samples = 60000;              // per trial (10 min at 100 Hz), preallocated
   std::size_t max_marks = 32;                   // per trial; more are refused and counted

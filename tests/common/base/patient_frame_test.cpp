@@ -80,5 +80,22 @@ TEST(PatientFrame, ParsesNamesAndLetters) {
   EXPECT_EQ(opposite(Anatomy::Superior), Anatomy::Inferior);
 }
 
+// Scene <-> world through a rotated, offset placement: scene (10, 20, 30) with i along -S, j
+// along +L and k along -P from the origin (3, -4, 5) is, summed by hand,
+// (3 + 20, -4 - 30, 5 - 10) = (23, -34, -5); and back.
+TEST(PatientFrame, SceneAndWorldThroughARotatedPlacement) {
+  Grid grid;
+  grid.world = placement(-1.0 * S, L, -1.0 * P);
+  grid.world.origin = {3, -4, 5};
+  const Vec3d world = world_of_scene(grid, {10, 20, 30});
+  EXPECT_NEAR(world.x, 23.0, 1e-12);
+  EXPECT_NEAR(world.y, -34.0, 1e-12);
+  EXPECT_NEAR(world.z, -5.0, 1e-12);
+  const Vec3d back = scene_of_world(grid, world);
+  EXPECT_NEAR(back.x, 10.0, 1e-12);
+  EXPECT_NEAR(back.y, 20.0, 1e-12);
+  EXPECT_NEAR(back.z, 30.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace palp

@@ -116,8 +116,7 @@ TEST_F(Search, TheSameInputsTheSameRows) {
   const SearchPath a = search_path(*lps_->fields, ninth_space(), kOffset, spec);
   const SearchPath b = search_path(*lps_->fields, ninth_space(), kOffset, spec);
   ASSERT_EQ(format_trajectory_csv(a.trajectory), format_trajectory_csv(b.trajectory));
-  EXPECT_EQ(format_marks_csv(a.mark_times_s), format_marks_csv(b.mark_times_s));
-  EXPECT_EQ(format_marks_csv(a.mark_times_s).substr(0, 8), "trial,t\n");
+  EXPECT_EQ(a.mark_times_s, b.mark_times_s);
   ASSERT_EQ(a.mark_times_s.size(), 3u);
   // Each mark on a row's time, strictly later than the one before.
   for (std::size_t k = 0; k < 3; ++k) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "base/errors.hpp"
 
@@ -31,6 +32,20 @@ TEST(MarksFile, ReadsTimesTrialsAndIgnoresOtherColumns) {
   EXPECT_EQ(trials[2].trial, 2);
   EXPECT_EQ(trials[2].t, 0.9);
   EXPECT_TRUE(parse_marks_csv("t\n", "m").empty());
+}
+
+// What palp traj search writes, palp task reads back exactly: the documented header, and times
+// that are not short decimals (0.1 + 0.2, a third) come back bit for bit.
+TEST(MarksFile, WrittenMarksReadBackExactly) {
+  const std::vector<MarkRow> marks = {{1, 0.1 + 0.2}, {2, 1.0 / 3.0}, {2, 7.5}};
+  const std::string text = format_marks_csv(marks);
+  EXPECT_EQ(text.rfind("trial,t\n", 0), 0u) << text;
+  const std::vector<MarkRow> back = parse_marks_csv(text, "m.csv");
+  ASSERT_EQ(back.size(), marks.size());
+  for (std::size_t k = 0; k < marks.size(); ++k) {
+    EXPECT_EQ(back[k].trial, marks[k].trial);
+    EXPECT_EQ(back[k].t, marks[k].t);
+  }
 }
 
 TEST(MarksFile, RefusesWhatItCannotTrust) {

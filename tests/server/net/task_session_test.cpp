@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "base/patient_frame.hpp"
 #include "net/task_messages.hpp"
 
 namespace palp::net {
@@ -32,10 +33,10 @@ anatomy::Landmarks fixture() {
   return l;
 }
 
-WorldPlacement placement() {
-  WorldPlacement w;
-  w.origin = {-49.5, -49.5, -49.5};
-  return w;
+Grid placement() {
+  Grid g;
+  g.world.origin = {-49.5, -49.5, -49.5};
+  return g;
 }
 
 // A snapshot at tick `seq` (1 kHz), the pad's one contact on the skin at LPS `lps`.
@@ -44,11 +45,11 @@ rt::Snapshot at(std::uint64_t seq, const Vec3d& lps, std::uint32_t buttons = 0) 
   s.contacts.resize(1);
   s.tick.seq = seq;
   s.tick.t_ns = 1'000'000'000 + static_cast<std::int64_t>(seq) * 1'000'000;
-  s.tick.pose.position = lps_to_scene(placement(), lps);
+  s.tick.pose.position = scene_of_world(placement(), lps);
   s.tick.force = {2.0, 0.0, 0.0};
   s.contact_count = 1;
   s.contacts[0].in_contact = 1;
-  s.contacts[0].p = lps_to_scene(placement(), lps);
+  s.contacts[0].p = scene_of_world(placement(), lps);
   s.buttons = buttons;
   return s;
 }
@@ -56,7 +57,7 @@ rt::Snapshot at(std::uint64_t seq, const Vec3d& lps, std::uint32_t buttons = 0) 
 TaskSetup setup(std::size_t max_samples = 1000, std::size_t max_marks = 4) {
   TaskSetup t;
   t.landmarks = fixture();
-  t.world = placement();
+  t.grid = placement();
   t.max_samples = max_samples;
   t.max_marks = max_marks;
   return t;
@@ -64,17 +65,6 @@ TaskSetup setup(std::size_t max_samples = 1000, std::size_t max_marks = 4) {
 
 training::TaskSpec ptcd9() {
   return {};  // ptcd, right, 9/10
-}
-
-TEST(TaskSession, PlacementRoundTrips) {
-  WorldPlacement w;
-  w.direction = {0, 1, 0, 0, 0, -1, -1, 0, 0};
-  w.origin = {3, -4, 5};
-  const Vec3d p{10, 20, 30};
-  const Vec3d back = lps_to_scene(w, scene_to_lps(w, p));
-  EXPECT_NEAR(back.x, p.x, 1e-9);
-  EXPECT_NEAR(back.y, p.y, 1e-9);
-  EXPECT_NEAR(back.z, p.z, 1e-9);
 }
 
 TEST(TaskSession, SamplesAtItsRateIntoABoundedBuffer) {
