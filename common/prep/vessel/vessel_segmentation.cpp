@@ -8,6 +8,9 @@
 //   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface)
 //   rejoin      lumens -> grown through candidates the opening cut, away from rejected parts
 //               and from cortex (branches)
+//   branches    lumens, CT, smoothed HU, cortex -> grown through voxels at the lumens' own
+//               contrast, below cortical HU, clear of cortical voxels, not a ridge, and not
+//               walled in by cortex (marrow)
 //   close       lumens -> closed by closing_mm, then one voxel of the wall's partial volume
 //   phase       the brightest lumen's level -> contrast_phase
 #include "prep/vessel/vessel_segmentation.hpp"
@@ -72,6 +75,12 @@ constexpr int kThickBodyRays = 13;
 
 // Faces on the lumen (of six) that make a voxel the lumen's notch.
 constexpr int kLumenNotchFaces = 4;
+
+// Sides (of the six axis directions) on which cortex walls a voxel in for it to be marrow: a
+// vertebral body's or a long bone's marrow is walled in on all six (endplates above and below)
+// but where a blurred cortex leaves a gap; a lumen runs on along its length (two sides open,
+// however calcified its wall) and a lumen resting on bone is walled in on one.
+constexpr int kEnclosedSides = 5;
 
 // cores' value for a voxel trunk_core_mm deep in the candidates (1: split_mm deep).
 constexpr std::uint8_t kTrunkCore = 2;
@@ -299,13 +308,88 @@ void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
   }
 }
 
+// Enclosed by cortex: voxels of `of` from which at least `min_sides` of the six axis rays meet
+// cortex (`ridge`, or HU at or above `cortex_hu`) within `reach_mm`, passing only through voxels
+// at or above `through_hu` (enhanced: blood, marrow); a ray that meets anything darker (soft
+// tissue, fat) or runs out of reach or out of the scan does not count.
+Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, double cortex_hu,
+                        double through_hu, double reach_mm, int min_sides) {
+  const Grid& g = ct.grid;
+  Mask enclosed(g, 0, "enclosed by cortex");
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t stride[3] = {1, nx, nx * ny};
+  std::int64_t reach[3];
+  for (int a = 0; a < 3; ++a)
+    reach[a] = static_cast<std::int64_t>(std::lround(reach_mm / g.spacing[a]));
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j)
+        for (std::int64_t i = 0; i < nx; ++i) {
+          const auto n = static_cast<std::int64_t>(g.linear(i, j, k));
+          if (!of.data[n]) continue;
+          const std::int64_t at[3] = {i, j, k};
+          int sides = 0;
+          for (int a = 0; a < 3; ++a)
+            for (int d = -1; d <= 1; d += 2)
+              for (std::int64_t s = 1; s <= reach[a]; ++s) {
+                const std::int64_t q = at[a] + d * s;
+                if (q < 0 || q >= g.dims[a]) break;
+                const std::int64_t m = n + d * s * stride[a];
+                if (ridge.data[m] || ct.data[m] >= cortex_hu) {
+                  ++sides;
+                  break;
+                }
+                if (ct.data[m] < through_hu) break;
+              }
+          enclosed.data[n] = sides >= min_sides;
+        }
+  });
+  return enclosed;
+}
+
+// Branches (see the header): `lumen` grown through voxels whose smoothed HU lies in the band of
+// the brightest lumen's contrast (`lumen_hu`), whose own HU is below `cortex_hu`, that hold no
+// voxel at or above it within branch_clearance_mm (face steps of the finest spacing), that are
+// not `ridge` (cortex) and that cortex does not wall in on kEnclosedSides sides within
+// branch_enclosure_mm.
+void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::int16_t>& hu,
+                   const Mask& ridge, double soft_hu, double lumen_hu, double cortex_hu,
+                   const VesselParams& params, Mask& lumen) {
+  const Grid& g = ct.grid;
+  Mask by_cortex(g, 0, "cortical HU and its clearance");
+  for (std::size_t n = 0; n < ct.size(); ++n) by_cortex.data[n] = ct.data[n] >= cortex_hu;
+  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const int steps = static_cast<int>(std::lround(params.branch_clearance_mm / h_min));
+  for (int s = 0; s < steps; ++s)
+    by_cortex = dilate_once(by_cortex, [](std::size_t) { return true; });
+  // The lumen's edge (half way from the soft tissue to its level), never below a lumen's least
+  // contrast (an enhancing organ of a portal-venous phase stays out), up to half its height
+  // above it (noise in a lumen; denser is something else).
+  const double height = lumen_hu - soft_hu;
+  const double low = std::max(soft_hu + 0.5 * height, soft_hu + params.min_lumen_contrast_hu);
+  const double high = lumen_hu + 0.5 * height;
+  Mask band(g, 0, "branch band");
+  for (std::size_t n = 0; n < band.size(); ++n)
+    band.data[n] =
+        body.data[n] && hu[n] >= low && hu[n] <= high && !by_cortex.data[n] && !ridge.data[n];
+  // marrow at the lumen's level: walled in by cortex on five sides of six or more
+  const Mask enclosed =
+      enclosed_by_cortex(ct, band, ridge, cortex_hu, soft_hu + params.min_contrast_hu,
+                         params.branch_enclosure_mm, kEnclosedSides);
+  for (std::size_t n = 0; n < band.size(); ++n) band.data[n] &= !enclosed.data[n];
+  grow_within(lumen, [&](std::size_t n) { return band.data[n] != 0; });
+}
+
 void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
   if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
     throw UsageError("segment_vessels: the body mask is not on the CT's grid");
   if (!(p.min_contrast_hu > 0.0) || !(p.ridge_drop > 0.0 && p.ridge_drop < 1.0) ||
       !(p.max_cortex_contact >= 0.0) || !(p.max_spread_fraction > 0.0) ||
       !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
-      !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0))
+      !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0) ||
+      !(p.branch_clearance_mm >= 0.0 && p.branch_clearance_mm <= 20.0) ||
+      !(p.branch_cortex_margin_hu > 0.0) ||
+      !(p.branch_enclosure_mm >= 0.0 && p.branch_enclosure_mm <= 100.0))
     throw UsageError("segment_vessels: unusable parameters");
 }
 
@@ -381,6 +465,10 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   });
   if (brightest == stats.size()) return result;  // no lumen: phase none
   result.lumen_level_hu = stats[brightest].mean();
+  // branches: the lumens grown through voxels at their contrast, apart from cortex
+  if (params.find_branches)
+    grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu,
+                  bone_seed_hu + params.branch_cortex_margin_hu, params, result.lumen);
   // close: flap and plaque shadows inside a lumen, never into cortex
   const auto below_cortex = [&](std::size_t n) {
     return body.data[n] && !cortex.data[n] && hu[n] < max_pool_hu;

@@ -23,6 +23,16 @@
 //              surface than inside (bone is, cortex over marrow; a lumen's edge is darker)
 //   rejoin     the lumens grown through the candidates the opening cut (branches), never
 //              within a voxel of a rejected part nor within two of cortex
+//   branches   the lumens grown through voxels at the brightest lumen's contrast L (smoothed HU
+//              from half way between S and L, and at least min_lumen_contrast_hu above S, up to
+//              L plus half its height above S), below cortical HU (the bone seed level +
+//              branch_cortex_margin_hu: only cortical bone reaches it), with no cortical voxel
+//              within branch_clearance_mm, not a ridge, and not walled in by cortex (a ridge or
+//              cortical HU met within branch_enclosure_mm through enhanced voxels) on five of
+//              the six axis rays. A branch leaving a trunk carries the trunk's contrast and lies
+//              apart from cortex where the opening cut it off and bone's levels would take it (a
+//              carotid, a subclavian, the coeliac trunk); marrow at that level lies behind its
+//              cortex (the ridge and its cortical voxels fence it) and inside it (walled in)
 //   closing    closed by closing_mm (a flap's shadow), then one voxel of contrast level beside
 //              them and not by cortex (the wall's partial volume)
 //   phase      from the brightest lumen's level above S (an enhancing organ never outshines
@@ -54,6 +64,10 @@ struct VesselParams {
   double min_lumen_ml = 0.3;              // smaller parts are noise, calcifications, partial volume
   double closing_mm = 2.0;                // flap and plaque shadows filled inside a lumen
   double arterial_above_soft_hu = 170.0;  // the phase's level: aorta of an arterial phase
+  bool find_branches = true;              // grow the lumens into branches (the header's method)
+  double branch_clearance_mm = 3.0;       // no cortical voxel this near a branch's voxel
+  double branch_cortex_margin_hu = 400.0;  // cortical HU: the bone seed level + this
+  double branch_enclosure_mm = 20.0;  // marrow: cortex within this on five of six axis rays
 };
 
 struct VesselResult {

@@ -392,6 +392,37 @@ TEST_F(PrepTest, OutputsAreByteIdenticalForAnyThreadCount) {
   }
 }
 
+// The share (percent) of `truth`'s voxels that `mask` holds.
+double percent_inside(const Mask& truth, const Mask& mask) {
+  std::int64_t in = 0, all = 0;
+  for (std::size_t n = 0; n < truth.size(); ++n) {
+    all += truth.data[n] != 0;
+    in += truth.data[n] && mask.data[n];
+  }
+  return all > 0 ? 100.0 * static_cast<double>(in) / static_cast<double>(all) : 0.0;
+}
+
+// The torso's arterial phase (aorta and its branches at 400 HU, above the bone seed level): the
+// issue's goal, at most 5 % of the contrast-filled vessels inside bone, holds with the lumens grown
+// into their branches (vessel_segmentation.hpp) and not without (the branches the opening cut
+// off and the strip where the aorta rests on the spine go to bone: 6.2 % when measured).
+TEST_F(PrepTest, AnArterialTreeAt400HuIsNotBone) {
+  PhantomOptions options;
+  options.contrast = PhantomContrast::arterial;
+  PhantomTruth truth;
+  const std::string input = (dir_ / "arterial.nii.gz").string();
+  write_nifti(input, make_phantom("torso", options, &truth));
+  ASSERT_GT(percent_inside(truth.vessel, truth.vessel), 99.0);
+  run_prep(input, (dir_ / "out").string(), {});
+  const Mask bone = read_nifti_mask((dir_ / "out" / kBoneFile).string());
+  EXPECT_LE(percent_inside(truth.vessel, bone), 5.0);
+  PrepParams no_branches;
+  no_branches.vessels.find_branches = false;
+  run_prep(input, (dir_ / "no_branches").string(), no_branches);
+  const Mask bone_without = read_nifti_mask((dir_ / "no_branches" / kBoneFile).string());
+  EXPECT_GT(percent_inside(truth.vessel, bone_without), 5.0) << "the case is no test of the rule";
+}
+
 TEST_F(PrepTest, NotACtIsRefusedUnlessAllowed) {
   CtVolume ct;
   write_small_ct(dir_, &ct);

@@ -20,16 +20,19 @@ constexpr double kSoftHu = 40.0;
 struct Scene {
   CtVolume ct;
   Mask body, tube, marrow;
+  Mask branch;  // the branch's voxels beyond 15 mm from the trunk's axis, clear of its edge
   Mask tube_clear;  // the tube's voxels two voxels or more from the cortex (not its partial volume)
 };
 
 // The tube's centre at (30, 45) mm in-plane, radius 9 mm; the vertebra's at (30, 68) mm, radius
-// 12 mm, cortex 2 mm: 2 mm of soft tissue between them.
-Scene scene(double tube_hu) {
+// 12 mm, cortex 2 mm: 2 mm of soft tissue between them. With `branch_radius_mm`, a branch of the
+// tube's contrast leaves it along +x at z = 18 mm and runs out of the scene.
+Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 900.0) {
   Grid g;
   g.dims = {60, 70, 24};
   g.spacing = {kSpacing, kSpacing, kSpacing};
-  Scene s{CtVolume(g, 0, "ct"), Mask(g, 1, "body"), Mask(g, 0, "tube"), Mask(g, 0, "marrow"),
+  Scene s{CtVolume(g, 0, "ct"),           Mask(g, 1, "body"),  Mask(g, 0, "tube"),
+          Mask(g, 0, "marrow"),             Mask(g, 0, "branch"),
           Mask(g, 0, "tube clear of the cortex")};
   for (std::int64_t k = 0; k < g.dims[2]; ++k)
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
@@ -38,6 +41,8 @@ Scene scene(double tube_hu) {
         const double y = (static_cast<double>(j) + 0.5) * kSpacing;
         const double r_tube = std::hypot(x - 30.0, y - 45.0);
         const double r_bone = std::hypot(x - 30.0, y - 68.0);
+        const double z = (static_cast<double>(k) + 0.5) * kSpacing;
+        const double r_branch = x > 30.0 ? std::hypot(y - 45.0, z - 18.0) : 1e9;
         // Partial volume at every edge, as a scanner's voxel averages what it covers: the
         // share of the voxel inside a circle of radius R at distance r, clamp(1/2 + (R - r)/h).
         const auto inside = [](double radius, double r) {
@@ -45,7 +50,9 @@ Scene scene(double tube_hu) {
         };
         double hu = kSoftHu + static_cast<double>((i * 7 + j * 13 + k * 5) % 21) - 10.0;
         hu += inside(9.0, r_tube) * (tube_hu - hu);
-        hu += inside(12.0, r_bone) * (900.0 - hu);
+        hu += inside(branch_radius_mm, r_branch) * (tube_hu - hu);
+        s.branch.at(i, j, k) = r_branch < branch_radius_mm - kSpacing && x > 45.0;
+        hu += inside(12.0, r_bone) * (cortex_hu - hu);
         hu += inside(10.0, r_bone) * (220.0 - hu);
         if (r_tube < 9.0) {
           s.tube.at(i, j, k) = 1;
@@ -120,6 +127,34 @@ TEST(SegmentVessels, ANarrowTubeApartFromAnyTrunkIsNotAVessel) {
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, params);
   EXPECT_EQ(count(r.lumen), 0);
   EXPECT_GE(r.rejected_thin, 1);
+}
+
+TEST(SegmentVessels, ABranchLeavingTheTrunkAtItsContrastIsTheLumens) {
+  // An 8 mm branch at 450 HU (above the bone seed level: bone's levels would take it) leaving the
+  // trunk, as a carotid leaves the arch: its edge voxels are ridges, so it is no candidate beyond
+  // the trunk, and only the branch rule finds it.
+  const Scene s = scene(450.0, 4.0);
+  ASSERT_GT(count(s.branch), 100);
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_EQ(count_both(r.lumen, s.branch), count(s.branch));
+  EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
+  VesselParams no_branches;
+  no_branches.find_branches = false;
+  const VesselResult without = segment_vessels(s.ct, s.body, kSoftHu, 300.0, no_branches);
+  EXPECT_LT(count_both(without.lumen, s.branch), count(s.branch) / 2) << "the branch is no test";
+}
+
+TEST(SegmentVessels, BranchesStopAtTheCortexAroundMarrowAtTheLumensLevel) {
+  // Marrow at 220 HU lies inside the band of a 350 HU lumen (195 to 505 HU), and so does a thin
+  // cortex of 500 HU (an osteoporotic vertebra, or one a thick slice blurs). With no cortical
+  // level and no clearance, the cortex's ridge alone fences the marrow from the branch growth.
+  const Scene s = scene(350.0, 3.0, 500.0);
+  VesselParams ridge_only;
+  ridge_only.branch_clearance_mm = 0.0;
+  ridge_only.branch_cortex_margin_hu = 5000.0;
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, ridge_only);
+  EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
+  EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
 }
 
 TEST(SegmentVessels, RefusesAMaskOnAnotherGrid) {
