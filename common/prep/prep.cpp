@@ -19,6 +19,8 @@
 // The CT copy and the masks are written on a background thread (background_writes.hpp) from the
 // moment each is final; they are waited for before d_bone. Bone segmentation runs mostly on one
 // core, so d_surf on the other costs little wall time.
+// run_prep at the end of this file reads as this chain, each stage a step of one PrepRun; what
+// prep.json records (and how a cached one is read back) is prep_record.*.
 #include "prep/prep.hpp"
 
 #include <algorithm>
@@ -46,6 +48,7 @@
 #include "prep/maps/subvoxel_distance.hpp"
 #include "prep/output_guard.hpp"
 #include "prep/prep_cache.hpp"
+#include "prep/prep_record.hpp"
 #include "prep/prep_structures.hpp"
 #include "prep/reorient.hpp"
 #include "prep/segment/components.hpp"
@@ -56,13 +59,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-nlohmann::json grid_json(const Grid& grid) {
-  return {{"dimensions", grid.dims},
-          {"spacing_mm", grid.spacing},
-          {"origin_lps_mm", grid.world.origin},
-          {"direction_lps", grid.world.direction}};
-}
 
 // The sub-voxel band on this grid: the parameter, or twice the coarsest spacing.
 double subvoxel_band_mm(const SurfaceParams& surface, const Grid& grid) {
@@ -99,144 +95,7 @@ bool input_serves_as_ct_copy(const std::string& input, bool reoriented) {
   return !reoriented && is_nifti_name(input) && file_is_gzip(input);
 }
 
-// CPU seconds of the whole process so far (all threads).
-double process_cpu_seconds() {
-  timespec t{};
-  if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) != 0) return 0.0;
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
 using segmentation::count_nonzero;
-
-// What prep.json says of the maps besides the result: the surface method's facts and the maps'
-// value ranges (also the .nii.gz headers' cal_min/cal_max).
-struct MapRecord {
-  Refinement refine{1, 1, 1};  // the maps' grid refines the CT's by these factors
-  double band_mm = 0.0;        // subvoxel: the near band
-  double projection_mm = 0.0;  // subvoxel: the skin projection's reach
-  IsoProjectionStats projected;
-  nlohmann::json point_counts;  // per surface: points, and how many the HU placed (not midpoints)
-  float surf_range[2] = {0, 0}, bone_range[2] = {0, 0}, vessel_range[2] = {0, 0};
-  nlohmann::json structures = nlohmann::json::object();  // per structure: its source, voxels
-  std::vector<std::string> structure_files;              // a label map's organs' and muscles' files
-  nlohmann::json skeleton;  // the skeleton's labels' name table (prep.hpp), null without
-};
-
-// prep.json's record of the lumens found in the scan.
-nlohmann::json vessel_json(const VesselResult& v) {
-  return {{"kind", "vessel"},
-          {"source", "auto"},
-          {"method", "contrast-filled lumens (prep/vessel/vessel_segmentation.hpp)"},
-          {"files", {kVesselFile, kVesselDistanceFile}},
-          {"voxels", v.voxels},
-          {"lumens", v.lumens},
-          {"lumen_level_hu", v.lumen_level_hu},
-          {"rejected_enclosed_by_cortex", v.rejected_shell},
-          {"rejected_not_uniform", v.rejected_spread},
-          {"rejected_brighter_at_surface", v.rejected_surface},
-          {"rejected_joined_to_no_trunk", v.rejected_thin}};
-}
-
-// A cached prep directory's prep.json -> the grids and voxel counts of `result`.
-void read_cached_result(const nlohmann::json& cached, PrepResult& result) {
-  result.from_cache = true;
-  result.grid.dims = cached["grid"]["dimensions"].get<Index3>();
-  result.grid.spacing = cached["grid"]["spacing_mm"].get<Vec3>();
-  result.map_grid = result.grid;
-  if (cached.contains("map_grid")) {
-    result.map_grid.dims = cached["map_grid"]["dimensions"].get<Index3>();
-    result.map_grid.spacing = cached["map_grid"]["spacing_mm"].get<Vec3>();
-  }
-  result.stats.body_voxels = cached["voxels"]["body"].get<std::uint64_t>();
-  result.stats.bone_voxels = cached["voxels"]["bone"].get<std::uint64_t>();
-  result.vessel_voxels = cached["voxels"].value("vessel", std::uint64_t{0});
-  result.structures = structure_summaries(cached.value("structures", nlohmann::json()));
-}
-
-// prep.json: the grids, parameters and levels used, counts, timings, CPU seconds, peak memory,
-// the outputs' sizes in `dir`, and the cache key.
-nlohmann::json prep_json(const PrepResult& result, const PrepParams& params,
-                         const SegmentationParams& segmentation, const SurfaceParams& surface,
-                         const MapRecord& maps, const fs::path& dir) {
-  nlohmann::json json;
-  json["palp_prep_version"] = kPrepAlgorithmVersion;
-  json["input"] = result.input;
-  json["cache_key"] = result.cache_key;
-  json["grid"] = grid_json(result.grid);
-  json["map_grid"] = grid_json(result.map_grid);  // d_surf, d_bone: the grid refined by
-  json["map_refinement"] = maps.refine;           // these factors (prep/maps/map_refine.hpp)
-  json["patient"] = {{"input_orientation", result.orientation},
-                     {"input_obliquity_deg", result.obliquity_deg},
-                     {"reoriented", result.reoriented},
-                     {"orientation", patient_frame(result.grid).orientation_code()}};
-  if (!result.hu_warning.empty()) json["not_hu_ok"] = result.hu_warning;
-  json["parameters"] = params_json(params);
-  json["surface"] = surface_method_name(params.surface.method);
-  {
-    const HuLevels& h = result.hu_levels;
-    json["hu_levels"] = {
-        {"mode", params.adapt_bone_levels ? "adapted to the scan" : "as given"},
-        {"soft_tissue_peak_hu", h.peak_found ? nlohmann::json(h.soft_peak_hu) : nlohmann::json()},
-        {"soft_tissue_share", h.peak_share},
-        {"fat_peak_hu", h.fat_found ? nlohmann::json(h.fat_peak_hu) : nlohmann::json()},
-        {"fat_share", h.fat_share},
-        {"offset_hu", params.adapt_bone_levels ? h.offset_hu : 0.0},
-        {"note", h.note},
-        {"bone_seed_hu", segmentation.bone_seed_hu},
-        {"bone_grow_hu", segmentation.bone_grow_hu},
-        {"bone_iso_hu", surface.bone_hu}};
-  }
-  if (params.surface.method == SurfaceMethod::subvoxel) {
-    json["surface_iso_hu"] = {{"skin", params.surface.skin_hu}, {"bone", surface.bone_hu}};
-    json["subvoxel_band_mm_used"] = maps.band_mm;
-    json["skin_projection"] = {{"reach_mm", maps.projection_mm},
-                               {"nodes", {maps.projected.visited, maps.projected.projected}}};
-    // [points, placed by HU]: the rest straddle no level (the mask cut there: table contact,
-    // filled lungs, marrow) and sit at edge midpoints, as the mask's faces would.
-    json["surface_points"] = maps.point_counts;
-  }
-  json["contrast_phase"] = result.contrast_phase;
-  json["structures"] = maps.structures;
-  if (!maps.skeleton.is_null()) json["skeleton_labels"] = maps.skeleton;
-  json["voxels"] = {{"total", result.grid.voxel_count()},
-                    {"body", result.stats.body_voxels},
-                    {"bone", result.stats.bone_voxels},
-                    {"vessel", result.vessel_voxels},
-                    {"removed_non_patient", result.stats.removed_non_patient_voxels},
-                    {"table", result.stats.table_voxels}};
-  json["distance_range_mm"] = {{"d_surf", {maps.surf_range[0], maps.surf_range[1]}},
-                               {"d_bone", {maps.bone_range[0], maps.bone_range[1]}}};
-  if (result.vessel_voxels > 0)
-    json["distance_range_mm"]["d_vessel"] = {maps.vessel_range[0], maps.vessel_range[1]};
-  nlohmann::json timings = nlohmann::json::object();
-  for (const auto& s : result.stages) timings[s.name] = s.seconds;
-  timings["total"] = result.total_seconds;
-  json["timings_s"] = timings;
-  nlohmann::json cpu = nlohmann::json::object();
-  for (const auto& s : result.stages)
-    if (s.cpu_seconds > 0.0) cpu[s.name] = s.cpu_seconds;
-  cpu["total"] = process_cpu_seconds();
-  json["cpu_seconds"] = cpu;
-  json["peak_memory_bytes"] = result.peak_rss_bytes;
-  nlohmann::json stage_peaks = nlohmann::json::object();
-  for (const auto& s : result.stages) stage_peaks[s.name] = s.peak_rss_bytes;
-  json["peak_memory_bytes_after_stage"] = stage_peaks;
-  json["threads"] = thread_count_or_default(params.distance.threads);
-  nlohmann::json sizes = nlohmann::json::object();
-  for (const char* name :
-       {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile}) {
-    sizes[name] = fs::file_size(dir / name);
-  }
-  if (result.vessel_voxels > 0) {
-    for (const char* name : {kVesselFile, kVesselDistanceFile})
-      sizes[name] = fs::file_size(dir / name);
-  }
-  for (const std::string& name : maps.structure_files) sizes[name] = fs::file_size(dir / name);
-  if (!maps.skeleton.is_null())
-    sizes[kSkeletonLabelsFile] = fs::file_size(dir / kSkeletonLabelsFile);
-  json["file_bytes"] = sizes;
-  return json;
-}
 
 // Writes `json` to `path` through a .partial file renamed over it.
 void write_json_atomically(const fs::path& path, const nlohmann::json& json) {
@@ -255,279 +114,415 @@ SurfaceMethod parse_surface_method(const std::string& name) {
   throw UsageError("--surface must be subvoxel or mask, not '" + name + "'");
 }
 
-PrepResult run_prep(const std::string& input, const std::string& out_dir, const PrepParams& params,
-                    const PrepProgress& progress) {
-  check_distance_band(params.distance.band_mm);  // before anything is read or written
-  const auto start = Clock::now();
-  PrepResult result;
-  result.input = input;
-  result.out_dir = out_dir;
-  const fs::path dir(out_dir);
-  // A failed or interrupted run leaves no temporary file, and no output at all in a directory
-  // it created (which is removed).
-  PrepOutputGuard guard(
-      dir, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile, kPrepJsonFile,
-            kVesselFile, kVesselDistanceFile, kSkeletonLabelsFile});
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) {
-    throw Error(out_dir + ": cannot create output directory" + (ec ? ": " + ec.message() : ""));
+namespace {
+
+// One run of the pipeline, its stages in the order run_prep calls them. The members are declared
+// in the order the stages need them: what a background job uses is declared before the job's
+// BackgroundWrites, so a failed run stops the job before its data goes.
+class PrepRun {
+ public:
+  PrepRun(const std::string& input, const std::string& out_dir, const PrepParams& params,
+          const PrepProgress& progress)
+      : input_(input),
+        params_(params),
+        progress_(progress),
+        dir_(out_dir),
+        // A failed or interrupted run leaves no temporary file, and no output at all in a
+        // directory it created (which is removed).
+        guard_(dir_, {kBodyFile, kBoneFile, kSurfaceDistanceFile, kBoneDistanceFile, kCtFile,
+                      kPrepJsonFile, kVesselFile, kVesselDistanceFile, kSkeletonLabelsFile}) {
+    result_.input = input;
+    result_.out_dir = out_dir;
   }
 
-  result.cache_key = prep_cache_key(input, params);
-  nlohmann::json cached;
-  if (params.use_cache && cache_is_valid(dir, result.cache_key, &cached)) {
-    read_cached_result(cached, result);
-    result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    result.peak_rss_bytes = peak_rss_bytes();
-    guard.commit();
-    return result;
-  }
-  // The files an earlier prep recorded, removed once this run's inputs are accepted (below).
-  const std::vector<std::string> previous = recorded_outputs(dir);
-  // Remove a previous prep.json first: until the new one is written the directory is not a
-  // valid cache, whatever happens in between.
-  fs::remove(dir / kPrepJsonFile, ec);
-  // Structures an earlier run found and this one may not.
-  for (const char* name : {kVesselFile, kVesselDistanceFile, kSkeletonLabelsFile})
-    fs::remove(dir / name, ec);
+  void create_directory();
+  bool served_from_cache();
+  void forget_previous_run();
+  void read_input();
+  void read_labels();
+  void body_mask();
+  void start_surface_job();
+  void hu_levels();
+  void vessels();
+  void bone_mask();
+  void wait_surface_and_writes();
+  void bone_map();
+  void vessel_map();
+  void structure_maps();
+  PrepResult finish();
+  PrepResult take_result() { return std::move(result_); }
 
-  auto stage = [&](const std::string& name, auto&& work) {
-    if (progress) progress(name, false, 0.0);
+ private:
+  // A named stage: timed, its CPU seconds and the peak memory after it recorded, reported.
+  template <class Work>
+  void stage(const std::string& name, Work&& work) {
+    if (progress_) progress_(name, false, 0.0);
     const auto t0 = Clock::now();
     const double cpu0 = process_cpu_seconds();
     work();
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    result.stages.push_back({name, seconds, peak_rss_bytes(), process_cpu_seconds() - cpu0});
-    if (progress) progress(name, true, seconds);
-  };
-
-  // The CT and the masks are shared with the background writer, which frees them once written.
-  auto ct_owner = std::make_shared<CtVolume>();
-  auto body_owner = std::make_shared<Mask>();
-  auto bone_owner = std::make_shared<Mask>();
-  CtVolume& ct = *ct_owner;
-  const Mask& body = *body_owner;
-  const Mask& bone = *bone_owner;
-  BackgroundWrites writes;
+    result_.stages.push_back({name, seconds, peak_rss_bytes(), process_cpu_seconds() - cpu0});
+    if (progress_) progress_(name, true, seconds);
+  }
   // Queues the write of a volume the pipeline no longer changes.
-  auto write_in_background = [&](const char* name, const char* file, auto owner) {
-    writes.add(
-        name,
-        [owner = std::shared_ptr<const typename decltype(owner)::element_type>(std::move(owner)),
-         path = dir / file] { write_atomically(path, *owner); });
-  };
+  template <class Volume>
+  void write_in_background(const char* name, const char* file, std::shared_ptr<Volume> owner) {
+    writes_.add(name, [owner = std::shared_ptr<const Volume>(std::move(owner)),
+                       path = dir_ / file] { write_atomically(path, *owner); });
+  }
   // Reports the background writes finished so far as stages of their own.
-  auto report_background = [&](const std::vector<BackgroundWrites::Done>& done) {
+  void report_background(const std::vector<BackgroundWrites::Done>& done) {
     for (const auto& d : done) {
-      if (progress) progress(d.name, false, 0.0);
-      result.stages.push_back({d.name, d.seconds, peak_rss_bytes()});
-      if (progress) progress(d.name, true, d.seconds);
+      if (progress_) progress_(d.name, false, 0.0);
+      result_.stages.push_back({d.name, d.seconds, peak_rss_bytes()});
+      if (progress_) progress_(d.name, true, d.seconds);
     }
-  };
+  }
+  void write_ct_copy();
+  void record_skeleton();
+  void compute_map(const Mask& mask, const SurfacePoints& points, const CtVolume* hu);
+
+  const std::string& input_;
+  const PrepParams& params_;
+  const PrepProgress& progress_;
+  const Clock::time_point start_ = Clock::now();
+  PrepResult result_;
+  const fs::path dir_;
+  PrepOutputGuard guard_;
+  // The files an earlier prep recorded, removed once this run's inputs are accepted.
+  std::vector<std::string> previous_;
+  // The CT and the masks are shared with the background writer, which frees them once written.
+  std::shared_ptr<CtVolume> ct_owner_ = std::make_shared<CtVolume>();
+  std::shared_ptr<Mask> body_owner_ = std::make_shared<Mask>();
+  std::shared_ptr<Mask> bone_owner_ = std::make_shared<Mask>();
+  const Mask& body_ = *body_owner_;
+  const Mask& bone_ = *bone_owner_;
+  BackgroundWrites writes_;
   // Structures beyond bone and vessels, written last, one at a time: a label map's arteries,
   // organs and muscles, or the truth of a phantom that draws its own (prep_structures.hpp).
-  std::vector<LabelledStructure> structures;
+  std::vector<LabelledStructure> structures_;
+  LabelMaps labels_;
+  bool subvoxel_ = false;
+  double band_ = 0.0, projection_ = 0.0;
+  DistanceMap map_;
+  SurfacePoints skin_points_, bone_points_;
+  std::size_t skin_count_[2] = {0, 0};  // the skin's points, and how many the HU placed
+  MapRecord record_;                    // what prep.json says of the maps
+  // The HU are needed by d_surf past the bone's points only for its projection onto their
+  // iso-surface; the job drops them after it. Nobody changes them: the writers read them.
+  std::shared_ptr<const CtVolume> surf_ct_;
+  BackgroundWrites surf_job_;  // after everything its jobs use, so it ends before they do
+  // The bone levels, shifted with the scan's soft-tissue peak unless given.
+  SegmentationParams segmentation_ = params_.segmentation;
+  SurfaceParams surface_ = params_.surface;
+  // Contrast-filled lumens: not bone; their own mask and map when the scan has any.
+  std::shared_ptr<Mask> vessel_owner_ = std::make_shared<Mask>();
+  bool has_vessels_ = false;
+  bool labelled_bone_ = false;
+};
+
+void PrepRun::create_directory() {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec || !fs::is_directory(dir_)) {
+    throw Error(dir_.string() + ": cannot create output directory" +
+                (ec ? ": " + ec.message() : ""));
+  }
+}
+
+// A valid cache in the directory: its prep.json gives the result, nothing is computed.
+bool PrepRun::served_from_cache() {
+  result_.cache_key = prep_cache_key(input_, params_);
+  nlohmann::json cached;
+  if (!params_.use_cache || !cache_is_valid(dir_, result_.cache_key, &cached)) return false;
+  read_cached_result(cached, result_);
+  result_.total_seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+  result_.peak_rss_bytes = peak_rss_bytes();
+  guard_.commit();
+  return true;
+}
+
+void PrepRun::forget_previous_run() {
+  previous_ = recorded_outputs(dir_);
+  // Remove a previous prep.json first: until the new one is written the directory is not a
+  // valid cache, whatever happens in between.
+  std::error_code ec;
+  fs::remove(dir_ / kPrepJsonFile, ec);
+  // Structures an earlier run found and this one may not.
+  for (const char* name : {kVesselFile, kVesselDistanceFile, kSkeletonLabelsFile})
+    fs::remove(dir_ / name, ec);
+}
+
+// The CT, checked to be in HU, on an axis-aligned grid.
+void PrepRun::read_input() {
+  CtVolume& ct = *ct_owner_;
   stage("read CT", [&] {
-    ct = read_ct_with_truth(input, params.labels_path.empty() ? &structures : nullptr);
+    ct = read_ct_with_truth(input_, params_.labels_path.empty() ? &structures_ : nullptr);
   });
   stage("check CT", [&] {
     const CtCheck check = check_hu(ct);
-    if (!check.plausible && !params.not_hu_ok) throw InputError(not_a_ct_message(input, check));
-    if (!check.plausible) result.hu_warning = check.finding;
+    if (!check.plausible && !params_.not_hu_ok) throw InputError(not_a_ct_message(input_, check));
+    if (!check.plausible) result_.hu_warning = check.finding;
   });
   const PatientFrame frame = patient_frame(ct.grid);
-  result.orientation = frame.orientation_code();
-  result.obliquity_deg = frame.obliquity_deg();
-  if (result.obliquity_deg > kAxisAlignedToleranceDeg) {
+  result_.orientation = frame.orientation_code();
+  result_.obliquity_deg = frame.obliquity_deg();
+  if (result_.obliquity_deg > kAxisAlignedToleranceDeg) {
     stage("reorient", [&] { ct = resample_axis_aligned(ct); });
-    result.reoriented = true;
+    result_.reoriented = true;
   }
-  result.grid = ct.grid;
-  // A lab's label map, on the CT's grid, before anything is written (a refused one leaves nothing).
-  LabelMaps labels;
-  if (!params.labels_path.empty()) {
-    stage("read labels",
-          [&] { labels = read_label_maps(params.labels_path, ct.grid, {params.labels_map}); });
-    if (auto artery = labelled_artery(labels)) structures.push_back(std::move(*artery));
-    labels.vein = Mask{};  // the split's classes and voxels are in labels.source
-    for (LabelledStructure& organ : labels.organs) structures.push_back(std::move(organ));
-    labels.organs.clear();
+  result_.grid = ct.grid;
+}
+
+// A lab's label map, on the CT's grid, before anything is written (a refused one leaves
+// nothing); then the outputs of an earlier run this one will not write go, and the CT's copy
+// starts.
+void PrepRun::read_labels() {
+  if (!params_.labels_path.empty()) {
+    stage("read labels", [&] {
+      labels_ = read_label_maps(params_.labels_path, ct_owner_->grid, {params_.labels_map});
+    });
+    if (auto artery = labelled_artery(labels_)) structures_.push_back(std::move(*artery));
+    labels_.vein = Mask{};  // the split's classes and voxels are in labels.source
+    for (LabelledStructure& organ : labels_.organs) structures_.push_back(std::move(organ));
+    labels_.organs.clear();
   }
-  guard.add_names(structure_files(structures));
-  remove_stale_outputs(dir, previous, input, params.labels_path);
-  if (input_serves_as_ct_copy(input, result.reoriented)) {
-    writes.add("bg write CT",
-               [from = fs::path(input), path = dir / kCtFile] { copy_atomically(from, path); });
+  guard_.add_names(structure_files(structures_));
+  remove_stale_outputs(dir_, previous_, input_, params_.labels_path);
+  write_ct_copy();
+}
+
+void PrepRun::write_ct_copy() {
+  if (input_serves_as_ct_copy(input_, result_.reoriented)) {
+    writes_.add("bg write CT",
+                [from = fs::path(input_), path = dir_ / kCtFile] { copy_atomically(from, path); });
   } else {
-    write_in_background("bg write CT", kCtFile, ct_owner);
+    write_in_background("bg write CT", kCtFile, ct_owner_);
   }
-  stage("body mask", [&] { *body_owner = segment_body(ct, params.segmentation, &result.stats); });
-  write_in_background("bg write body", kBodyFile, body_owner);
-  if (!params.not_hu_ok) {
-    const std::string finding = check_body_fraction(count_nonzero(body), ct.grid);
+}
+
+void PrepRun::body_mask() {
+  const CtVolume& ct = *ct_owner_;
+  stage("body mask",
+        [&] { *body_owner_ = segment_body(ct, params_.segmentation, &result_.stats); });
+  write_in_background("bg write body", kBodyFile, body_owner_);
+  if (!params_.not_hu_ok) {
+    const std::string finding = check_body_fraction(count_nonzero(body_), ct.grid);
     if (!finding.empty())
       throw InputError(
-          input + ": does not look like a CT in Hounsfield units: " + finding +
+          input_ + ": does not look like a CT in Hounsfield units: " + finding +
           ". To prep it anyway: palp prep --not-hu-ok INPUT --out DIR (then use DIR as the "
           "scene)");
   }
-  // d_surf needs only the CT, the body mask and the skin level: it is computed and written on a
-  // thread of its own (`surf_job`) while this one segments the bone (mostly one core), then its
-  // buffer serves d_bone.
-  const bool subvoxel = params.surface.method == SurfaceMethod::subvoxel;
-  const double band = subvoxel_band_mm(params.surface, ct.grid);
-  const double projection = skin_projection_mm(params.surface, ct.grid);
-  DistanceMap map;
-  SurfacePoints skin_points, bone_points;
-  std::size_t skin_count[2] = {0, 0};  // the skin's points, and how many the HU placed
-  MapRecord record;                    // what prep.json says of the maps
-  record.band_mm = band;
-  record.projection_mm = projection;
-  if (!labels.skeleton.data.empty()) {  // the labelled vertebrae and ribs, each its own value
-    nlohmann::json names = nlohmann::json::object();
-    for (std::size_t v = 0; v < labels.skeleton_names.size(); ++v)
-      names[std::to_string(v + 1)] = labels.skeleton_names[v];
-    record.skeleton = {
-        {"file", kSkeletonLabelsFile}, {"source", params.labels_path}, {"labels", names}};
-    write_in_background("bg write skeleton labels", kSkeletonLabelsFile,
-                        std::make_shared<Mask>(std::move(labels.skeleton)));
-  }
-  // The maps' grid: the CT's, or its aligned refinement (--map-spacing; prep/maps/map_refine.hpp).
-  const Refinement& refine = record.refine = map_refinement(result.grid, params.map_spacing_mm);
-  result.map_grid = refined_grid(result.grid, refine);
-  // The map of `mask` into `map` on the CT's grid, upsampled to the maps' grid when refined, then
-  // (the skin's, when `hu`) projected onto the HU iso-surface at the maps' nodes.
-  auto compute_map = [&](const Mask& mask, const SurfacePoints& points, const CtVolume* hu) {
-    if (subvoxel) {
-      subvoxel_signed_distance(points, mask, band, params.distance.band_mm, map,
-                               params.distance.threads);
-    } else {
-      signed_distance(mask, params.distance, map);
-    }
-    if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
-    if (subvoxel && hu != nullptr)
-      record.projected = project_skin_map(*hu, mask, params.surface.skin_hu, projection,
-                                          params.distance.band_mm, map, params.distance.threads);
-  };
-  // The HU are needed by d_surf past the bone's points only for its projection onto their
-  // iso-surface; the job drops them after it. Nobody changes them: the writers read them.
-  std::shared_ptr<const CtVolume> surf_ct = ct_owner;
-  BackgroundWrites surf_job;  // after everything its jobs use, so it ends before they do
-  if (subvoxel) {
-    surf_job.add("skin points", [&] {
-      skin_points = surface_points(*surf_ct, body, params.surface.skin_hu, params.distance.threads);
-      skin_count[0] = skin_points.points.size();
-      skin_count[1] = skin_points.interpolated;
-    });
-  }
-  surf_job.add("d_surf", [&] {
-    compute_map(body, skin_points, subvoxel && projection != 0.0 ? surf_ct.get() : nullptr);
-    surf_ct.reset();
-    skin_points = SurfacePoints{};
-    value_range(map, record.surf_range, params.distance.threads);
-  });
-  surf_job.add("write d_surf", [&] {
-    write_atomically(dir / kSurfaceDistanceFile, map, record.surf_range[0], record.surf_range[1]);
-  });
+}
 
-  // The bone levels, shifted with the scan's soft-tissue peak unless given
-  // (prep/segment/hu_levels.hpp).
-  SegmentationParams segmentation = params.segmentation;
-  SurfaceParams surface = params.surface;
-  stage("HU levels", [&] {
-    result.hu_levels = estimate_hu_levels(
-        ct, body, {segmentation.bone_seed_hu, segmentation.bone_grow_hu, surface.bone_hu});
-    if (params.adapt_bone_levels) {
-      segmentation.bone_seed_hu = result.hu_levels.levels.seed_hu;
-      segmentation.bone_grow_hu = result.hu_levels.levels.grow_hu;
-      surface.bone_hu = result.hu_levels.levels.iso_hu;
-    }
-  });
-  // Contrast-filled lumens: not bone; their own mask and map when the scan has any.
-  auto vessel_owner = std::make_shared<Mask>();
-  if (!labels.vessel.data.empty()) {  // labelled vessels replace the search
-    result.vessel_voxels = count_nonzero(labels.vessel);
-    record.structures["vessel"] = labelled_vessel_json(labels, result.vessel_voxels);
-    *vessel_owner = std::move(labels.vessel);
-  } else if (params.find_vessels) {
-    stage("vessels", [&] {
-      const HuLevels& h = result.hu_levels;
-      const double soft = h.peak_found ? h.soft_peak_hu : kNominalSoftTissueHu + h.offset_hu;
-      VesselResult v = segment_vessels(ct, body, soft, segmentation.bone_seed_hu, params.vessels);
-      result.contrast_phase = v.contrast_phase;
-      result.vessel_voxels = v.voxels;
-      if (v.voxels > 0) record.structures["vessel"] = vessel_json(v);
-      *vessel_owner = std::move(v.lumen);
+// The labelled vertebrae and ribs, each its own value, written as they are.
+void PrepRun::record_skeleton() {
+  if (labels_.skeleton.data.empty()) return;
+  nlohmann::json names = nlohmann::json::object();
+  for (std::size_t v = 0; v < labels_.skeleton_names.size(); ++v)
+    names[std::to_string(v + 1)] = labels_.skeleton_names[v];
+  record_.skeleton = {
+      {"file", kSkeletonLabelsFile}, {"source", params_.labels_path}, {"labels", names}};
+  write_in_background("bg write skeleton labels", kSkeletonLabelsFile,
+                      std::make_shared<Mask>(std::move(labels_.skeleton)));
+}
+
+// The map of `mask` into map_ on the CT's grid, upsampled to the maps' grid when refined, then
+// (the skin's, when `hu`) projected onto the HU iso-surface at the maps' nodes.
+void PrepRun::compute_map(const Mask& mask, const SurfacePoints& points, const CtVolume* hu) {
+  const Refinement& refine = record_.refine;
+  if (subvoxel_) {
+    subvoxel_signed_distance(points, mask, band_, params_.distance.band_mm, map_,
+                             params_.distance.threads);
+  } else {
+    signed_distance(mask, params_.distance, map_);
+  }
+  if (is_refined(refine)) map_ = upsample_aligned(map_, refine, params_.distance.threads);
+  if (subvoxel_ && hu != nullptr)
+    record_.projected = project_skin_map(*hu, mask, params_.surface.skin_hu, projection_,
+                                         params_.distance.band_mm, map_, params_.distance.threads);
+}
+
+// d_surf needs only the CT, the body mask and the skin level: it is computed and written on a
+// thread of its own (surf_job_) while this one segments the bone (mostly one core), then its
+// buffer serves d_bone.
+void PrepRun::start_surface_job() {
+  const Grid& grid = ct_owner_->grid;
+  subvoxel_ = params_.surface.method == SurfaceMethod::subvoxel;
+  band_ = record_.band_mm = subvoxel_band_mm(params_.surface, grid);
+  projection_ = record_.projection_mm = skin_projection_mm(params_.surface, grid);
+  record_skeleton();
+  // The maps' grid: the CT's, or its aligned refinement (--map-spacing; prep/maps/map_refine.hpp).
+  record_.refine = map_refinement(result_.grid, params_.map_spacing_mm);
+  result_.map_grid = refined_grid(result_.grid, record_.refine);
+  surf_ct_ = ct_owner_;
+  if (subvoxel_) {
+    surf_job_.add("skin points", [&] {
+      skin_points_ =
+          surface_points(*surf_ct_, body_, params_.surface.skin_hu, params_.distance.threads);
+      skin_count_[0] = skin_points_.points.size();
+      skin_count_[1] = skin_points_.interpolated;
     });
   }
-  const bool has_vessels = result.vessel_voxels > 0;
-  if (has_vessels) write_in_background("bg write vessel", kVesselFile, vessel_owner);
-  const bool labelled_bone = !labels.bone.data.empty();
-  if (labelled_bone) {  // the union of the label map's bone classes, as it is
-    *bone_owner = std::move(labels.bone);
+  surf_job_.add("d_surf", [&] {
+    compute_map(body_, skin_points_, subvoxel_ && projection_ != 0.0 ? surf_ct_.get() : nullptr);
+    surf_ct_.reset();
+    skin_points_ = SurfacePoints{};
+    value_range(map_, record_.surf_range, params_.distance.threads);
+  });
+  surf_job_.add("write d_surf", [&] {
+    write_atomically(dir_ / kSurfaceDistanceFile, map_, record_.surf_range[0],
+                     record_.surf_range[1]);
+  });
+}
+
+// The bone levels, shifted with the scan's soft-tissue peak unless given
+// (prep/segment/hu_levels.hpp).
+void PrepRun::hu_levels() {
+  stage("HU levels", [&] {
+    result_.hu_levels = estimate_hu_levels(
+        *ct_owner_, body_,
+        {segmentation_.bone_seed_hu, segmentation_.bone_grow_hu, surface_.bone_hu});
+    if (params_.adapt_bone_levels) {
+      segmentation_.bone_seed_hu = result_.hu_levels.levels.seed_hu;
+      segmentation_.bone_grow_hu = result_.hu_levels.levels.grow_hu;
+      surface_.bone_hu = result_.hu_levels.levels.iso_hu;
+    }
+  });
+}
+
+// Contrast-filled lumens: labelled ones replace the search.
+void PrepRun::vessels() {
+  if (!labels_.vessel.data.empty()) {
+    result_.vessel_voxels = count_nonzero(labels_.vessel);
+    record_.structures["vessel"] = labelled_vessel_json(labels_, result_.vessel_voxels);
+    *vessel_owner_ = std::move(labels_.vessel);
+  } else if (params_.find_vessels) {
+    stage("vessels", [&] {
+      const HuLevels& h = result_.hu_levels;
+      const double soft = h.peak_found ? h.soft_peak_hu : kNominalSoftTissueHu + h.offset_hu;
+      VesselResult v =
+          segment_vessels(*ct_owner_, body_, soft, segmentation_.bone_seed_hu, params_.vessels);
+      result_.contrast_phase = v.contrast_phase;
+      result_.vessel_voxels = v.voxels;
+      if (v.voxels > 0) record_.structures["vessel"] = vessel_json(v);
+      *vessel_owner_ = std::move(v.lumen);
+    });
+  }
+  has_vessels_ = result_.vessel_voxels > 0;
+  if (has_vessels_) write_in_background("bg write vessel", kVesselFile, vessel_owner_);
+}
+
+// The bone mask (a label map's bone classes as they are, or segmented) and its points; the CT
+// is released here (its writers and d_surf's projection may still hold it).
+void PrepRun::bone_mask() {
+  const CtVolume& ct = *ct_owner_;
+  labelled_bone_ = !labels_.bone.data.empty();
+  if (labelled_bone_) {
+    *bone_owner_ = std::move(labels_.bone);
   } else {
     stage("bone mask", [&] {
-      *bone_owner = segment_bone(ct, body, segmentation, &result.stats,
-                                 has_vessels ? vessel_owner.get() : nullptr);
+      *bone_owner_ = segment_bone(ct, body_, segmentation_, &result_.stats,
+                                  has_vessels_ ? vessel_owner_.get() : nullptr);
     });
   }
-  write_in_background("bg write bone", kBoneFile, bone_owner);
-  if (subvoxel) {
+  write_in_background("bg write bone", kBoneFile, bone_owner_);
+  if (subvoxel_) {
     stage("bone points", [&] {
-      bone_points = surface_points(ct, bone, surface.bone_hu, params.distance.threads);
+      bone_points_ = surface_points(ct, bone_, surface_.bone_hu, params_.distance.threads);
     });
   }
-  ct_owner.reset();
-  result.stats.body_voxels = count_nonzero(body);
-  result.stats.bone_voxels = count_nonzero(bone);
-  record.structures["bone"] = labelled_bone ? labelled_bone_json(labels, result.stats.bone_voxels)
-                                            : auto_structure_json("bone", result.stats.bone_voxels,
-                                                                  {kBoneFile, kBoneDistanceFile});
+  ct_owner_.reset();
+  result_.stats.body_voxels = count_nonzero(body_);
+  result_.stats.bone_voxels = count_nonzero(bone_);
+  record_.structures["bone"] =
+      labelled_bone_
+          ? labelled_bone_json(labels_, result_.stats.bone_voxels)
+          : auto_structure_json("bone", result_.stats.bone_voxels, {kBoneFile, kBoneDistanceFile});
+}
+
+void PrepRun::wait_surface_and_writes() {
   std::vector<BackgroundWrites::Done> written;
-  stage("wait d_surf", [&] { written = surf_job.wait(); });
+  stage("wait d_surf", [&] { written = surf_job_.wait(); });
   report_background(written);
-  if (subvoxel) {
-    record.point_counts = {{"skin", {skin_count[0], skin_count[1]}},
-                           {"bone", {bone_points.points.size(), bone_points.interpolated}}};
+  if (subvoxel_) {
+    record_.point_counts = {{"skin", {skin_count_[0], skin_count_[1]}},
+                            {"bone", {bone_points_.points.size(), bone_points_.interpolated}}};
   }
   // The CT's copy and the masks are out by now (they usually are long before).
-  stage("wait CT+masks", [&] { written = writes.wait(); });
+  stage("wait CT+masks", [&] { written = writes_.wait(); });
   report_background(written);
+}
 
-  stage("d_bone", [&] { compute_map(bone, bone_points, nullptr); });
-  bone_points = SurfacePoints{};
-  value_range(map, record.bone_range, params.distance.threads);
+// d_bone, in d_surf's buffer.
+void PrepRun::bone_map() {
+  stage("d_bone", [&] { compute_map(bone_, bone_points_, nullptr); });
+  bone_points_ = SurfacePoints{};
+  value_range(map_, record_.bone_range, params_.distance.threads);
   stage("write d_bone", [&] {
-    write_atomically(dir / kBoneDistanceFile, map, record.bone_range[0], record.bone_range[1]);
+    write_atomically(dir_ / kBoneDistanceFile, map_, record_.bone_range[0], record_.bone_range[1]);
   });
-  if (has_vessels) {
-    stage("d_vessel", [&] {
-      signed_distance(*vessel_owner, params.distance, map);
-      if (is_refined(refine)) map = upsample_aligned(map, refine, params.distance.threads);
-      value_range(map, record.vessel_range, params.distance.threads);
-    });
-    vessel_owner.reset();
-    stage("write d_vessel", [&] {
-      write_atomically(dir / kVesselDistanceFile, map, record.vessel_range[0],
-                       record.vessel_range[1]);
-    });
-  }
-  if (!structures.empty()) {  // one at a time: a CT-sized mask and the maps' buffer
+}
+
+// d_vessel (to the mask's faces), in the same buffer, when the scan has vessels.
+void PrepRun::vessel_map() {
+  if (!has_vessels_) return;
+  stage("d_vessel", [&] {
+    signed_distance(*vessel_owner_, params_.distance, map_);
+    if (is_refined(record_.refine))
+      map_ = upsample_aligned(map_, record_.refine, params_.distance.threads);
+    value_range(map_, record_.vessel_range, params_.distance.threads);
+  });
+  vessel_owner_.reset();
+  stage("write d_vessel", [&] {
+    write_atomically(dir_ / kVesselDistanceFile, map_, record_.vessel_range[0],
+                     record_.vessel_range[1]);
+  });
+}
+
+// One at a time: a CT-sized mask and the maps' buffer.
+void PrepRun::structure_maps() {
+  if (!structures_.empty()) {
     stage("structures", [&] {
-      write_labelled_structures(structures, result.grid, params.distance, refine, dir, map,
-                                record.structures, record.structure_files);
+      write_labelled_structures(structures_, result_.grid, params_.distance, record_.refine, dir_,
+                                map_, record_.structures, record_.structure_files);
     });
   }
-  result.structures = structure_summaries(record.structures);
+  result_.structures = structure_summaries(record_.structures);
+}
 
-  result.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  result.peak_rss_bytes = peak_rss_bytes();
+// prep.json, written last: until it is there the directory is not a valid cache.
+PrepResult PrepRun::finish() {
+  result_.total_seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+  result_.peak_rss_bytes = peak_rss_bytes();
+  write_json_atomically(dir_ / kPrepJsonFile,
+                        prep_record_json(result_, params_, segmentation_, surface_, record_, dir_));
+  guard_.commit();
+  return take_result();
+}
 
-  write_json_atomically(dir / kPrepJsonFile,
-                        prep_json(result, params, segmentation, surface, record, dir));
-  guard.commit();
-  return result;
+}  // namespace
+
+PrepResult run_prep(const std::string& input, const std::string& out_dir, const PrepParams& params,
+                    const PrepProgress& progress) {
+  check_distance_band(params.distance.band_mm);  // before anything is read or written
+  PrepRun run(input, out_dir, params, progress);
+  run.create_directory();
+  if (run.served_from_cache()) return run.take_result();
+  run.forget_previous_run();      // prep.json and structures an earlier run wrote
+  run.read_input();               // CT, checked in HU, axis-aligned
+  run.read_labels();              // --labels; the CT's copy starts writing
+  run.body_mask();                // body mask, written in the background
+  run.start_surface_job();        // skin points, d_surf and its write on a thread of their own
+  run.hu_levels();                // the bone levels from the soft-tissue peak
+  run.vessels();                  // contrast-filled lumens (or the labelled vessels)
+  run.bone_mask();                // bone mask and points; the CT released
+  run.wait_surface_and_writes();  // d_surf, the CT's copy and the masks are out
+  run.bone_map();                 // d_bone, in d_surf's buffer
+  run.vessel_map();               // d_vessel, when there are vessels
+  run.structure_maps();           // arteries, organs, muscles: <name>, d_<name>
+  return run.finish();            // prep.json, last
 }
 
 }  // namespace palp

@@ -34,7 +34,7 @@
 #include <vector>
 
 #include "devices/device.hpp"
-#include "model/falcon_kinematics.hpp"
+#include "devices/falcon_kinematics.hpp"
 #include "rt/snapshot.hpp"
 #include "usb/falcon_protocol.hpp"
 #include "usb/usb_context.hpp"

@@ -17,7 +17,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "model/falcon_kinematics.hpp"
+#include "devices/falcon_kinematics.hpp"
 
 namespace {
 

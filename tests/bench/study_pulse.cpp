@@ -50,7 +50,7 @@
 
 #include "bench/closed_loop.hpp"
 #include "bench/study_util.hpp"
-#include "model/falcon_kinematics.hpp"
+#include "devices/falcon_kinematics.hpp"
 #include "model/structure_layers.hpp"
 #include "safety/force_chain.hpp"
 #include "safety/safety.hpp"

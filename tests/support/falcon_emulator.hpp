@@ -1,6 +1,6 @@
 // An emulated Novint Falcon for tests, on the umockdev USB emulator (usb_emulator.hpp), written
 // from the published protocol and not from palp's: it includes neither server/usb/falcon_protocol
-// nor common/model/falcon_kinematics, so a wrong bit, sign or length in palp cannot pass by being
+// nor server/devices/falcon_kinematics, so a wrong bit, sign or length in palp cannot pass by being
 // shared (falcon_reference_test.cpp checks the includes). Every wire constant below is transcribed
 // from libnifalcon (github.com/libnifalcon/libnifalcon, commit f7c727a, BSD-3) with its file and
 // line; the mechanism uses the transcription of libnifalcon's Stamper kinematics in

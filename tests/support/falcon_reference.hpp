@@ -1,7 +1,7 @@
 // An independent transcription, for tests only, of the Novint Falcon's published constants and of
 // libnifalcon's Stamper kinematics (Alastair Barrow's, after R. E. Stamper 1997): palp's own code
 // in test support, written from the equations in libnifalcon, not from palp's
-// common/model/falcon_kinematics or server/usb/falcon_protocol (neither is included here, nor by
+// server/devices/falcon_kinematics or server/usb/falcon_protocol (neither is included here, nor by
 // the Falcon emulator that uses this file).
 //
 // Source: github.com/libnifalcon/libnifalcon, commit f7c727aa24403ea10dc1507d7d396eeb7d55564a

@@ -26,6 +26,7 @@
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
+#include "prep/maps/lower_envelope.hpp"
 
 namespace palp {
 namespace {
@@ -64,54 +65,6 @@ struct Box {
   Index3 lo{0, 0, 0};  // inclusive
   Index3 hi{0, 0, 0};  // exclusive
   std::int64_t size(int axis) const { return hi[axis] - lo[axis]; }
-};
-
-// Lower envelope of parabolas y = f[q] + (w (x - q))^2 over sites q with finite f (Felzenszwalb
-// and Huttenlocher 2012), evaluated at every x in [0, n): argmin[x] receives the winning site,
-// or -1 when no site exists. Scratch is owned by the caller so a pass allocates nothing per line.
-struct Envelope {
-  std::vector<std::int32_t> sites;
-  std::vector<double> site_value;  // f[q] + w2 q^2 of each site in the envelope
-  std::vector<double> bounds;
-
-  void reserve(std::int64_t n) {
-    sites.resize(static_cast<std::size_t>(n));
-    site_value.resize(static_cast<std::size_t>(n));
-    bounds.resize(static_cast<std::size_t>(n) + 1);
-  }
-
-  // f[q] < 0 marks "no site at q". w2 = spacing^2 along the line.
-  void solve(const double* f, std::int64_t n, double w2, std::int32_t* argmin) {
-    std::size_t count = 0;  // parabolas in the envelope
-    for (std::int64_t q = 0; q < n; ++q) {
-      if (f[q] < 0.0) continue;
-      const double dq = static_cast<double>(q);
-      const double fq = f[q] + w2 * dq * dq;
-      while (count > 0) {
-        const double s = (fq - site_value[count - 1]) /
-                         (2.0 * w2 * (dq - static_cast<double>(sites[count - 1])));
-        if (s > bounds[count - 1]) {
-          bounds[count] = s;
-          break;
-        }
-        --count;
-      }
-      if (count == 0) bounds[0] = -std::numeric_limits<double>::infinity();
-      sites[count] = static_cast<std::int32_t>(q);
-      site_value[count] = fq;
-      ++count;
-      bounds[count] = std::numeric_limits<double>::infinity();
-    }
-    if (count == 0) {
-      std::fill(argmin, argmin + n, -1);
-      return;
-    }
-    std::size_t segment = 0;
-    for (std::int64_t x = 0; x < n; ++x) {
-      while (bounds[segment + 1] < static_cast<double>(x)) ++segment;
-      argmin[x] = sites[segment];
-    }
-  }
 };
 
 // Bounding box of the nonzero voxels; empty (lo == hi) when there are none.
@@ -193,7 +146,7 @@ struct LineBlock {
   std::vector<double> f;              // one line's parabola heights
   std::vector<std::int32_t> argmin;   // one line's winning sites
   std::vector<std::uint32_t> staged;  // one line's results, committed once both classes are done
-  Envelope envelope;
+  LowerEnvelope envelope;
 
   explicit LineBlock(std::int64_t n) : length(n) {
     const auto size = static_cast<std::size_t>(n);
@@ -219,7 +172,18 @@ struct LineBlock {
       const double fq = cls[i] != target ? 0.0 : height(value[i]);
       f[static_cast<std::size_t>(q)] = fq > reach2 ? -1.0 : fq;
     }
-    envelope.solve(f.data(), length, w2, argmin.data());
+    // f[q] < 0 marks "no site at q"; argmin[x] receives the winning site, or -1 without one.
+    if (envelope.build(length, w2, [this](std::int64_t q, double& fq) {
+          fq = f[static_cast<std::size_t>(q)];
+          return !(fq < 0.0);
+        }) == 0) {
+      std::fill(argmin.begin(), argmin.end(), -1);
+    } else {
+      envelope.for_each_span(
+          length, [this](std::int64_t x0, std::int64_t x1, std::int64_t q, double) {
+            std::fill(argmin.begin() + x0, argmin.begin() + x1, static_cast<std::int32_t>(q));
+          });
+    }
     for (std::int64_t x = 0; x < length; ++x) {
       if (cls[at(x, line)] == target) emit(x, argmin[static_cast<std::size_t>(x)]);
     }
@@ -308,6 +272,37 @@ void pass_k(LineBlock& block, std::int64_t width, double sx2, double sy2, double
   }
 }
 
+// `out` on `grid`, every voxel outside beyond the band (-band); its memory reused when it fits.
+void fill_outside(const Grid& grid, float band, unsigned threads, DistanceMap& out) {
+  if (out.data.size() == grid.voxel_count()) {
+    out.grid = grid;
+    parallel_for_chunks(
+        grid.dims[2], 8,
+        [&](std::int64_t k0, std::int64_t k1) {
+          std::fill(out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k0)),
+                    out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k1)), -band);
+        },
+        threads);
+  } else {
+    out = DistanceMap();  // release the old memory before taking the new
+    out = DistanceMap(grid, -band, "distance map");
+  }
+}
+
+// Crop: voxels farther than the band (+ h/2 offset, + one voxel) from the inside box are
+// outside and clamped, so the transform only runs inside this box. The nearest site of every
+// voxel in the box lies in the box (clamping a site onto the box never lengthens the path).
+Box crop_box(const Box& inside, const Grid& grid, double band_mm) {
+  const double h = grid.min_spacing();
+  Box box;
+  for (int a = 0; a < 3; ++a) {
+    const auto margin = static_cast<std::int64_t>(std::ceil((band_mm + h) / grid.spacing[a])) + 1;
+    box.lo[a] = std::max<std::int64_t>(0, inside.lo[a] - margin);
+    box.hi[a] = std::min<std::int64_t>(grid.dims[a], inside.hi[a] + margin);
+  }
+  return box;
+}
+
 }  // namespace
 
 DistanceMap signed_distance(const Mask& mask, const DistanceParams& params) {
@@ -333,32 +328,10 @@ void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap
   const Index3 n = grid.dims;
   const double h = grid.min_spacing();
 
-  if (out.data.size() == grid.voxel_count()) {
-    out.grid = grid;
-    parallel_for_chunks(
-        n[2], 8,
-        [&](std::int64_t k0, std::int64_t k1) {
-          std::fill(out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k0)),
-                    out.data.begin() + static_cast<std::ptrdiff_t>(grid.linear(0, 0, k1)), -band);
-        },
-        threads);
-  } else {
-    out = DistanceMap();  // release the old memory before taking the new
-    out = DistanceMap(grid, -band, "distance map");
-  }
+  fill_outside(grid, band, threads, out);
   const Box inside = inside_bounds(mask, threads);
   if (inside.size(0) <= 0) return;  // no inside voxel: everything is outside, beyond the band
-
-  // Crop: voxels farther than the band (+ h/2 offset, + one voxel) from the inside box are
-  // outside and clamped, so the transform only runs inside this box. The nearest site of every
-  // voxel in the box lies in the box (clamping a site onto the box never lengthens the path).
-  Box box;
-  for (int a = 0; a < 3; ++a) {
-    const auto margin =
-        static_cast<std::int64_t>(std::ceil((params.band_mm + h) / grid.spacing[a])) + 1;
-    box.lo[a] = std::max<std::int64_t>(0, inside.lo[a] - margin);
-    box.hi[a] = std::min<std::int64_t>(n[a], inside.hi[a] + margin);
-  }
+  const Box box = crop_box(inside, grid, params.band_mm);
   const std::int64_t bx = box.size(0), by = box.size(1), bz = box.size(2);
   // The output array doubles as the packed-offset store until pass k turns it into floats.
   PackedView packed{out.data.data()};

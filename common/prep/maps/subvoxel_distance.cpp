@@ -10,11 +10,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
 
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
 #include "prep/maps/distance_transform.hpp"
+#include "prep/maps/lower_envelope.hpp"
 #include "prep/maps/map_rounding.hpp"
 
 namespace palp {
@@ -29,64 +29,29 @@ namespace {
 
 constexpr float kNone = std::numeric_limits<float>::infinity();
 
-// Lower envelope of y = f[q] + w2 (x - q)^2 over the q with finite f, written over f. Each site
-// keeps its f and f + w2 q^2, so f itself can be overwritten without a copy of it.
-struct Parabolas {
-  std::vector<std::int32_t> sites;
-  std::vector<double> bounds;
-  std::vector<double> site_f;      // f[q] of each site in the envelope
-  std::vector<double> site_value;  // f[q] + w2 q^2 of each site in the envelope
-  explicit Parabolas(std::int64_t n)
-      : sites(static_cast<std::size_t>(n)),
-        bounds(static_cast<std::size_t>(n) + 1),
-        site_f(static_cast<std::size_t>(n)),
-        site_value(static_cast<std::size_t>(n)) {}
-
-  void solve(float* f, std::int64_t n, double w2, double reach2) {
-    // f <= reach2 exactly when f <= the largest float not above reach2 (a float compare).
-    float reach2f = static_cast<float>(reach2);
-    if (static_cast<double>(reach2f) > reach2)
-      reach2f = std::nextafter(reach2f, -std::numeric_limits<float>::infinity());
-    std::size_t count = 0;
-    for (std::int64_t q = 0; q < n; ++q) {
-      if (!(f[q] <= reach2f)) continue;
-      const double fq = f[q] + w2 * static_cast<double>(q) * static_cast<double>(q);
-      while (count > 0) {
-        const auto p = sites[count - 1];
-        const double s = (fq - site_value[count - 1]) / (2.0 * w2 * static_cast<double>(q - p));
-        if (s > bounds[count - 1]) {
-          bounds[count] = s;
-          break;
-        }
-        --count;
-      }
-      if (count == 0) bounds[0] = -std::numeric_limits<double>::infinity();
-      sites[count] = static_cast<std::int32_t>(q);
-      site_f[count] = f[q];
-      site_value[count] = fq;
-      ++count;
-      bounds[count] = std::numeric_limits<double>::infinity();
-    }
-    if (count == 0) {
-      std::fill(f, f + n, kNone);
-      return;
-    }
-    // Site s is the lowest at the x with bounds[s] < x <= bounds[s + 1] (the bounds rise).
-    std::int64_t x = 0;
-    for (std::size_t segment = 0; segment < count && x < n; ++segment) {
-      const double bound = bounds[segment + 1];
-      const std::int64_t end = bound >= static_cast<double>(n - 1) ? n
-                               : bound < 0.0                       ? 0
-                                             : static_cast<std::int64_t>(bound) + 1;  // floor
-      const double height = site_f[segment];
-      const std::int64_t q = sites[segment];
-      for (; x < end; ++x) {
-        const double c = static_cast<double>(x - q);
-        f[x] = static_cast<float>(height + w2 * c * c);
-      }
-    }
+// Lower envelope of y = f[q] + w2 (x - q)^2 over the q with f[q] <= reach2, written over f
+// (lower_envelope.hpp; each site keeps its f, so f itself can be overwritten without a copy).
+void envelope_on_line(LowerEnvelope& envelope, float* f, std::int64_t n, double w2, double reach2) {
+  // f <= reach2 exactly when f <= the largest float not above reach2 (a float compare).
+  float reach2f = static_cast<float>(reach2);
+  if (static_cast<double>(reach2f) > reach2)
+    reach2f = std::nextafter(reach2f, -std::numeric_limits<float>::infinity());
+  const auto site = [f, reach2f](std::int64_t q, double& fq) {
+    if (!(f[q] <= reach2f)) return false;
+    fq = f[q];
+    return true;
+  };
+  if (envelope.build(n, w2, site) == 0) {
+    std::fill(f, f + n, kNone);
+    return;
   }
-};
+  envelope.for_each_span(n, [f, w2](std::int64_t x0, std::int64_t x1, std::int64_t q, double fq) {
+    for (std::int64_t x = x0; x < x1; ++x) {
+      const double c = static_cast<double>(x - q);
+      f[x] = static_cast<float>(fq + w2 * c * c);
+    }
+  });
+}
 
 // 1D pass along a line: on entry f[q] holds the fraction t of the point on the edge (q, q+1), or
 // a negative value for none; on exit the squared distance (mm^2) to the nearest point, or kNone.
@@ -286,10 +251,9 @@ void squared_point_distance(const SurfacePoints& surface, double reach2, std::ve
   const double s0 = grid.spacing[0], s1 = grid.spacing[1], s2 = grid.spacing[2];
   auto envelope = [reach2](double w2) {
     return [w2, reach2](float* f, std::int64_t len) {
-      thread_local std::unique_ptr<Parabolas> parabolas;
-      if (!parabolas || static_cast<std::int64_t>(parabolas->sites.size()) < len)
-        parabolas = std::make_unique<Parabolas>(len);
-      parabolas->solve(f, len, w2, reach2);
+      thread_local LowerEnvelope lines;
+      if (lines.capacity() < len) lines.reserve(len);
+      envelope_on_line(lines, f, len, w2, reach2);
     };
   };
   auto nearest = [](double w) {
@@ -344,6 +308,20 @@ void squared_point_distance(const SurfacePoints& surface, double reach2, std::ve
         }
       },
       threads);
+}
+
+// Slices [k0, k1) of `map` rounded to 1/1024 mm (map_rounding.hpp) and clamped to +-clamp.
+void round_and_clamp(DistanceMap& map, std::int64_t k0, std::int64_t k1, float clamp) {
+  const Grid& grid = map.grid;
+  const std::size_t count = static_cast<std::size_t>(grid.dims[0] * grid.dims[1]);
+  for (std::int64_t k = k0; k < k1; ++k) {
+    float* slice = &map.data[grid.linear(0, 0, k)];
+    for (std::size_t v = 0; v < count; ++v) {
+      const float rounded = round_to_map_step(slice[v]);
+      const float above = rounded < -clamp ? -clamp : rounded;  // std::clamp, by value:
+      slice[v] = clamp < above ? clamp : above;                 // a select vectorizes
+    }
+  }
 }
 
 // Within `band_mm` of each point: the minimum of |map| and the distance to the point's disc,
@@ -419,16 +397,7 @@ void refine_near_surface(const SurfacePoints& surface, const Mask& mask, double 
             }
           }
         }
-        // Round to 1/1024 mm (map_rounding.hpp) and clamp.
-        for (std::int64_t k = k0; k < k1; ++k) {
-          float* slice = &map.data[grid.linear(0, 0, k)];
-          const std::size_t count = static_cast<std::size_t>(n[0] * n[1]);
-          for (std::size_t v = 0; v < count; ++v) {
-            const float rounded = round_to_map_step(slice[v]);
-            const float above = rounded < -clamp ? -clamp : rounded;  // std::clamp, by value:
-            slice[v] = clamp < above ? clamp : above;                 // a select vectorizes
-          }
-        }
+        round_and_clamp(map, k0, k1, clamp);
       },
       threads);
 }

@@ -393,6 +393,62 @@ void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
     throw UsageError("segment_vessels: unusable parameters");
 }
 
+// Opens the candidates: those within split_mm of a voxel split_mm deep, so that a bridge of
+// partial volume thinner than twice that (a lumen resting on a vertebra, a rib) parts them.
+// `cores` receives 1 split_mm deep in the candidates, kTrunkCore trunk_core_mm deep (one float
+// map, its buffer reused for the reach from the cores).
+Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& cores) {
+  const Grid& g = candidates.grid;
+  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double split = std::max(params.split_mm, h_min);
+  DistanceMap depth =
+      signed_distance(candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0});
+  cores = Mask(g, 0, "vessel cores");
+  for (std::size_t n = 0; n < cores.size(); ++n) {
+    const double d = depth.data[n] + 0.5 * h_min;
+    cores.data[n] = !candidates.data[n]         ? 0
+                    : d >= params.trunk_core_mm ? kTrunkCore
+                    : d >= split                ? 1
+                                                : 0;
+  }
+  signed_distance(cores, {split + 3.0 * h_max, 0}, depth);
+  Mask opened(g, 0, "vessel parts");
+  for (std::size_t n = 0; n < opened.size(); ++n)
+    opened.data[n] = candidates.data[n] && 0.5 * h_min - depth.data[n] <= split + h_min;
+  return opened;
+}
+
+// Closes the lumens over flap and plaque shadows (never into cortex), adds the wall's partial
+// volume and fills their notches.
+void close_lumens(const CtVolume& ct, const Mask& body, const Mask& cortex, const Mask& near,
+                  const std::vector<std::int16_t>& hu, int low_hu, int max_pool_hu,
+                  const VesselParams& params, Mask& lumen) {
+  const Grid& g = ct.grid;
+  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const auto below_cortex = [&](std::size_t n) {
+    return body.data[n] && !cortex.data[n] && hu[n] < max_pool_hu;
+  };
+  const int steps = std::max(1, static_cast<int>(std::lround(params.closing_mm / h_min)));
+  Mask closed = lumen;
+  const auto off_cortex = [&](std::size_t n) { return below_cortex(n) && !near.data[n]; };
+  for (int s = 0; s < steps; ++s) closed = dilate_once(closed, off_cortex);
+  for (int s = 0; s < steps; ++s) closed = erode_once(closed);
+  for (std::size_t n = 0; n < closed.size(); ++n) closed.data[n] |= lumen.data[n];
+  // the wall's partial volume: one voxel of contrast level beside the lumen, not by cortex (a
+  // lumen's edge blurred into its wall, which bone's growing level would otherwise take)
+  lumen = dilate_once(closed, [&](std::size_t n) {
+    return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu;
+  });
+  // a voxel with the lumen on four or more of its six faces is the lumen's: a flap's bright
+  // sliver or a corner of its edge, read as a ridge (cortex beside a lumen has its bone behind
+  // it: at most three faces on the lumen)
+  Mask notch_room(g, 0, "lumen notch room");
+  for (std::size_t n = 0; n < notch_room.size(); ++n)
+    notch_room.data[n] = body.data[n] && hu[n] < max_pool_hu;
+  segmentation::fill_notches(notch_room, kLumenNotchFaces, lumen);
+}
+
 }  // namespace
 
 VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_peak_hu,
@@ -411,28 +467,8 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   for (std::size_t n = 0; n < ct.size(); ++n)
     candidates.data[n] =
         body.data[n] && !near.data[n] && ct.data[n] >= low_hu && hu[n] < max_pool_hu;
-  // open: the candidates within split_mm of a voxel split_mm deep, so that a bridge of partial
-  // volume thinner than twice that (a lumen resting on a vertebra, a rib) parts them
-  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
-  const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
-  const double split = std::max(params.split_mm, h_min);
-  // cores: 1 split_mm deep in the candidates, kTrunkCore trunk_core_mm deep (one float map,
-  // its buffer reused for the reach from the cores)
-  DistanceMap depth =
-      signed_distance(candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0});
-  Mask cores(g, 0, "vessel cores");
-  for (std::size_t n = 0; n < cores.size(); ++n) {
-    const double d = depth.data[n] + 0.5 * h_min;
-    cores.data[n] = !candidates.data[n]         ? 0
-                    : d >= params.trunk_core_mm ? kTrunkCore
-                    : d >= split                ? 1
-                                                : 0;
-  }
-  signed_distance(cores, {split + 3.0 * h_max, 0}, depth);
-  Mask opened(g, 0, "vessel parts");
-  for (std::size_t n = 0; n < opened.size(); ++n)
-    opened.data[n] = candidates.data[n] && 0.5 * h_min - depth.data[n] <= split + h_min;
-  depth = DistanceMap{};
+  Mask cores;
+  const Mask opened = open_candidates(candidates, params, cores);
   // parts: 6-connected, with their size, level, spread, trunk core and cortex contact
   const RunTable runs = extract_runs(opened, false);
   const RunLabels labels = label_runs(g, runs);
@@ -469,28 +505,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   if (params.find_branches)
     grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu,
                   bone_seed_hu + params.branch_cortex_margin_hu, params, result.lumen);
-  // close: flap and plaque shadows inside a lumen, never into cortex
-  const auto below_cortex = [&](std::size_t n) {
-    return body.data[n] && !cortex.data[n] && hu[n] < max_pool_hu;
-  };
-  const int steps = std::max(1, static_cast<int>(std::lround(params.closing_mm / h_min)));
-  Mask closed = result.lumen;
-  const auto off_cortex = [&](std::size_t n) { return below_cortex(n) && !near.data[n]; };
-  for (int s = 0; s < steps; ++s) closed = dilate_once(closed, off_cortex);
-  for (int s = 0; s < steps; ++s) closed = erode_once(closed);
-  for (std::size_t n = 0; n < closed.size(); ++n) closed.data[n] |= result.lumen.data[n];
-  // the wall's partial volume: one voxel of contrast level beside the lumen, not by cortex (a
-  // lumen's edge blurred into its wall, which bone's growing level would otherwise take)
-  result.lumen = dilate_once(closed, [&](std::size_t n) {
-    return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu;
-  });
-  // a voxel with the lumen on four or more of its six faces is the lumen's: a flap's bright
-  // sliver or a corner of its edge, read as a ridge (cortex beside a lumen has its bone behind
-  // it: at most three faces on the lumen)
-  Mask notch_room(g, 0, "lumen notch room");
-  for (std::size_t n = 0; n < notch_room.size(); ++n)
-    notch_room.data[n] = body.data[n] && hu[n] < max_pool_hu;
-  segmentation::fill_notches(notch_room, kLumenNotchFaces, result.lumen);
+  close_lumens(ct, body, cortex, near, hu, low_hu, max_pool_hu, params, result.lumen);
   result.voxels = segmentation::count_nonzero(result.lumen);
   result.contrast_phase = result.lumen_level_hu - soft_peak_hu >= params.arterial_above_soft_hu
                               ? "arterial"

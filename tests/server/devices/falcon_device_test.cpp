@@ -21,7 +21,7 @@
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
 #include "loop/haptic_loop.hpp"
-#include "model/falcon_kinematics.hpp"
+#include "devices/falcon_kinematics.hpp"
 #include "model/registration.hpp"
 #include "net/server.hpp"
 #include "safety/engagement.hpp"

@@ -8,7 +8,7 @@
 // Jacobian: implicit differentiation of G(t1, q) = (X)^2 + (Z)^2 - L(v)^2 = 0 with
 // X = u + c - a cos t1, Z = w - a sin t1, dL/dv = -cot t3:
 //   dt1/dq = -(2X, 2 L cot t3, 2Z) / (2a (X sin t1 - Z cos t1)),  dt1/dp = dt1/dq R(phi_i).
-#include "model/falcon_kinematics.hpp"
+#include "devices/falcon_kinematics.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
-// common/model/falcon_kinematics.cpp: forward / inverse round trip within 1 um over the workspace,
+// server/devices/falcon_kinematics.cpp: forward / inverse round trip within 1 um over the workspace,
 // the Jacobian against central finite differences, force -> efforts -> mechanism within 1 %, and
 // efforts limited to the firmware's documented cap with the force's direction kept (never clipped
 // motor by motor, never wrapped). falcon_reference_test.cpp compares all this with libnifalcon.
-#include "model/falcon_kinematics.hpp"
+#include "devices/falcon_kinematics.hpp"
 
 #include <gtest/gtest.h>
 

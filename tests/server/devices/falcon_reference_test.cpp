@@ -1,4 +1,4 @@
-// common/model/falcon_kinematics.cpp against an independent transcription of libnifalcon's
+// server/devices/falcon_kinematics.cpp against an independent transcription of libnifalcon's
 // Stamper kinematics (tests/support/falcon_reference.hpp, each equation cited there): encoder ->
 // angle, angles -> position (forward), position -> angles (inverse), force -> motor efforts, at a
 // 9 x 9 x 9 grid over +-40 mm about the centre and at literal reference vectors. The expectations
@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "model/falcon_kinematics.hpp"
+#include "devices/falcon_kinematics.hpp"
 #include "support/falcon_reference.hpp"
 
 namespace palp {
@@ -203,7 +203,7 @@ TEST(FalconReference, EmulatorAndReferenceIncludeNoPalpFalconHeader) {
     while (std::getline(in, line)) {
       if (line.rfind("#include", 0) != 0) continue;
       EXPECT_EQ(line.find("usb/falcon_protocol.hpp"), std::string::npos) << file << ": " << line;
-      EXPECT_EQ(line.find("model/falcon_kinematics.hpp"), std::string::npos)
+      EXPECT_EQ(line.find("falcon_kinematics.hpp"), std::string::npos)
           << file << ": " << line;
     }
   }
