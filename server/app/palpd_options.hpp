@@ -8,9 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/cli.hpp"
-#include "cli/commands.hpp"
-#include "cli/palpd_task.hpp"
+#include "cli_common/cli.hpp"
+#include "app/palpd_task.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
 #include "net/server.hpp"
@@ -43,7 +42,7 @@ struct PalpdOptions {
   double duration_s = 0;  // 0: until SIGINT / SIGTERM
   std::string record_dir;
   std::string stats_json;  // "" : none
-  cli::TaskOptions task;   // --landmarks, --task*: training tasks (palpd_task.hpp)
+  app::TaskOptions task;   // --landmarks, --task*: training tasks (palpd_task.hpp)
 };
 
 // nullopt: --help was asked for (the caller prints palpd_help()).

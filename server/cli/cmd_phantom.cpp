@@ -3,7 +3,7 @@
 #include <iostream>
 
 #include "base/patient_frame.hpp"
-#include "cli/cli.hpp"
+#include "cli_common/cli.hpp"
 #include "cli/commands.hpp"
 #include "io/ct_io.hpp"
 #include "io/phantom.hpp"

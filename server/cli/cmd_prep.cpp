@@ -4,7 +4,7 @@
 
 #include "base/parallel.hpp"
 #include "base/patient_frame.hpp"
-#include "cli/cli.hpp"
+#include "cli_common/cli.hpp"
 #include "cli/commands.hpp"
 #include "prep/labels/label_maps.hpp"
 #include "prep/prep.hpp"
