@@ -271,7 +271,4 @@ class StreamClient {
 // the network thread. palpview asks before it opens its window.
 std::string connect_refusal(const StreamOptions& options);
 
-// "HOST:PORT" (or "[v6]:PORT") -> host and port (1..65535); UsageError when malformed.
-void parse_host_port(const std::string& text, std::string& host, std::uint16_t& port);
-
 }  // namespace palp::view

@@ -15,12 +15,12 @@
 #include "asio.hpp"
 #include "base/errors.hpp"
 #include "cli_common/cli.hpp"
+#include "client_core/host_port.hpp"
+#include "client_core/server_link.hpp"
 #include "cli/commands.hpp"
 #include "cli_common/config_file.hpp"
 #include "console/ctl_task.hpp"
-#include "console/server_link.hpp"
 #include "cli_common/tls_options.hpp"
-#include "net/protocol.hpp"
 #include "scene/trajectory.hpp"
 #include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
@@ -398,7 +398,7 @@ class Session {
   std::chrono::steady_clock::duration timeout_;
   asio::io_context io_;
   tls::ClientContext* tls_ = nullptr;
-  ServerLink link_;
+  client::ServerLink link_;
   std::size_t next_ = 0;
   bool welcomed_ = false, refused_ = false, any_ok_ = false;
   bool waiting_for_after_ = false, after_scene_ = false, after_stats_ = false;
@@ -423,12 +423,10 @@ int cmd_ctl(const Arguments& argv) {
   const std::vector<std::string>& pos = args.positional();
   if (pos.empty()) throw UsageError("ctl needs HOST:PORT and an ACTION");
   const std::string& target = pos[0];
-  const auto colon = target.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == target.size())
-    throw UsageError("ctl needs HOST:PORT, got '" + target + "'");
-  std::string host = target.substr(0, colon);
-  if (host.size() > 2 && host.front() == '[' && host.back() == ']')
-    host = host.substr(1, host.size() - 2);
+  std::string host;
+  std::uint16_t port = 0;
+  if (const std::string why = client::host_port_problem(target, host, port); !why.empty())
+    throw UsageError("ctl needs HOST:PORT, got '" + target + "': " + why);
   std::vector<std::string> words(pos.begin() + 1, pos.end());
   for (const char* option : {"side", "space", "interspace"})  // task start's (ctl_task.hpp)
     if (const auto value = args.get(option)) {
@@ -450,7 +448,7 @@ int cmd_ctl(const Arguments& argv) {
   hello.set_client_name(args.get("name").value_or("palp-ctl"));
   hello.set_frame_rate_hz(1.0);  // frames are not what ctl is for
   const std::unique_ptr<tls::ClientContext> tls = client_tls(args);
-  Session session(host, target.substr(colon + 1), hello, action, timeout, tls.get());
+  Session session(host, std::to_string(port), hello, action, timeout, tls.get());
   return session.run();
 }
 

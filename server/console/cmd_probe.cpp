@@ -21,12 +21,12 @@
 #include "base/patient_frame.hpp"
 #include "console/check_rate.hpp"
 #include "cli_common/cli.hpp"
+#include "client_core/host_port.hpp"
+#include "client_core/server_link.hpp"
 #include "cli/commands.hpp"
 #include "console/probe_dds.hpp"
-#include "console/server_link.hpp"
 #include "cli_common/tls_options.hpp"
 #include "loop/haptic_loop.hpp"
-#include "net/protocol.hpp"
 #include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
 
@@ -252,7 +252,7 @@ class Probe {
   std::int64_t duration_ns_, stall_ns_;
   asio::io_context io_;
   tls::ClientContext* tls_ = nullptr;
-  ServerLink link_;
+  client::ServerLink link_;
   asio::steady_timer timer_;
   Report report_;
   bool loopback_ = false;
@@ -281,12 +281,10 @@ int cmd_probe(const Arguments& argv) {
   }
   if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT (or --check-rate HZ)");
   const std::string target = args.positional()[0];
-  const auto colon = target.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == target.size())
-    throw UsageError("probe needs HOST:PORT, got '" + target + "'");
-  std::string host = target.substr(0, colon);
-  if (host.size() > 2 && host.front() == '[' && host.back() == ']')
-    host = host.substr(1, host.size() - 2);
+  std::string host;
+  std::uint16_t port = 0;
+  if (const std::string why = client::host_port_problem(target, host, port); !why.empty())
+    throw UsageError("probe needs HOST:PORT, got '" + target + "': " + why);
   const double duration = args.number("duration", 5.0);
   const double rate = args.number("rate", 0.0);
   const double stall = args.number("stall", 1.0);
@@ -310,7 +308,7 @@ int cmd_probe(const Arguments& argv) {
   hello.set_volume_max_dim(static_cast<std::uint32_t>(max_dim));
 
   const std::unique_ptr<tls::ClientContext> tls = client_tls(args);
-  Probe probe(host, target.substr(colon + 1), hello, duration, stall, tls.get());
+  Probe probe(host, std::to_string(port), hello, duration, stall, tls.get());
   Report r = probe.run();
   const double span_s = static_cast<double>(r.last_rx_ns - r.first_rx_ns) * 1e-9;
   const double fps = r.frames > 1 && span_s > 0 ? static_cast<double>(r.frames - 1) / span_s : 0.0;

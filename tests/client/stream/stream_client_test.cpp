@@ -154,56 +154,6 @@ StreamOptions options_for(std::uint16_t port) {
   return o;
 }
 
-// ------------------------------------------------------------------------------ parse_host_port
-
-TEST(ParseHostPort, AcceptsHostsAndBracketedIpv6) {
-  std::string host;
-  std::uint16_t port = 0;
-  view::parse_host_port("127.0.0.1:7400", host, port);
-  EXPECT_EQ(host, "127.0.0.1");
-  EXPECT_EQ(port, 7400);
-  view::parse_host_port("lab-pc.example:1", host, port);
-  EXPECT_EQ(host, "lab-pc.example");
-  EXPECT_EQ(port, 1);
-  view::parse_host_port("[::1]:65535", host, port);
-  EXPECT_EQ(host, "::1");
-  EXPECT_EQ(port, 65535);
-}
-
-TEST(ParseHostPort, RejectsMalformedInputWithTheReason) {
-  const std::vector<std::pair<std::string, std::string>> cases = {
-      {"", "missing ':PORT'"},
-      {"localhost", "missing ':PORT'"},
-      {"localhost:", "empty port"},
-      {":7400", "empty host"},
-      {"localhost:0", "out of range"},
-      {"localhost:65536", "out of range"},
-      {"localhost:1234567", "out of range"},
-      {"localhost:74a0", "not a number"},
-      {"localhost:+80", "not a number"},
-      {"localhost: 80", "not a number"},
-      {"::1:7400", "brackets"},
-      {"[::1]7400", "missing ':PORT'"},
-      {"[::1", "missing ']'"},
-      {"[localhost]:80", "brackets are for IPv6"},
-      {"[]:80", "brackets are for IPv6"},
-      {"bad host:80", "invalid character"},
-  };
-  for (const auto& [text, why] : cases) {
-    std::string host = "unchanged";
-    std::uint16_t port = 9;
-    try {
-      view::parse_host_port(text, host, port);
-      ADD_FAILURE() << "accepted '" << text << "'";
-    } catch (const UsageError& e) {
-      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << text << ": " << e.what();
-      EXPECT_NE(std::string(e.what()).find("'" + text + "'"), std::string::npos) << e.what();
-    }
-    EXPECT_EQ(host, "unchanged");
-    EXPECT_EQ(port, 9);
-  }
-}
-
 TEST(StreamClient, RejectsUnusableOptions) {
   StreamOptions o;
   o.port = 0;

@@ -1,6 +1,6 @@
 // The connection of a command-line console (palp probe, palp ctl) to palpd: ClientMessages
 // written one at a time (TLS allows one write in flight), ServerMessages decoded from the bytes
-// as they come. The console connects the stream (tls::async_connect), then calls read() once;
+// as they come (ServerMessageReader, as palpview's connection thread decodes them). The console connects the stream (tls::async_connect), then calls read() once;
 // every message and failure goes to its handlers until close().
 #pragma once
 
@@ -9,16 +9,15 @@
 #include <deque>
 #include <functional>
 #include <string>
-#include <string_view>
 #include <utility>
 
 #include "asio.hpp"
+#include "client_core/message_reader.hpp"
 #include "palp.pb.h"
 #include "tls/stream.hpp"
-#include "wire/framing.hpp"
 #include "wire/messages.hpp"
 
-namespace palp::cli {
+namespace palp::client {
 
 class ServerLink {
  public:
@@ -33,7 +32,7 @@ class ServerLink {
       : stream_(io),
         peer_(std::move(peer)),
         handlers_(std::move(handlers)),
-        decoder_(wire::kDefaultMaxServerFrame) {}
+        reader_(peer_) {}
 
   tls::Stream& stream() { return stream_; }
   bool closed() const { return closed_; }
@@ -56,16 +55,13 @@ class ServerLink {
                                                          : "connection lost: " + ec.message());
           }
           if (handlers_.bytes) handlers_.bytes(n);
-          decoder_.feed(buffer_.data(), n);
-          std::string_view body;
+          reader_.feed(buffer_.data(), n);
           for (;;) {
-            const wire::FrameStatus status = decoder_.next(body);
-            if (status == wire::FrameStatus::Incomplete) break;
-            if (status != wire::FrameStatus::Ok)
-              return handlers_.fail("bad frame from " + peer_ + ": " + wire::to_string(status));
             v1::ServerMessage m;
-            if (!m.ParseFromArray(body.data(), static_cast<int>(body.size())))
-              return handlers_.fail("undecodable message from " + peer_);
+            std::string why;
+            const ServerMessageReader::Next next = reader_.next(m, why);
+            if (next == ServerMessageReader::Next::Incomplete) break;
+            if (next == ServerMessageReader::Next::Broken) return handlers_.fail(why);
             handlers_.message(m);
             if (closed_) return;
           }
@@ -87,9 +83,9 @@ class ServerLink {
   std::string peer_;
   Handlers handlers_;
   std::deque<std::string> outbox_;
-  wire::FrameDecoder decoder_;
+  ServerMessageReader reader_;
   std::array<std::uint8_t, 65536> buffer_{};
   bool closed_ = false;
 };
 
-}  // namespace palp::cli
+}  // namespace palp::client
