@@ -18,8 +18,7 @@
 // This file: the connection, its thread, reading and writing, reconnecting and housekeeping.
 // Elsewhere in stream/: Impl's declaration (stream_client_impl.hpp), the message handlers
 // (server_messages.cpp) and the pure pieces they use, none of which sees Asio: handshake.*,
-// volume_assembly.*, frame_decoding.*, clock_sync.*; to_string is in stream_text.cpp, HOST:PORT in
-// proto/client_core/host_port.*.
+// volume_assembly.*, frame_decoding.*, clock_sync.*; HOST:PORT is in proto/client_core/host_port.*.
 #include "stream/stream_client.hpp"
 
 #include <algorithm>

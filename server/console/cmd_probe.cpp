@@ -17,18 +17,20 @@
 #include <vector>
 
 #include "asio.hpp"
+#include "base/device_state.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
-#include "console/check_rate.hpp"
+#include "cli/commands.hpp"
 #include "cli_common/cli.hpp"
+#include "cli_common/tls_options.hpp"
 #include "client_core/host_port.hpp"
 #include "client_core/server_link.hpp"
-#include "cli/commands.hpp"
+#include "console/check_rate.hpp"
 #include "console/probe_dds.hpp"
-#include "cli_common/tls_options.hpp"
 #include "loop/haptic_loop.hpp"
 #include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
+#include "wire/messages.hpp"
 
 namespace palp::cli {
 namespace {
@@ -260,6 +262,14 @@ class Probe {
   std::uint64_t ping_id_ = 0;
 };
 
+// The device state's name (base/device_state.hpp); the wire's own zero is "unspecified", and a
+// number palp.v1 does not define "?".
+const char* device_state_text(v1::DeviceState state) {
+  if (state == v1::DEVICE_STATE_UNSPECIFIED) return "unspecified";
+  const DeviceState known = wire::from_proto(state);
+  return known == DeviceState::Unknown ? "?" : to_string(known);
+}
+
 std::string json_number(double v) {
   if (!std::isfinite(v)) return "null";
   char text[64];
@@ -423,9 +433,7 @@ int cmd_probe(const Arguments& argv) {
           static_cast<unsigned long long>(s.faults()), s.jitter_max_us(), s.tick_mean_us(),
           s.clients(), s.realtime() ? "real time" : "not real time");
       // the device as palpd sees it (e.g. a Falcon: homing, what to do), and its link
-      static const char* const kStates[] = {"unspecified", "present", "absent", "fault"};
-      const int st = static_cast<int>(s.device_state());
-      std::printf("  status    device %s%s%s", st >= 0 && st <= 3 ? kStates[st] : "?",
+      std::printf("  status    device %s%s%s", device_state_text(s.device_state()),
                   s.device_message().empty() ? "" : ": ", s.device_message().c_str());
       if (s.device_exchanges() > 0)
         std::printf(

@@ -55,8 +55,8 @@ enum class DeviceStatus : std::uint8_t {
 };
 const char* to_string(DeviceStatus status);
 
-// DeviceState (snapshot.hpp): Present / Absent / Fault, as clients see it.
-const char* to_string(DeviceState state);
+// DeviceState (base/device_state.hpp, through snapshot.hpp): Present / Absent / Fault, as
+// clients see it; its names are base's.
 
 struct DeviceSample {
   Pose pose{};
