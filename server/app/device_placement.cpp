@@ -33,15 +33,16 @@ Vec3d workspace_half(const std::string& text) {
   return {v[0], v[1], v[2]};
 }
 
-// Devices with a frame of their own (usb-haptic, falcon) are registered onto the patient; devices that
-// move in the scene frame refuse registration options.
+// Devices that drive a hand from a frame of their own (usb-haptic, falcon) are registered onto the
+// patient; devices that move in the scene frame refuse registration options.
 std::optional<net::SceneDescription::Placement> place_device(const cli::Args& args,
-                                                             std::string_view kind,
+                                                             const rt::Device& device,
                                                              const Scene& scene, bool quiet) {
-  const bool placed = kind == "usb-haptic" || kind == "falcon";
+  const std::string_view kind = device.kind();  // for people only
+  const bool placed = device.drives_a_hand();
   const bool asked = args.get("device-axes") || args.get("device-scale") ||
                      args.get("workspace-mm") ||
-                     ((args.get("home") || args.get("home-clearance")) && kind != "spacemouse");
+                     ((args.get("home") || args.get("home-clearance")) && !device.takes_home());
   if (!placed) {
     // A config file written for the lab's device may be tried with --device sim: a note, not
     // an error.

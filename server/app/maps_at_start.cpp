@@ -54,8 +54,7 @@ std::size_t haptic_map_bytes(const FieldSampler& f) {
   return f.grid().voxel_count() * (f.bytes_per_voxel() + (f.has_bone_beneath() ? 4 : 0));
 }
 
-MapsAtStart maps_at_start(const cli::Args& args, const std::string& device_spec, std::string_view kind,
-                          Scene& scene,
+MapsAtStart maps_at_start(const cli::Args& args, const rt::Device& device, Scene& scene,
                           const std::optional<net::SceneDescription::Placement>& placement,
                           const Tool& tool, bool quiet) {
   MapsAtStart out;
@@ -70,20 +69,18 @@ MapsAtStart maps_at_start(const cli::Args& args, const std::string& device_spec,
                        "'");
   }
   if (mode == "off") return out;
-  const bool is_sim = kind == "sim";
+  std::optional<Trajectory> path;  // a scripted device's (sim), asked for with MM only
+  if (!placement && mode != "auto") path = device.scripted_path(*scene.fields, tool);
   Box reach;
   if (placement) {
     reach = placed_reach(placement->registration, placement->workspace_half_mm);
-  } else if (is_sim && mode != "auto") {
-    const Trajectory path = device_spec.size() > 4
-                                ? read_trajectory_csv(device_spec.substr(4))
-                                : rt::builtin_palpation_path(*scene.fields, tool);
-    reach = path_reach(path);
+  } else if (path) {
+    reach = path_reach(*path);
   } else {
     if (mode != "auto" && !quiet)
       std::fprintf(stderr,
                    "palpd: note: --map-window: the %s device's reach is not known: whole maps\n",
-                   std::string(kind).c_str());
+                   std::string(device.kind()).c_str());
     return out;
   }
   const Box box = grow(reach, margin + tool_reach(tool));

@@ -5,8 +5,8 @@
 //
 //   reach: a placed device (usb-haptic, falcon): its workspace box at the home, in the scene,
 //          widened by the margin (room for re-centres) and the tool's reach;
-//          sim / sim:FILE (only with --map-window MM): the box of its path's device positions,
-//          widened by the tool's reach and MM;
+//          a scripted device, sim / sim:FILE (its scripted_path(), only with --map-window MM):
+//          the box of its path's device positions, widened by the tool's reach and MM;
 //   -> window_sampler (the scene's scheme and storage; bone-beneath traced on the whole maps)
 //   -> the model's sampler; scene.fields becomes a values-only sampler of the whole maps
 //      (analytic gradient, float32: the render volume samples the same values bit for bit).
@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "cli_common/cli.hpp"
+#include "devices/device.hpp"
 #include "model/field_sampler.hpp"
 #include "model/map_window.hpp"
 #include "model/registration.hpp"
@@ -71,8 +72,9 @@ struct MapsAtStart {
 
 // With a reach known (see the top), builds the window and replaces scene.fields by the whole
 // maps' values-only sampler; otherwise returns scene.fields. UsageError for a bad --map-window.
-MapsAtStart maps_at_start(const cli::Args& args, const std::string& device_spec, std::string_view kind,
-                          Scene& scene,
+// The reach of a device placed on the patient comes from `placement`, else from the device's
+// scripted_path() (sim) with --map-window MM.
+MapsAtStart maps_at_start(const cli::Args& args, const rt::Device& device, Scene& scene,
                           const std::optional<net::SceneDescription::Placement>& placement,
                           const Tool& tool, bool quiet);
 

@@ -8,15 +8,15 @@
 #include <iostream>
 #include <system_error>
 
-#include "base/errors.hpp"
 #include "app/dds_options.hpp"
-#include "app/maps_at_start.hpp"
-#include "cli_common/model_setup.hpp"
-#include "app/rt_options.hpp"
-#include "cli_common/tls_options.hpp"
-#include "app/tune_at_start.hpp"
-#include "dds_common.hpp"
 #include "app/igtl_options.hpp"
+#include "app/maps_at_start.hpp"
+#include "app/rt_options.hpp"
+#include "app/tune_at_start.hpp"
+#include "base/errors.hpp"
+#include "cli_common/model_setup.hpp"
+#include "cli_common/tls_options.hpp"
+#include "dds_common.hpp"
 
 namespace palp::app {
 namespace {
@@ -193,11 +193,11 @@ struct ReplayDefaults {
 // A replay brings its own scene, tool, rate, profile and parameters unless given: read it, and
 // return the options it brings (empty when none) and its parameters (before the command line's).
 ReplayDefaults read_replay(PalpdOptions& o) {
-  o.replay = rt::read_recording(o.device_spec.substr(7));
+  o.replay = rt::read_recording(o.replay_path);
   const rt::Recording& replay = *o.replay;
   if (replay.truncated) {
     const std::string what =
-        o.device_spec.substr(7) + " ends inside a record (cut short, e.g. by a crash): " +
+        o.replay_path + " ends inside a record (cut short, e.g. by a crash): " +
         std::to_string(replay.records.size()) + " whole ticks" +
         (replay.records.empty() ? std::string()
                                 : ", the last seq " + std::to_string(replay.records.back().seq));
@@ -315,6 +315,7 @@ std::optional<PalpdOptions> parse_palpd_options(cli::Arguments argv) {
   o.device_spec = *device_spec;
   o.quiet = o.args.has("quiet");
   if (o.device_spec.rfind("replay:", 0) == 0) {
+    o.replay_path = o.device_spec.substr(7);
     auto [defaults, recorded_params] = read_replay(o);
     params_in.insert(params_in.begin(), recorded_params.begin(), recorded_params.end());
     if (!defaults.empty()) {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "cli_common/cli.hpp"
 #include "app/palpd_task.hpp"
+#include "cli_common/cli.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
 #include "net/server.hpp"
@@ -33,6 +33,7 @@ struct PalpdOptions {
   cli::Args args;  // with a replay's defaults in front of the command line
   std::string device_spec;
   bool quiet = false;
+  std::string replay_path;              // replay:FILE: FILE ("" for the other devices)
   std::optional<rt::Recording> replay;  // replay:FILE, read
   Tool tool;
   ForceParams params;

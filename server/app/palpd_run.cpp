@@ -11,19 +11,19 @@
 #include <optional>
 #include <string>
 
-#include "base/errors.hpp"
-#include "base/patient_frame.hpp"
 #include "app/dds_options.hpp"
 #include "app/device_placement.hpp"
 #include "app/falcon_options.hpp"
+#include "app/igtl_options.hpp"
 #include "app/maps_at_start.hpp"
-#include "cli_common/model_setup.hpp"
 #include "app/palpd_control.hpp"
+#include "app/tune_at_start.hpp"
+#include "base/errors.hpp"
+#include "base/patient_frame.hpp"
+#include "cli_common/model_setup.hpp"
 #include "cli_common/palpd_stats.hpp"
 #include "cli_common/tls_options.hpp"
-#include "app/tune_at_start.hpp"
 #include "devices/device.hpp"
-#include "app/igtl_options.hpp"
 #include "net/client_log.hpp"
 #include "safety/engagement.hpp"
 #include "scene/home_site.hpp"
@@ -127,7 +127,7 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
   device_config.timeout_s = std::max(o.loop.device_timeout_s, 0.01);
   // device frame -> scene: the registration of a device placed on the patient
   const std::optional<net::SceneDescription::Placement> placement =
-      app::place_device(o.args, device.kind(), scene, o.quiet);
+      app::place_device(o.args, device, scene, o.quiet);
   if (placement) o.loop.registration = placement->registration;
   app::orient_falcon(o.args, device, scene, placement);
   if (device.takes_home() && (o.args.get("home") || o.args.get("home-clearance")))
@@ -136,8 +136,7 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
     throw InputError("device " + o.device_spec + ": " + device.last_error());
   if (device.activate() != rt::DeviceStatus::Ok)
     throw InputError("device " + o.device_spec + ": " + device.last_error());
-  auto maps =
-      app::maps_at_start(o.args, o.device_spec, device.kind(), scene, placement, o.tool, o.quiet);
+  auto maps = app::maps_at_start(o.args, device, scene, placement, o.tool, o.quiet);
   if (maps.windowed)
     model = std::make_shared<const Model>(maps.haptic, o.tool, o.params, scene.layers);
   device_config.fields.reset();  // the whole maps' gradient fields go with the last holder
@@ -277,10 +276,8 @@ int serve(PalpdOptions& o, rt::Device& device, Built& b) {
   const auto igtl = app::igtl_beside(o.args, b.scene.grid, o.loop.rate_hz, server, o.quiet);
   const auto dds =
       app::dds_beside(o.args, description, loop, control, server, o.tool.name, o.quiet);
-  const std::string replay_path =
-      o.device_spec.rfind("replay:", 0) == 0 ? o.device_spec.substr(7) : std::string();
   const auto task =
-      app::task_beside(std::move(o.task), b.scene.grid, app, server, replay_path, o.quiet);
+      app::task_beside(std::move(o.task), b.scene.grid, app, server, o.replay_path, o.quiet);
 
   if (const auto record = o.args.get("record")) {
     const std::string failure = app.start(*record, "palpd --record");
