@@ -15,10 +15,10 @@
 
 #include "app/palpd_options.hpp"
 #include "app/palpd_run.hpp"
+#include "app/rt_options.hpp"
 #include "base/errors.hpp"
 #include "cli_common/cli.hpp"
 #include "cli_common/config_file.hpp"
-#include "app/rt_options.hpp"
 
 namespace palp {
 namespace {

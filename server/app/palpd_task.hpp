@@ -9,9 +9,9 @@
 #include <string>
 
 #include "anatomy/landmarks.hpp"
+#include "app/palpd_control.hpp"
 #include "base/volume.hpp"
 #include "cli_common/cli.hpp"
-#include "app/palpd_control.hpp"
 #include "net/server.hpp"
 #include "net/task_session.hpp"
 #include "training/task.hpp"

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "base/errors.hpp"
-#include "cli_common/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli_common/cli.hpp"
 #include "cli_common/config_file.hpp"
 #include "cli_common/model_setup.hpp"
 #include "model/force_model.hpp"

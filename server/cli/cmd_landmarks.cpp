@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include "anatomy/landmarks.hpp"
-#include "cli_common/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli_common/cli.hpp"
 #include "cli_common/scene_landmarks.hpp"
 #include "prep/prep.hpp"
 #include "scene/scene.hpp"

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "base/errors.hpp"
-#include "cli_common/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli_common/cli.hpp"
 #include "cli_common/model_setup.hpp"
 #include "io/ct_io.hpp"
 #include "prep/prep.hpp"

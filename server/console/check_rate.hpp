@@ -5,8 +5,8 @@
 // and a verdict.
 #pragma once
 
-#include "cli_common/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli_common/cli.hpp"
 
 namespace palp::cli {
 

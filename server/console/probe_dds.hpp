@@ -1,8 +1,8 @@
 // palp probe --dds: the DDS side of palp probe (cmd_probe_dds.cpp).
 #pragma once
 
-#include "cli_common/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli_common/cli.hpp"
 
 namespace palp::cli {
 

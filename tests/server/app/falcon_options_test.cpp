@@ -12,9 +12,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include "app/falcon_options.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
-#include "app/falcon_options.hpp"
 #include "devices/falcon_device.hpp"
 #include "model/registration.hpp"
 #include "support/cli_test_util.hpp"

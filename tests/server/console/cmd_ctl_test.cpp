@@ -9,8 +9,8 @@
 
 #include "rt/recording.hpp"
 #include "support/cli_test_util.hpp"
-#include "support/outside_address.hpp"
 #include "support/net_test_client.hpp"
+#include "support/outside_address.hpp"
 #include "support/palpd_process.hpp"
 
 namespace palp {
