@@ -15,10 +15,10 @@
 
 #include "app/palpd_options.hpp"
 #include "app/palpd_run.hpp"
+#include "app/rt_options.hpp"
 #include "base/errors.hpp"
-#include "cli/cli.hpp"
-#include "cli/config_file.hpp"
-#include "cli/rt_options.hpp"
+#include "cli_common/cli.hpp"
+#include "cli_common/config_file.hpp"
 
 namespace palp {
 namespace {
@@ -45,7 +45,7 @@ int run(const cli::Arguments& argv_in) {
   cli::Arguments from_config;
   if (config)
     from_config = cli::config_arguments(*config, app::palpd_flags(),
-                                        cli::with_rt_options(app::palpd_valued()), &lines);
+                                        app::with_rt_options(app::palpd_valued()), &lines);
   try {
     from_config.insert(from_config.end(), argv_in.begin(), argv_in.end());
     return run_configured(std::move(from_config));

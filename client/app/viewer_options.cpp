@@ -8,6 +8,7 @@
 #include <string>
 
 #include "base/errors.hpp"
+#include "client_core/host_port.hpp"
 #include "dds_common.hpp"
 #include "stream/stream_client.hpp"
 #include "tls/client_policy.hpp"
@@ -126,7 +127,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
     };
     if (arg == "-h" || arg == "--help") return std::nullopt;
     if (arg == "--connect") {
-      parse_host_port(value(), o.host, o.port);
+      client::parse_host_port(value(), o.host, o.port);
       have_connect = true;
     } else if (arg == "--dds") {  // [DOMAIN]
       o.dds = true;

@@ -17,24 +17,6 @@ std::string fixed(double value, int digits) {
   return buffer;
 }
 
-const char* link_label(LinkState state) {
-  switch (state) {
-    case LinkState::Connecting:
-      return "connecting";
-    case LinkState::Loading:
-      return "loading";
-    case LinkState::Live:
-      return "live";
-    case LinkState::Stalled:
-      return "stalled";
-    case LinkState::Reconnecting:
-      return "reconnecting";
-    case LinkState::Refused:
-      return "refused";
-  }
-  return "?";
-}
-
 }  // namespace
 
 std::string banner_text(const LatestState& state) {
@@ -98,7 +80,7 @@ std::string task_text(const LatestState& state) {
 std::string hud_text(const LatestState& state, const HudInputs& inputs) {
   const LinkStats& link = state.link;
   std::ostringstream out;
-  out << (inputs.controller ? "controller" : "observer") << "  link " << link_label(link.state);
+  out << (inputs.controller ? "controller" : "observer") << "  link " << to_string(link.state);
   if (link.connections > 1) out << " (reconnected " << link.connections - 1 << "x)";
   out << "\n";
   out << "view " << fixed(inputs.view_fps, 1) << " fps   stream " << fixed(link.frames_per_s, 0)

@@ -14,19 +14,6 @@
 
 namespace palp::view::net {
 
-DeviceState device_state_of(v1::DeviceState s) {
-  switch (s) {
-    case v1::DEVICE_PRESENT:
-      return DeviceState::Present;
-    case v1::DEVICE_ABSENT:
-      return DeviceState::Absent;
-    case v1::DEVICE_FAULT:
-      return DeviceState::Fault;
-    default:
-      return DeviceState::Unknown;
-  }
-}
-
 namespace {
 
 // SceneInfo.structures: at most kMaxStructures, labels 1..kMaxStructures increasing, names and
@@ -148,7 +135,7 @@ FrameState decode_frame(const v1::HapticFrame& f) {
   frame.tick_status = f.tick_status();
   frame.safety_status = f.safety_status();
   frame.fault = f.fault();
-  frame.device_state = device_state_of(f.device_state());
+  frame.device_state = palp::wire::from_proto(f.device_state());
   // The pulse, kept to its ranges whatever came (it only colours the artery and fills the HUD).
   const auto within = [](double v, double hi) { return std::isfinite(v) ? std::clamp(v, 0.0, hi) : 0.0; };
   frame.pulse_wave = within(f.pulse_wave(), 1.0);

@@ -1,4 +1,5 @@
-// palp.v1 -> plain structs (pure, no Asio): SceneInfo, HapticFrame and the device state.
+// palp.v1 -> plain structs (pure, no Asio): SceneInfo and HapticFrame (the device state by
+// proto/wire's from_proto).
 #pragma once
 
 #include <memory>
@@ -7,8 +8,6 @@
 #include "stream/stream_client.hpp"
 
 namespace palp::view::net {
-
-DeviceState device_state_of(v1::DeviceState s);
 
 // The scene the server describes; server_name is left empty (it comes with Welcome). Throws
 // ProtocolViolation when the grid is unusable (not 3 dims and spacings, out of range).

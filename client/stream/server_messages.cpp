@@ -243,7 +243,7 @@ void StreamClient::Impl::on_stats(Connection& c, const v1::Stats& s) {
   l.server_faults = s.faults();
   l.server_paused = s.paused();
   l.server_recording = s.recording();
-  l.device_state = net::device_state_of(s.device_state());
+  l.device_state = palp::wire::from_proto(s.device_state());
   l.device_message = s.device_message();
   if (s.has_registration_home()) {
     const Vec3d home = palp::wire::from_proto(s.registration_home());

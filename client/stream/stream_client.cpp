@@ -9,8 +9,8 @@
 // Connection it was started for and returns when that is no longer the current one, so a late
 // callback of a dropped connection never touches the next.
 //
-//   start_connect -> resolve -> connect -> Hello -> read loop: frames decoded by
-//   palp::wire::FrameDecoder -> on_message (Welcome, SceneInfo, VolumeChunk, HapticFrame, Stats,
+//   start_connect -> resolve -> connect -> Hello -> read loop: messages decoded by the client
+//   core's ServerMessageReader (proto/client_core/, as palp probe and palp ctl decode them) -> on_message (Welcome, SceneInfo, VolumeChunk, HapticFrame, Stats,
 //   CommandResult, Pong, Error) -> shared state
 //   housekeeping timer (every <= 50 ms): Pings, rates, latency median, Stalled, silence timeout
 //   drop(): close, Reconnecting, retry after reconnect_min_s * 2^attempt (capped)
@@ -18,8 +18,7 @@
 // This file: the connection, its thread, reading and writing, reconnecting and housekeeping.
 // Elsewhere in stream/: Impl's declaration (stream_client_impl.hpp), the message handlers
 // (server_messages.cpp) and the pure pieces they use, none of which sees Asio: handshake.*,
-// volume_assembly.*, frame_decoding.*, clock_sync.*; to_string and parse_host_port are in
-// stream_text.cpp.
+// volume_assembly.*, frame_decoding.*, clock_sync.*; HOST:PORT is in proto/client_core/host_port.*.
 #include "stream/stream_client.hpp"
 
 #include <algorithm>
@@ -33,12 +32,12 @@
 
 #include "asio.hpp"
 #include "base/errors.hpp"
+#include "client_core/host_port.hpp"
 #include "stream/clock_sync.hpp"
 #include "stream/handshake.hpp"
 #include "stream/protocol_checks.hpp"
 #include "stream/stream_client_impl.hpp"
 #include "tls/client_policy.hpp"
-#include "wire/framing.hpp"
 #include "wire/messages.hpp"
 
 namespace palp::view {
@@ -179,8 +178,7 @@ void StreamClient::Impl::start_connect() {
 }
 
 std::string StreamClient::Impl::endpoint_text() const {
-  return (opts.host.find(':') != std::string::npos ? "[" + opts.host + "]" : opts.host) + ":" +
-         std::to_string(opts.port);
+  return client::format_host_port(opts.host, opts.port);
 }
 
 void StreamClient::Impl::send_hello(Connection& c) {
@@ -248,19 +246,14 @@ void StreamClient::Impl::read(const ConnectionPtr& c) {
         }
         const std::int64_t now = now_ns();
         c->last_rx_ns = now;
-        c->decoder.feed(c->read_buffer.data(), n);
-        std::string_view body;
+        c->reader.feed(c->read_buffer.data(), n);
         v1::ServerMessage message;
         for (;;) {
-          const palp::wire::FrameStatus status = c->decoder.next(body);
-          if (status == palp::wire::FrameStatus::Incomplete) break;
-          if (status != palp::wire::FrameStatus::Ok) {
-            drop(c, std::string("bad frame from the server: ") + palp::wire::to_string(status));
-            return;
-          }
-          message.Clear();
-          if (!message.ParseFromArray(body.data(), static_cast<int>(body.size()))) {
-            drop(c, "undecodable message from the server");
+          std::string why;
+          const client::ServerMessageReader::Next next = c->reader.next(message, why);
+          if (next == client::ServerMessageReader::Next::Incomplete) break;
+          if (next == client::ServerMessageReader::Next::Broken) {
+            drop(c, why);
             return;
           }
           try {

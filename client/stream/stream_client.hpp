@@ -42,13 +42,31 @@
 #include <thread>
 #include <vector>
 
+#include "base/device_state.hpp"
 #include "base/vec.hpp"
 #include "model/force_model.hpp"
 
 namespace palp::view {
 
 enum class LinkState { Connecting, Loading, Live, Stalled, Reconnecting, Refused };
-const char* to_string(LinkState state);
+// Inline: the HUD (client/render), which does not link this library, prints it too.
+constexpr const char* to_string(LinkState state) {
+  switch (state) {
+    case LinkState::Connecting:
+      return "connecting";
+    case LinkState::Loading:
+      return "loading";
+    case LinkState::Live:
+      return "live";
+    case LinkState::Stalled:
+      return "stalled";
+    case LinkState::Reconnecting:
+      return "reconnecting";
+    case LinkState::Refused:
+      break;
+  }
+  return "refused";
+}
 
 struct StreamOptions {
   std::string host = "127.0.0.1";
@@ -144,9 +162,9 @@ struct ContactState {
   bool in_contact = false;
 };
 
-// Unknown: the server did not say (older palpd, or not yet).
-enum class DeviceState { Unknown, Present, Absent, Fault };
-const char* to_string(DeviceState state);
+// base/device_state.hpp; Unknown: the server did not say (older palpd, or not yet).
+using DeviceState = palp::DeviceState;
+using palp::to_string;
 
 struct FrameState {
   bool valid = false;  // false until the first frame of this connection
@@ -270,8 +288,5 @@ class StreamClient {
 // connect and goes Refused). Resolves the host, blocking; a host that does not resolve is left to
 // the network thread. palpview asks before it opens its window.
 std::string connect_refusal(const StreamOptions& options);
-
-// "HOST:PORT" (or "[v6]:PORT") -> host and port (1..65535); UsageError when malformed.
-void parse_host_port(const std::string& text, std::string& host, std::uint16_t& port);
 
 }  // namespace palp::view

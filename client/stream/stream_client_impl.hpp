@@ -14,12 +14,12 @@
 #include <vector>
 
 #include "asio.hpp"
+#include "client_core/message_reader.hpp"
 #include "palp.pb.h"
 #include "stream/clock_sync.hpp"
 #include "stream/stream_client.hpp"
 #include "stream/volume_assembly.hpp"
 #include "tls/tls_context.hpp"
-#include "wire/framing.hpp"
 
 namespace palp::view {
 
@@ -31,10 +31,10 @@ struct StreamClient::Impl {
   // One TCP connection attempt and its session.
   struct Connection {
     explicit Connection(asio::io_context& io)
-        : stream(io), resolver(io), decoder(palp::wire::kDefaultMaxServerFrame) {}
+        : stream(io), resolver(io), reader("the server") {}
     palp::tls::Stream stream;  // plain, or TLS once connected (opts.tls_*)
     tcp::resolver resolver;
-    palp::wire::FrameDecoder decoder;
+    client::ServerMessageReader reader;  // the frames decoded into ServerMessages
     std::array<std::uint8_t, 65536> read_buffer{};
     std::string out_pending, out_inflight;  // bytes to write / being written
     bool writing = false;

@@ -44,4 +44,31 @@ Pose from_proto(const v1::Pose& pose) {
   return p;
 }
 
+v1::DeviceState to_proto(DeviceState state) {
+  switch (state) {
+    case DeviceState::Present:
+      return v1::DEVICE_PRESENT;
+    case DeviceState::Absent:
+      return v1::DEVICE_ABSENT;
+    case DeviceState::Fault:
+      return v1::DEVICE_FAULT;
+    case DeviceState::Unknown:
+      break;
+  }
+  return v1::DEVICE_STATE_UNSPECIFIED;
+}
+
+DeviceState from_proto(v1::DeviceState state) {
+  switch (state) {
+    case v1::DEVICE_PRESENT:
+      return DeviceState::Present;
+    case v1::DEVICE_ABSENT:
+      return DeviceState::Absent;
+    case v1::DEVICE_FAULT:
+      return DeviceState::Fault;
+    default:
+      return DeviceState::Unknown;
+  }
+}
+
 }  // namespace palp::wire

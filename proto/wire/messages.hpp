@@ -1,10 +1,11 @@
-// palp.v1 helpers both ends of the wire use: a message's frame, and palp's vectors and poses
-// in and out of their protobuf forms. Server-only conversions (snapshots, client checks) live in
+// palp.v1 helpers both ends of the wire use: a message's frame, and palp's vectors, poses and
+// device states in and out of their protobuf forms. Server-only conversions (snapshots, client checks) live in
 // server/net/protocol.hpp; the client's decoding of frames lives in client/stream/.
 #pragma once
 
 #include <string>
 
+#include "base/device_state.hpp"
 #include "base/vec.hpp"
 #include "palp.pb.h"
 
@@ -22,5 +23,9 @@ void to_proto(const Vec3d& v, v1::Vec3* out);
 void to_proto(const Pose& pose, v1::Pose* out);
 Vec3d from_proto(const v1::Vec3& v);
 Pose from_proto(const v1::Pose& pose);
+// The device's state (base/device_state.hpp, the same numbers): Unknown goes out unspecified;
+// unspecified and numbers palp.v1 does not define come in Unknown.
+v1::DeviceState to_proto(DeviceState state);
+DeviceState from_proto(v1::DeviceState state);
 
 }  // namespace palp::wire

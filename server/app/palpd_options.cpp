@@ -8,15 +8,15 @@
 #include <iostream>
 #include <system_error>
 
+#include "app/dds_options.hpp"
+#include "app/igtl_options.hpp"
+#include "app/maps_at_start.hpp"
+#include "app/rt_options.hpp"
+#include "app/tune_at_start.hpp"
 #include "base/errors.hpp"
-#include "cli/dds_options.hpp"
-#include "cli/maps_at_start.hpp"
-#include "cli/model_setup.hpp"
-#include "cli/rt_options.hpp"
-#include "cli/tls_options.hpp"
-#include "cli/tune_at_start.hpp"
+#include "cli_common/model_setup.hpp"
+#include "cli_common/tls_options.hpp"
 #include "dds_common.hpp"
-#include "cli/igtl_options.hpp"
 
 namespace palp::app {
 namespace {
@@ -137,7 +137,7 @@ palpd refuses to start when the device, so placed, cannot reach 10 mm below the 
   -h, --help              show this help
 )";
 
-const std::vector<std::string> kFlags = cli::with_dds_flags(
+const std::vector<std::string> kFlags = app::with_dds_flags(
     {"help", "quiet", "no-realtime", "no-force-limits", "allow-truncated", "tune"});
 const std::vector<std::string> kValued = {"device",
                                           "tool",
@@ -183,7 +183,7 @@ const std::vector<std::string> kValued = {"device",
                                           "task-interspace",
                                           "task-report-dir"};
 const std::vector<std::string> kValuedAll =
-    cli::with_igtl_options(cli::with_dds_options(kValued));
+    app::with_igtl_options(app::with_dds_options(kValued));
 
 // What a replay brings: the options not given (--scene=..., ...) and its parameters.
 struct ReplayDefaults {
@@ -193,11 +193,11 @@ struct ReplayDefaults {
 // A replay brings its own scene, tool, rate, profile and parameters unless given: read it, and
 // return the options it brings (empty when none) and its parameters (before the command line's).
 ReplayDefaults read_replay(PalpdOptions& o) {
-  o.replay = rt::read_recording(o.device_spec.substr(7));
+  o.replay = rt::read_recording(o.replay_path);
   const rt::Recording& replay = *o.replay;
   if (replay.truncated) {
     const std::string what =
-        o.device_spec.substr(7) + " ends inside a record (cut short, e.g. by a crash): " +
+        o.replay_path + " ends inside a record (cut short, e.g. by a crash): " +
         std::to_string(replay.records.size()) + " whole ticks" +
         (replay.records.empty() ? std::string()
                                 : ", the last seq " + std::to_string(replay.records.back().seq));
@@ -243,7 +243,7 @@ net::ServerConfig server_config_from(const cli::Args& args, double rate_hz) {
     throw UsageError("--port must be an integer in 0..65535");
   server_config.port = static_cast<std::uint16_t>(port);
   server_config.token = args.get("token").value_or("");
-  (void)cli::dds_config_from(args, rate_hz);  // its refusals before TLS loads
+  (void)app::dds_config_from(args, rate_hz);  // its refusals before TLS loads
   server_config.tls = cli::server_tls(args);
   server_config.max_clients =
       static_cast<std::size_t>(option_within(args, "max-clients", 16, 1, 1024));
@@ -270,9 +270,9 @@ void make_record_dir(const std::string& record_dir) {
 }  // namespace
 
 std::string palpd_help() {
-  return std::string(kUsage) + cli::kSceneOptionsHelp + kOptions + cli::kTuneAtStartHelp +
-         cli::kMapWindowHelp + cli::kRtOptionsHelp + cli::kIgtlOptionsHelp +
-         cli::kDdsOptionsHelp;
+  return std::string(kUsage) + cli::kSceneOptionsHelp + kOptions + app::kTuneAtStartHelp +
+         app::kMapWindowHelp + app::kRtOptionsHelp + app::kIgtlOptionsHelp +
+         app::kDdsOptionsHelp;
 }
 
 const std::vector<std::string>& palpd_flags() {
@@ -302,7 +302,7 @@ double option_within(const cli::Args& args, const std::string& key, double fallb
 std::optional<PalpdOptions> parse_palpd_options(cli::Arguments argv) {
   argv = palp::dds::split_dds_domain(std::move(argv));  // --dds [DOMAIN]
   std::vector<std::string> params_in = cli::take_repeated(argv, "param");
-  std::vector<std::string> valued = cli::with_rt_options(cli::kSceneOptions);
+  std::vector<std::string> valued = app::with_rt_options(cli::kSceneOptions);
   valued.insert(valued.end(), kValuedAll.begin(), kValuedAll.end());
   PalpdOptions o(cli::Args(argv, kFlags, valued));
   if (o.args.has("help")) return std::nullopt;
@@ -315,6 +315,7 @@ std::optional<PalpdOptions> parse_palpd_options(cli::Arguments argv) {
   o.device_spec = *device_spec;
   o.quiet = o.args.has("quiet");
   if (o.device_spec.rfind("replay:", 0) == 0) {
+    o.replay_path = o.device_spec.substr(7);
     auto [defaults, recorded_params] = read_replay(o);
     params_in.insert(params_in.begin(), recorded_params.begin(), recorded_params.end());
     if (!defaults.empty()) {
@@ -329,11 +330,11 @@ std::optional<PalpdOptions> parse_palpd_options(cli::Arguments argv) {
   if (const auto name = args.get("device-profile")) o.profile = &device_profile(*name);
   o.loop = loop_config_from(args);
   o.server = server_config_from(args, o.loop.rate_hz);
-  cli::apply_rt_options(args, o.loop, o.server);
+  app::apply_rt_options(args, o.loop, o.server);
   o.duration_s = option_within(args, "duration", 0, 0, 1e7);
   o.record_dir = args.get("record-dir").value_or(".");
   make_record_dir(o.record_dir);
-  o.task = cli::task_options(args, o.record_dir);
+  o.task = app::task_options(args, o.record_dir);
   o.stats_json = args.get("stats-json").value_or("");
   (void)cli::scene_options(args);
   return o;

@@ -8,9 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/cli.hpp"
-#include "cli/commands.hpp"
-#include "cli/palpd_task.hpp"
+#include "app/palpd_task.hpp"
+#include "cli_common/cli.hpp"
 #include "loop/haptic_loop.hpp"
 #include "model/force_model.hpp"
 #include "net/server.hpp"
@@ -34,6 +33,7 @@ struct PalpdOptions {
   cli::Args args;  // with a replay's defaults in front of the command line
   std::string device_spec;
   bool quiet = false;
+  std::string replay_path;              // replay:FILE: FILE ("" for the other devices)
   std::optional<rt::Recording> replay;  // replay:FILE, read
   Tool tool;
   ForceParams params;
@@ -43,7 +43,7 @@ struct PalpdOptions {
   double duration_s = 0;  // 0: until SIGINT / SIGTERM
   std::string record_dir;
   std::string stats_json;  // "" : none
-  cli::TaskOptions task;   // --landmarks, --task*: training tasks (palpd_task.hpp)
+  app::TaskOptions task;   // --landmarks, --task*: training tasks (palpd_task.hpp)
 };
 
 // nullopt: --help was asked for (the caller prints palpd_help()).

@@ -11,19 +11,19 @@
 #include <optional>
 #include <string>
 
+#include "app/dds_options.hpp"
+#include "app/device_placement.hpp"
+#include "app/falcon_options.hpp"
+#include "app/igtl_options.hpp"
+#include "app/maps_at_start.hpp"
+#include "app/palpd_control.hpp"
+#include "app/tune_at_start.hpp"
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
-#include "cli/dds_options.hpp"
-#include "cli/device_placement.hpp"
-#include "cli/falcon_options.hpp"
-#include "cli/maps_at_start.hpp"
-#include "cli/model_setup.hpp"
-#include "cli/palpd_control.hpp"
-#include "cli/palpd_stats.hpp"
-#include "cli/tls_options.hpp"
-#include "cli/tune_at_start.hpp"
+#include "cli_common/model_setup.hpp"
+#include "cli_common/palpd_stats.hpp"
+#include "cli_common/tls_options.hpp"
 #include "devices/device.hpp"
-#include "cli/igtl_options.hpp"
 #include "net/client_log.hpp"
 #include "safety/engagement.hpp"
 #include "scene/home_site.hpp"
@@ -70,7 +70,7 @@ std::unique_ptr<rt::Device> open_device(PalpdOptions& o) {
   std::unique_ptr<rt::Device> device =
       o.replay ? std::make_unique<rt::ReplayDevice>(std::move(o.replay->records))
                : rt::make_device(o.device_spec);
-  cli::prepare_falcon(o.args, *device);  // the firmware file, before anything is awaited
+  app::prepare_falcon(o.args, *device);  // the firmware file, before anything is awaited
   choose_limits(o, *device);
   return device;
 }
@@ -78,10 +78,10 @@ std::unique_ptr<rt::Device> open_device(PalpdOptions& o) {
 // What the loop, the server and the clients are built on.
 struct Built {
   Scene scene;
-  cli::StartTuning tuning;
+  app::StartTuning tuning;
   std::shared_ptr<const Model> model;
   std::optional<net::SceneDescription::Placement> placement;  // a device placed on the patient
-  cli::MapsAtStart maps;
+  app::MapsAtStart maps;
   std::shared_ptr<const StructureLabels> structures;  // what the clients draw beyond skin, bone
 };
 
@@ -116,8 +116,8 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
   // the port first: a port in use is told before minutes of scene preparation
   net::check_listen_address(o.server.bind, o.server.port);
   Scene scene = cli::load_scene_for(o.args, "palpd", o.quiet);
-  cli::StartTuning tuning =
-      cli::tune_at_start(o.args, scene, o.tool, o.params, o.loop.rate_hz, o.quiet);
+  app::StartTuning tuning =
+      app::tune_at_start(o.args, scene, o.tool, o.params, o.loop.rate_hz, o.quiet);
   auto model = std::make_shared<const Model>(scene.fields, o.tool, o.params, scene.layers);
 
   rt::DeviceConfig device_config;
@@ -127,17 +127,16 @@ Built build_model(PalpdOptions& o, rt::Device& device) {
   device_config.timeout_s = std::max(o.loop.device_timeout_s, 0.01);
   // device frame -> scene: the registration of a device placed on the patient
   const std::optional<net::SceneDescription::Placement> placement =
-      cli::place_device(o.args, device.kind(), scene, o.quiet);
+      app::place_device(o.args, device, scene, o.quiet);
   if (placement) o.loop.registration = placement->registration;
-  cli::orient_falcon(o.args, device, scene, placement);
+  app::orient_falcon(o.args, device, scene, placement);
   if (device.takes_home() && (o.args.get("home") || o.args.get("home-clearance")))
     device_config.home = home_pose(o.args, scene);
   if (device.configure(device_config) != rt::DeviceStatus::Ok)
     throw InputError("device " + o.device_spec + ": " + device.last_error());
   if (device.activate() != rt::DeviceStatus::Ok)
     throw InputError("device " + o.device_spec + ": " + device.last_error());
-  auto maps =
-      cli::maps_at_start(o.args, o.device_spec, device.kind(), scene, placement, o.tool, o.quiet);
+  auto maps = app::maps_at_start(o.args, device, scene, placement, o.tool, o.quiet);
   if (maps.windowed)
     model = std::make_shared<const Model>(maps.haptic, o.tool, o.params, scene.layers);
   device_config.fields.reset();  // the whole maps' gradient fields go with the last holder
@@ -217,7 +216,7 @@ void print_start(const PalpdOptions& o, const rt::HapticLoop& loop, const net::S
 // Until the loop finishes, a signal comes (returned: SIGINT, SIGTERM; 0 otherwise) or
 // --duration passes.
 int wait_for_end(const PalpdOptions& o, const rt::HapticLoop& loop, const rt::Device& device,
-                 cli::MapsAtStart& maps, const sigset_t& signals, std::int64_t start_ns) {
+                 app::MapsAtStart& maps, const sigset_t& signals, std::int64_t start_ns) {
   // Hot-plug devices come and go: say so once per change (with the device's own words, e.g. the
   // udev rule to install), not once per tick.
   std::string device_report;
@@ -229,7 +228,7 @@ int wait_for_end(const PalpdOptions& o, const rt::HapticLoop& loop, const rt::De
       if (!o.quiet || loop.device_state() == rt::DeviceState::Fault)
         std::fprintf(stderr, "palpd: %s\n", report.c_str());
     }
-    cli::warn_if_home_left_window(maps, loop.registration_home());
+    app::warn_if_home_left_window(maps, loop.registration_home());
     timespec wait{0, 100'000'000};
     const int sig = sigtimedwait(&signals, nullptr, &wait);
     if (sig == SIGINT || sig == SIGTERM) return sig;
@@ -270,17 +269,15 @@ void finish_task(const PalpdOptions& o, net::TaskSession& task) {
 int serve(PalpdOptions& o, rt::Device& device, Built& b) {
   const sigset_t signals = block_stop_signals();
   rt::HapticLoop loop(b.model, device, o.loop);
-  cli::PalpdControl app(loop, b.maps.haptic, device, recording_metadata(o, b), o.record_dir);
+  app::PalpdControl app(loop, b.maps.haptic, device, recording_metadata(o, b), o.record_dir);
   const net::SceneDescription description = describe_scene(o, b);
-  cli::DdsControlGate control(app);  // palp.v1's and DDS's device poses, one at a time
+  app::DdsControlGate control(app);  // palp.v1's and DDS's device poses, one at a time
   net::Server server(o.server, description, loop, &control);
-  const auto igtl = cli::igtl_beside(o.args, b.scene.grid, o.loop.rate_hz, server, o.quiet);
+  const auto igtl = app::igtl_beside(o.args, b.scene.grid, o.loop.rate_hz, server, o.quiet);
   const auto dds =
-      cli::dds_beside(o.args, description, loop, control, server, o.tool.name, o.quiet);
-  const std::string replay_path =
-      o.device_spec.rfind("replay:", 0) == 0 ? o.device_spec.substr(7) : std::string();
+      app::dds_beside(o.args, description, loop, control, server, o.tool.name, o.quiet);
   const auto task =
-      cli::task_beside(std::move(o.task), b.scene.grid, app, server, replay_path, o.quiet);
+      app::task_beside(std::move(o.task), b.scene.grid, app, server, o.replay_path, o.quiet);
 
   if (const auto record = o.args.get("record")) {
     const std::string failure = app.start(*record, "palpd --record");

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "base/errors.hpp"
-#include "cli/cli.hpp"
 #include "cli/commands.hpp"
-#include "cli/config_file.hpp"
-#include "cli/model_setup.hpp"
+#include "cli_common/cli.hpp"
+#include "cli_common/config_file.hpp"
+#include "cli_common/model_setup.hpp"
 #include "model/force_model.hpp"
 #include "model/map_window.hpp"
 #include "scene/trajectory.hpp"

@@ -8,9 +8,9 @@
 #include <sstream>
 
 #include "anatomy/landmarks.hpp"
-#include "cli/cli.hpp"
 #include "cli/commands.hpp"
-#include "cli/scene_landmarks.hpp"
+#include "cli_common/cli.hpp"
+#include "cli_common/scene_landmarks.hpp"
 #include "prep/prep.hpp"
 #include "scene/scene.hpp"
 

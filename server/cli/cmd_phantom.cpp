@@ -3,8 +3,8 @@
 #include <iostream>
 
 #include "base/patient_frame.hpp"
-#include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli_common/cli.hpp"
 #include "io/ct_io.hpp"
 #include "io/phantom.hpp"
 #include "prep/reorient.hpp"

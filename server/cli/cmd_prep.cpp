@@ -4,8 +4,8 @@
 
 #include "base/parallel.hpp"
 #include "base/patient_frame.hpp"
-#include "cli/cli.hpp"
 #include "cli/commands.hpp"
+#include "cli_common/cli.hpp"
 #include "prep/labels/label_maps.hpp"
 #include "prep/prep.hpp"
 

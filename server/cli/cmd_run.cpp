@@ -8,11 +8,11 @@
 #include <iostream>
 #include <optional>
 
-#include "cli/cli.hpp"
 #include "cli/commands.hpp"
-#include "cli/config_file.hpp"
-#include "cli/model_setup.hpp"
 #include "cli/offline_run.hpp"
+#include "cli_common/cli.hpp"
+#include "cli_common/config_file.hpp"
+#include "cli_common/model_setup.hpp"
 #include "model/force_model.hpp"
 #include "safety/safety.hpp"
 #include "scene/trajectory.hpp"

@@ -10,10 +10,10 @@
 
 #include "anatomy/landmarks.hpp"
 #include "base/patient_frame.hpp"
-#include "cli/cli.hpp"
 #include "cli/commands.hpp"
-#include "cli/model_setup.hpp"
 #include "cli/task_options.hpp"
+#include "cli_common/cli.hpp"
+#include "cli_common/model_setup.hpp"
 #include "scene/search_path.hpp"
 #include "scene/trajectory.hpp"
 #include "scene/trajectory_gen.hpp"

@@ -17,9 +17,9 @@
 #include <vector>
 
 #include "base/errors.hpp"
-#include "cli/cli.hpp"
 #include "cli/commands.hpp"
-#include "cli/model_setup.hpp"
+#include "cli_common/cli.hpp"
+#include "cli_common/model_setup.hpp"
 #include "io/ct_io.hpp"
 #include "prep/prep.hpp"
 #include "tune/tuner.hpp"

@@ -2,12 +2,9 @@
 // errors are thrown as palp::Error (exit 1) or palp::UsageError (exit 2) and printed by main.
 #pragma once
 
-#include <string>
-#include <vector>
+#include "cli_common/cli.hpp"
 
 namespace palp::cli {
-
-using Arguments = std::vector<std::string>;
 
 int cmd_phantom(const Arguments& args);  // cmd_phantom.cpp
 int cmd_prep(const Arguments& args);     // cmd_prep.cpp

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "cli/cli.hpp"
+#include "cli_common/cli.hpp"
 #include "training/task.hpp"
 
 namespace palp::cli {

@@ -29,18 +29,6 @@ const char* to_string(DeviceStatus status) {
   return "error";
 }
 
-const char* to_string(DeviceState state) {
-  switch (state) {
-    case DeviceState::Present:
-      return "present";
-    case DeviceState::Absent:
-      return "absent";
-    case DeviceState::Fault:
-      break;
-  }
-  return "fault";
-}
-
 std::unique_ptr<Device> make_device(std::string_view spec) {
   const auto colon = spec.find(':');
   const std::string_view kind = spec.substr(0, colon);

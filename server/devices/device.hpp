@@ -55,8 +55,8 @@ enum class DeviceStatus : std::uint8_t {
 };
 const char* to_string(DeviceStatus status);
 
-// DeviceState (snapshot.hpp): Present / Absent / Fault, as clients see it.
-const char* to_string(DeviceState state);
+// DeviceState (base/device_state.hpp, through snapshot.hpp): Present / Absent / Fault, as
+// clients see it; its names are base's.
 
 struct DeviceSample {
   Pose pose{};
@@ -116,6 +116,15 @@ class Device {
   // Whether it takes a home pose on the patient (palpd --home, --home-clearance) while moving
   // in the scene frame (spacemouse).
   virtual bool takes_home() const noexcept { return false; }
+  // Not real time: the device positions it will play, when they are known before it runs (sim:
+  // its file or the built-in path for `fields` and `tool`); nullopt when they are not. palpd
+  // --map-window MM cuts the maps to their reach.
+  virtual std::optional<Trajectory> scripted_path(const FieldSampler& fields,
+                                                  const Tool& tool) const {
+    (void)fields;
+    (void)tool;
+    return std::nullopt;
+  }
   // Real time (atomic loads): what the device itself declares about its force, stiffness and
   // damping (0: not declared). The loop's limits are lowered to these, never raised.
   virtual DeclaredLimits declared_limits() const noexcept { return {}; }
@@ -150,6 +159,8 @@ class SimDevice final : public Device {
   DeviceStatus read(std::int64_t now_ns, DeviceSample& sample) noexcept override;
   DeviceStatus write(const DeviceCommand& command) noexcept override;
   DeviceStatus deactivate() override;
+  std::optional<Trajectory> scripted_path(const FieldSampler& fields,
+                                          const Tool& tool) const override;
 
   const Trajectory& trajectory() const { return trajectory_; }
   double period_s() const { return period_s_; }  // one loop of the path

@@ -56,6 +56,11 @@ DeviceStatus SimDevice::configure(const DeviceConfig& config) {
   return DeviceStatus::Ok;
 }
 
+std::optional<Trajectory> SimDevice::scripted_path(const FieldSampler& fields,
+                                                  const Tool& tool) const {
+  return trajectory_.empty() ? builtin_palpation_path(fields, tool) : trajectory_;
+}
+
 DeviceStatus SimDevice::activate() {
   if (trajectory_.empty()) return fail("sim: not configured");
   active_ = true;

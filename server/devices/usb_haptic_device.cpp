@@ -209,6 +209,7 @@ DeviceState UsbHapticDevice::state() const noexcept {
     case usb::LinkState::Fault:
       return DeviceState::Fault;
     case usb::LinkState::Absent:
+    case usb::LinkState::Unknown:  // a link is never unknown
       break;
   }
   return DeviceState::Absent;

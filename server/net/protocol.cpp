@@ -23,18 +23,6 @@ std::shared_ptr<const std::string> error_frame(v1::Error::Code code, const std::
 
 using wire::to_proto;
 
-v1::DeviceState to_proto(rt::DeviceState state) {
-  switch (state) {
-    case rt::DeviceState::Present:
-      return v1::DEVICE_PRESENT;
-    case rt::DeviceState::Absent:
-      return v1::DEVICE_ABSENT;
-    case rt::DeviceState::Fault:
-      return v1::DEVICE_FAULT;
-  }
-  return v1::DEVICE_STATE_UNSPECIFIED;
-}
-
 std::shared_ptr<const std::string> welcome_frame(std::uint64_t client_id, v1::Role role,
                                                  const std::string& server_name, double rate_hz,
                                                  std::int64_t now_ns) {

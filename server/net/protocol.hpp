@@ -15,8 +15,7 @@ namespace palp::net {
 
 using wire::kMaxNameBytes;
 using wire::kProtocolVersion;
-
-v1::DeviceState to_proto(rt::DeviceState state);
+using wire::to_proto;  // the device state among them (proto/wire/messages.hpp)
 
 // A ServerMessage's frame, shared by every client it is queued for; one holding an Error.
 std::shared_ptr<const std::string> frame_of(const v1::ServerMessage& message);

@@ -14,17 +14,16 @@
 #include <memory>
 #include <vector>
 
+#include "base/device_state.hpp"
 #include "base/vec.hpp"
 #include "model/force_model.hpp"
 
 namespace palp::rt {
 
-// What clients are told about the device (the values of palp.v1 DeviceState).
-enum class DeviceState : std::uint8_t {
-  Present = 1,  // streaming
-  Absent = 2,   // not plugged in, unplugged, or not yet found: zero force
-  Fault = 3,    // plugged in but failing (permission, handshake, device fault bits): zero force
-};
+// What clients are told about the device (the values of palp.v1 DeviceState; a device reports
+// Present, Absent or Fault, never Unknown).
+using DeviceState = palp::DeviceState;
+using palp::to_string;
 
 // One contact point of a tick.
 struct ContactSnapshot {

@@ -245,18 +245,6 @@ void UsbContext::scan_without_hotplug() {
 // ---------------------------------------------------------------------------------------------
 // UsbLink
 
-const char* to_string(LinkState state) {
-  switch (state) {
-    case LinkState::Present:
-      return "present";
-    case LinkState::Fault:
-      return "fault";
-    case LinkState::Absent:
-      break;
-  }
-  return "absent";
-}
-
 UsbLink::UsbLink(std::shared_ptr<UsbContext> context, LinkConfig config)
     : context_(std::move(context)), config_(std::move(config)) {
   if (!context_) throw UsageError("USB link without a context");

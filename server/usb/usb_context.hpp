@@ -42,6 +42,8 @@
 #include <thread>
 #include <vector>
 
+#include "base/device_state.hpp"
+
 struct libusb_context;
 struct libusb_device;
 struct libusb_device_handle;
@@ -109,12 +111,11 @@ class UsbContext {
   std::thread thread_;
 };
 
-enum class LinkState : std::uint8_t {
-  Absent = 0,   // not plugged in (or closed)
-  Present = 1,  // open, claimed, handshake done, streaming
-  Fault = 2,    // plugged in but unusable: permission, busy, handshake refused
-};
-const char* to_string(LinkState state);
+// A USB link's state, in the device states' vocabulary (base/device_state.hpp): Absent (not
+// plugged in, or closed), Present (open, claimed, handshake done, streaming), Fault (plugged in
+// but unusable: permission, busy, handshake refused); never Unknown.
+using LinkState = palp::DeviceState;
+using palp::to_string;
 
 struct LinkConfig {
   UsbId id;

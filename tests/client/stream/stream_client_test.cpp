@@ -1,5 +1,4 @@
-// palpview's network layer (client/stream/stream_client): what needs no server. parse_host_port
-// accepts hosts and bracketed IPv6 and refuses malformed input with the reason; unusable options
+// palpview's network layer (client/stream/stream_client): what needs no server. Unusable options
 // are refused when the client is made; a token for another machine without TLS is refused before
 // anything connects. Against palpd: stream_client_palpd_test.cpp; against scripted servers:
 // stream_client_fake_server_test.cpp; over TLS: stream_client_tls_test.cpp.
@@ -24,56 +23,6 @@ using view::LatestState;
 using view::LinkState;
 using view::StreamClient;
 using view::StreamOptions;
-
-// ------------------------------------------------------------------------------ parse_host_port
-
-TEST(ParseHostPort, AcceptsHostsAndBracketedIpv6) {
-  std::string host;
-  std::uint16_t port = 0;
-  view::parse_host_port("127.0.0.1:7400", host, port);
-  EXPECT_EQ(host, "127.0.0.1");
-  EXPECT_EQ(port, 7400);
-  view::parse_host_port("lab-pc.example:1", host, port);
-  EXPECT_EQ(host, "lab-pc.example");
-  EXPECT_EQ(port, 1);
-  view::parse_host_port("[::1]:65535", host, port);
-  EXPECT_EQ(host, "::1");
-  EXPECT_EQ(port, 65535);
-}
-
-TEST(ParseHostPort, RejectsMalformedInputWithTheReason) {
-  const std::vector<std::pair<std::string, std::string>> cases = {
-      {"", "missing ':PORT'"},
-      {"localhost", "missing ':PORT'"},
-      {"localhost:", "empty port"},
-      {":7400", "empty host"},
-      {"localhost:0", "out of range"},
-      {"localhost:65536", "out of range"},
-      {"localhost:1234567", "out of range"},
-      {"localhost:74a0", "not a number"},
-      {"localhost:+80", "not a number"},
-      {"localhost: 80", "not a number"},
-      {"::1:7400", "brackets"},
-      {"[::1]7400", "missing ':PORT'"},
-      {"[::1", "missing ']'"},
-      {"[localhost]:80", "brackets are for IPv6"},
-      {"[]:80", "brackets are for IPv6"},
-      {"bad host:80", "invalid character"},
-  };
-  for (const auto& [text, why] : cases) {
-    std::string host = "unchanged";
-    std::uint16_t port = 9;
-    try {
-      view::parse_host_port(text, host, port);
-      ADD_FAILURE() << "accepted '" << text << "'";
-    } catch (const UsageError& e) {
-      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << text << ": " << e.what();
-      EXPECT_NE(std::string(e.what()).find("'" + text + "'"), std::string::npos) << e.what();
-    }
-    EXPECT_EQ(host, "unchanged");
-    EXPECT_EQ(port, 9);
-  }
-}
 
 TEST(StreamClient, RejectsUnusableOptions) {
   StreamOptions o;

@@ -20,6 +20,16 @@ TEST(Messages, FrameIsTheVarintLengthThenTheBody) {
   EXPECT_EQ(frame.substr(2), body);
 }
 
+TEST(Messages, DeviceStatesKeepTheirNumbers) {
+  for (const DeviceState s : {DeviceState::Present, DeviceState::Absent, DeviceState::Fault}) {
+    EXPECT_EQ(static_cast<int>(to_proto(s)), static_cast<int>(s));
+    EXPECT_EQ(from_proto(to_proto(s)), s);
+  }
+  EXPECT_EQ(to_proto(DeviceState::Unknown), v1::DEVICE_STATE_UNSPECIFIED);
+  EXPECT_EQ(from_proto(v1::DEVICE_STATE_UNSPECIFIED), DeviceState::Unknown);
+  EXPECT_EQ(from_proto(static_cast<v1::DeviceState>(9)), DeviceState::Unknown);
+}
+
 TEST(Messages, PosesRoundTrip) {
   Pose p;
   p.position = {1.5, -2, 1e-9};

@@ -476,7 +476,7 @@ TEST_F(FalconTest, ForceBeyondTheEffortCapIsScaledWithItsDirectionKept) {
 }
 
 // The registration palpd uses for a Falcon on the torso: IAR axes, home 20 mm above the anterior
-// skin (cli/device_placement.cpp).
+// skin (app/device_placement.cpp).
 struct Placed {
   Scene scene;
   Registration registration;

@@ -80,6 +80,31 @@ TEST(SimDevice, BuiltInPathNeedsAScene) {
   EXPECT_FALSE(d.last_error().empty());
 }
 
+TEST(SimDevice, ItsPathIsKnownBeforeItRuns) {
+  const auto fields = testing::ball_fields();
+  const Tool tool = parse_tool("finger:7");
+  const auto from_file = SimDevice(three_rows()).scripted_path(*fields, tool);
+  ASSERT_TRUE(from_file);
+  ASSERT_EQ(from_file->size(), 3u);
+  EXPECT_EQ((*from_file)[2].pose.position.x, 2.0);
+  const auto built_in = SimDevice().scripted_path(*fields, tool);
+  ASSERT_TRUE(built_in);
+  EXPECT_EQ(built_in->size(), builtin_palpation_path(*fields, tool).size());
+}
+
+TEST(MakeDevice, CapabilitiesAreTheDevicesOwn) {
+  // palpd places, limits and homes a device by these, never by its kind's name.
+  for (const char* spec : {"sim", "remote"}) {
+    const auto d = make_device(spec);
+    EXPECT_FALSE(d->drives_a_hand()) << spec;
+    EXPECT_FALSE(d->takes_home()) << spec;
+    EXPECT_TRUE(d->own_profile().empty()) << spec;
+  }
+  const auto fields = testing::ball_fields();
+  EXPECT_TRUE(make_device("sim")->scripted_path(*fields, parse_tool("finger:1")));
+  EXPECT_FALSE(make_device("remote")->scripted_path(*fields, parse_tool("finger:1")));
+}
+
 TEST(MakeDevice, KnowsItsDevices) {
   EXPECT_EQ(make_device("sim")->kind(), "sim");
   EXPECT_EQ(make_device("remote")->kind(), "remote");

@@ -1,0 +1,259 @@
+// palp probe --dds [DOMAIN] [--rig NAME]: one rig's DDS topics as a subscriber gets them: frames
+// per second, the delivered fraction (frame_index gaps: frames the publisher numbered and this
+// reader never got), latency from each frame's stamp (CLOCK_REALTIME at the tick's deadline, so
+// across hosts only as good as their clock sync), the scene and palpd's stats.
+// palp probe --dds --list: the rigs announced on the domain. The last line is JSON.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "base/errors.hpp"
+#include "console/probe_dds.hpp"
+#include "dds_subscriber.hpp"
+#include "palp.pb.h"
+
+namespace palp::cli {
+
+const char* const kProbeDdsHelp = R"(
+       palp probe --dds [DOMAIN] [--rig NAME] [options]
+       palp probe --dds [DOMAIN] --list
+
+Over DDS (palpd --dds; docs/dds.md): subscribes to a rig's topics and prints frames/s, the
+delivered fraction, latency from the frames' stamps, the scene and palpd's stats.
+  --dds [DOMAIN]          the DDS domain (default 0); CYCLONEDDS_URI configures the network
+  --rig NAME              the rig (default: this host's name, as palpd's default)
+  --list                  list the rigs announced on the domain (listens --duration, default 2)
+  --contacts              read frames_contacts (every frame with its contacts) instead of frames
+  --batch                 read frame_batch (palpd --dds-batch-ms: every frame, a batch of them
+                          per sample, one wake-up per batch) instead of frames
+  --ros                   also count the ROS 2 topics (tool_pose, wrench)
+  --volume                also receive the render volume (chunks and bytes)
+  --depth N               frames (batches with --batch) the reader keeps between two takes (256)
+  --warmup S              count nothing for the first S seconds (joining many subscribers at
+                          once), then listen --duration seconds (0)
+  --take-ms MS            take what arrived every MS ms instead of waking for each sample
+                          (0 = wake for each; a display's way: fewer wake-ups, frames batched)
+  --duration, --stall and -q as above
+)";
+
+bool wants_dds(const Arguments& argv) {
+  return std::any_of(argv.begin(), argv.end(), [](const std::string& a) {
+    return a == "--dds" || a.rfind("--dds=", 0) == 0;
+  });
+}
+
+namespace {
+
+std::string json_number(double v) {
+  if (!std::isfinite(v)) return "null";
+  char text[64];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  const std::size_t i =
+      std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(i), v.end());
+  return v[i];
+}
+
+int list(std::uint32_t domain, double duration, bool quiet) {
+  const std::vector<dds::RigSeen> rigs = dds::list_rigs(domain, duration);
+  if (!quiet) {
+    std::printf("probe --dds %u --list: %zu rig%s\n", domain, rigs.size(),
+                rigs.size() == 1 ? "" : "s");
+    for (const dds::RigSeen& r : rigs)
+      std::printf("  %-20s %s host %s pid %u, %s, tool %s, device %s, %.6g Hz%s\n", r.rig.c_str(),
+                  r.alive ? "live" : "gone", r.host.c_str(), r.pid, r.scene.c_str(), r.tool.c_str(),
+                  r.device.c_str(), r.rate_hz, r.control ? ", control" : "");
+  }
+  std::string json = "{\"domain\":" + std::to_string(domain) + ",\"rigs\":[";
+  for (std::size_t i = 0; i < rigs.size(); ++i) {
+    const dds::RigSeen& r = rigs[i];
+    if (i) json += ",";
+    json += "{\"rig\":\"" + r.rig + "\",\"alive\":" + (r.alive ? "true" : "false") +
+            ",\"host\":\"" + r.host + "\",\"pid\":" + std::to_string(r.pid) +
+            ",\"rate_hz\":" + json_number(r.rate_hz) + "}";
+  }
+  std::printf("%s]}\n", json.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int cmd_probe_dds(const Arguments& argv_in) {
+  const Arguments argv = dds::split_dds_domain(argv_in);
+  const Args args(argv, {"help", "quiet", "dds", "list", "ros", "volume", "contacts", "batch"},
+                  {"dds-domain", "rig", "duration", "stall", "depth", "take-ms", "warmup"});
+  if (args.has("help")) {
+    std::cout << "usage: " << (kProbeDdsHelp + 8);  // without the leading "\n       "
+    return 0;
+  }
+  if (!args.positional().empty())
+    throw UsageError("probe --dds takes no HOST:PORT, got '" + args.positional()[0] + "'");
+  const std::uint32_t domain = dds::parse_domain(args.get("dds-domain").value_or("0"));
+  const bool quiet = args.has("quiet");
+  const double duration = args.number("duration", args.has("list") ? 2.0 : 5.0);
+  const double stall = args.number("stall", 1.0);
+  const double depth = args.number("depth", 256);
+  if (!(duration > 0)) throw UsageError("--duration must be positive");
+  if (!(stall > 0)) throw UsageError("--stall must be positive");
+  if (!(depth >= 1 && depth <= 100000)) throw UsageError("--depth must be in 1..100000");
+  const double take_ms = args.number("take-ms", 0);
+  const double warmup = args.number("warmup", 0);
+  if (!(warmup >= 0 && warmup <= 3600)) throw UsageError("--warmup must be in 0..3600 s");
+  if (!(take_ms >= 0 && take_ms <= 1000)) throw UsageError("--take-ms must be in 0..1000");
+  if (args.has("list")) return list(domain, duration, quiet);
+  if (args.has("batch") && args.has("contacts"))
+    throw UsageError("--batch carries frames without contacts: use one of --batch, --contacts");
+
+  dds::SubscriberOptions o;
+  o.domain = domain;
+  o.rig = args.get("rig").value_or(dds::default_rig());
+  o.ros = args.has("ros");
+  o.contacts = args.has("contacts");
+  o.volume = args.has("volume");
+  o.batch = args.has("batch");
+  o.frame_depth = static_cast<std::int32_t>(depth);
+  dds::RigSubscriber sub(o);
+
+  std::uint64_t frames = 0, first_index = 0, last_index = 0, gaps = 0, poses = 0, wrenches = 0;
+  std::uint64_t volume_chunks = 0, volume_bytes = 0, volume_count = 0, fault_frames = 0;
+  std::int64_t first_rx = 0, last_rx = 0, max_silence = 0;
+  std::uint64_t first_take = 0;  // frames taken at first_rx (a batch): not part of the rate
+  std::vector<double> latency_us;
+  latency_us.reserve(static_cast<std::size_t>(std::min(duration * 20000.0, 2e6)));
+  bool have_scene = false, have_stats = false;
+  v1::SceneInfo scene;
+  v1::Stats stats;
+  std::string failure;
+  dds::Handlers h;
+  h.frame = [&](const palp_dds_HapticFrame& f, std::int64_t rx) {
+    if (frames == 0)
+      first_index = f.frame_index, first_rx = rx;
+    else if (f.frame_index > last_index + 1)
+      ++gaps;
+    if (frames > 0) max_silence = std::max(max_silence, rx - last_rx);
+    last_index = std::max(last_index, f.frame_index);
+    last_rx = rx;
+    ++frames;
+    if (rx == first_rx) ++first_take;
+    if (f.fault) ++fault_frames;
+    latency_us.push_back(static_cast<double>(rx - dds::from_time(f.stamp)) * 1e-3);
+  };
+  h.pose = [&](const geometry_msgs_msg_dds__PoseStamped_&, std::int64_t) { ++poses; };
+  h.wrench = [&](const geometry_msgs_msg_dds__WrenchStamped_&, std::int64_t) { ++wrenches; };
+  h.encoded = [&](const char* leaf, const palp_dds_Encoded& e) {
+    const std::string which = leaf;
+    if (which == dds::kScene)
+      have_scene = scene.ParseFromArray(e.payload._buffer, static_cast<int>(e.payload._length));
+    else if (which == dds::kStats)
+      have_stats = stats.ParseFromArray(e.payload._buffer, static_cast<int>(e.payload._length));
+    else if (which == dds::kVolume)
+      ++volume_chunks, volume_bytes += e.payload._length, volume_count = e.count;
+  };
+  if (warmup > 0) {  // frames of the warm-up taken and forgotten
+    const std::int64_t until = dds::realtime_ns() + static_cast<std::int64_t>(warmup * 1e9);
+    dds::Handlers skip;
+    skip.encoded = h.encoded;
+    while (dds::realtime_ns() < until)
+      if (sub.wait(0.05)) sub.take(skip);
+  }
+  const std::int64_t start = dds::realtime_ns();
+  const std::int64_t end = start + static_cast<std::int64_t>(duration * 1e9);
+  while (true) {
+    const std::int64_t now = dds::realtime_ns();
+    if (now >= end) break;
+    if (take_ms > 0) {
+      std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(take_ms));
+      sub.take(h);
+    } else if (sub.wait(std::min(0.1, static_cast<double>(end - now) * 1e-9))) {
+      sub.take(h);
+    }
+    const std::int64_t since = frames ? dds::realtime_ns() - last_rx : dds::realtime_ns() - start;
+    if (since > static_cast<std::int64_t>((frames ? stall : std::max(stall, 3.0)) * 1e9)) {
+      failure = frames ? "stalled" : "no frames (no palpd publishing rig " + o.rig + "?)";
+      break;
+    }
+  }
+  sub.take(h);
+  if (frames == 0 && failure.empty())
+    failure = "no frames (no palpd publishing rig " + o.rig + "?)";
+  const double span_s = static_cast<double>(last_rx - first_rx) * 1e-9;
+  const double fps =
+      frames > first_take && span_s > 0 ? static_cast<double>(frames - first_take) / span_s : 0.0;
+  const double expected = frames ? static_cast<double>(last_index - first_index + 1) : 0.0;
+  const double delivered = expected > 0 ? static_cast<double>(frames) / expected : 0.0;
+  const double p50 = percentile(latency_us, 0.5), p90 = percentile(latency_us, 0.9);
+  const double p99 = percentile(latency_us, 0.99), p999 = percentile(latency_us, 0.999);
+  const double lmax =
+      latency_us.empty() ? NAN : *std::max_element(latency_us.begin(), latency_us.end());
+  if (!quiet) {
+    std::printf("probe --dds %u rig %s: %s\n", domain, o.rig.c_str(),
+                failure.empty() ? "ok" : failure.c_str());
+    if (have_scene)
+      std::printf("  scene     %s, tool %s, device %s, %.6g Hz\n", scene.source().c_str(),
+                  scene.tool().name().c_str(), scene.device().c_str(), scene.tick_rate_hz());
+    std::printf("  frames    %llu at %.1f/s, delivered %.4f (%llu gaps), %llu with a fault%s\n",
+                static_cast<unsigned long long>(frames), fps, delivered,
+                static_cast<unsigned long long>(gaps),
+                static_cast<unsigned long long>(fault_frames),
+                o.batch ? (", " + std::to_string(sub.batches()) + " batches").c_str() : "");
+    std::printf(
+        "  latency   p50 %.1f us, p90 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us "
+        "(from the stamp, CLOCK_REALTIME)\n",
+        p50, p90, p99, p999, lmax);
+    std::printf("  arrivals  longest silence %.1f ms\n", static_cast<double>(max_silence) * 1e-6);
+    if (o.ros)
+      std::printf("  ros 2     %llu tool_pose, %llu wrench\n",
+                  static_cast<unsigned long long>(poses),
+                  static_cast<unsigned long long>(wrenches));
+    if (o.volume)
+      std::printf("  volume    %llu of %llu chunks, %llu bytes\n",
+                  static_cast<unsigned long long>(volume_chunks),
+                  static_cast<unsigned long long>(volume_count),
+                  static_cast<unsigned long long>(volume_bytes));
+    if (have_stats)
+      std::printf(
+          "  server    %.1f Hz, %llu ticks, %llu overruns, %llu faults, jitter max "
+          "%.1f us, %u DDS subscribers, %llu published, %llu dropped before publishing\n",
+          stats.rate_hz(), static_cast<unsigned long long>(stats.ticks()),
+          static_cast<unsigned long long>(stats.overruns()),
+          static_cast<unsigned long long>(stats.faults()), stats.jitter_max_us(), stats.clients(),
+          static_cast<unsigned long long>(stats.client_frames_sent()),
+          static_cast<unsigned long long>(stats.client_frames_dropped()));
+  }
+  // The keys palp probe HOST:PORT uses where they mean the same (tests/bench reads both).
+  std::printf(
+      "{\"ok\":%s,\"domain\":%u,\"rig\":\"%s\",\"frames\":%llu,\"frames_per_s\":%s,"
+      "\"delivered\":%s,\"gaps\":%llu,\"max_interval_ms\":%s,"
+      "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
+      "\"scene\":%s,\"stats\":%s,\"tool_pose\":%llu,\"wrench\":%llu,\"volume_chunks\":%llu,"
+      "\"server_rate_hz\":%s,\"overruns\":%s,\"subscribers\":%s,\"batches\":%llu}\n",
+      failure.empty() && frames > 0 ? "true" : "false", domain, o.rig.c_str(),
+      static_cast<unsigned long long>(frames), json_number(fps).c_str(),
+      json_number(delivered).c_str(), static_cast<unsigned long long>(gaps),
+      json_number(static_cast<double>(max_silence) * 1e-6).c_str(), json_number(p50).c_str(),
+      json_number(p90).c_str(), json_number(p99).c_str(), json_number(p999).c_str(),
+      json_number(lmax).c_str(), have_scene ? "true" : "false", have_stats ? "true" : "false",
+      static_cast<unsigned long long>(poses), static_cast<unsigned long long>(wrenches),
+      static_cast<unsigned long long>(volume_chunks),
+      have_stats ? json_number(stats.rate_hz()).c_str() : "null",
+      have_stats ? std::to_string(stats.overruns()).c_str() : "null",
+      have_stats ? std::to_string(stats.clients()).c_str() : "null",
+      static_cast<unsigned long long>(sub.batches()));
+  if (!failure.empty()) {
+    std::fprintf(stderr, "palp: error: probe --dds: %s\n", failure.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace palp::cli
