@@ -50,7 +50,7 @@ struct SegmentationParams {
   // voxels (seed-level marrow is enclosed by its cortex) loses its opening by a ball of
   // bone_lumen_radius_mm: the thick part, a lumen 14 mm or more across (the aorta, the vena cava);
   // a rib or cortex holds no such ball. 5 mm took bone of the shared CT at 6 mm slices (recall
-  // 0.838 -> 0.826; docs/prep.md). bone_lumen_radius_mm 0: off.
+  // 0.838 -> 0.826; docs/notebook/prep.md). bone_lumen_radius_mm 0: off.
   double bone_lumen_cortex_margin_hu = 400.0;
   double bone_lumen_max_contact = 0.5;
   double bone_lumen_radius_mm = 7.0;
@@ -75,8 +75,8 @@ struct SegmentationParams {
   // is below this fraction of the way from its outside neighbours' mean to its brightest bone
   // neighbour; 0: no trim. The half-maximum (0.5) fits sharp phantom edges but cuts ribs and
   // cortex the experts label on the shared CT (0 fits those best); 0.3 is the compromise: 0.2 gains
-  // 0.003 Dice there and loses 0.015-0.019 on the torso phantom (docs/prep.md). The contact a
-  // dropped leak leaves on a bone goes with the leak, whatever this is.
+  // 0.003 Dice there and loses 0.015-0.019 on the torso phantom (docs/notebook/prep.md). The
+  // contact a dropped leak leaves on a bone goes with the leak, whatever this is.
   double bone_edge_fraction = 0.3;
   // Notches: after the edge trim, a body voxel outside the bone with bone on at least this many of
   // its six faces (a pit, tunnel or gap narrower than a voxel in a surface smooth at that scale) is
@@ -109,7 +109,8 @@ struct SegmentationParams {
   // lies beside no gas (common/prep/bone/bone_ribs.hpp) and each of its voxels lies within this
   // distance of the body's outside in its slice plane, where ribs and costal cartilage lie and
   // contrast vessels or fluid-filled tubes of the same HU do not. 25 mm lost ribs of the shared CT
-  // with its kernel softened, 40-60 mm took a sharpened kernel's overshoot (docs/prep.md). 0: off.
+  // with its kernel softened, 40-60 mm took a sharpened kernel's overshoot
+  // (docs/notebook/prep.md). 0: off.
   double bone_rib_depth_mm = 30.0;
 };
 
