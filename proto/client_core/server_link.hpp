@@ -13,11 +13,30 @@
 
 #include "asio.hpp"
 #include "client_core/message_reader.hpp"
+#include "base/errors.hpp"
 #include "palp.pb.h"
+#include "tls/client_policy.hpp"
 #include "tls/stream.hpp"
 #include "wire/messages.hpp"
 
 namespace palp::client {
+
+// The console's peer resolved; a token never leaves in clear text for another machine
+// (tls/client_policy.hpp): UsageError when `has_token` without `tls` to a non-loopback address,
+// Error when the name does not resolve.
+inline asio::ip::tcp::resolver::results_type resolve_peer(asio::io_context& io,
+                                                          const std::string& host,
+                                                          const std::string& port, bool has_token,
+                                                          bool tls) {
+  asio::ip::tcp::resolver resolver(io);
+  asio::error_code ec;
+  auto endpoints = resolver.resolve(host, port, ec);
+  if (ec) throw Error("cannot resolve " + host + ":" + port + ": " + ec.message());
+  if (const std::string no = tls::clear_text_token_refusal(has_token, tls, host, endpoints);
+      !no.empty())
+    throw UsageError(no);
+  return endpoints;
+}
 
 class ServerLink {
  public:

@@ -22,7 +22,6 @@
 #include "client_core/server_link.hpp"
 #include "console/ctl_task.hpp"
 #include "scene/trajectory.hpp"
-#include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
 
 namespace palp::cli {
@@ -201,15 +200,8 @@ class Session {
                [this](const std::string& why) { fail(why); }}) {}
 
   int run() {
-    tcp::resolver resolver(io_);
-    asio::error_code ec;
-    const auto endpoints = resolver.resolve(host_, port_, ec);
-    if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
-    // the token never leaves in clear text for another machine (tls/client_policy.hpp)
-    if (const std::string no = tls::clear_text_token_refusal(!hello_.token().empty(),
-                                                             tls_ != nullptr, host_, endpoints);
-        !no.empty())
-      throw UsageError(no);
+    const auto endpoints =
+        client::resolve_peer(io_, host_, port_, !hello_.token().empty(), tls_ != nullptr);
     tls::async_connect(link_.stream(), endpoints, host_, port_, tls_,
                        [this](const std::string& failure) {
                          if (!failure.empty()) return fail(failure);

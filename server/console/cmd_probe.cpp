@@ -28,7 +28,6 @@
 #include "console/check_rate.hpp"
 #include "console/probe_dds.hpp"
 #include "loop/haptic_loop.hpp"
-#include "tls/client_policy.hpp"
 #include "wire/framing.hpp"
 #include "wire/messages.hpp"
 
@@ -111,15 +110,8 @@ class Probe {
         timer_(io_) {}
 
   Report run() {
-    tcp::resolver resolver(io_);
-    asio::error_code ec;
-    const auto endpoints = resolver.resolve(host_, port_, ec);
-    if (ec) throw Error("cannot resolve " + host_ + ":" + port_ + ": " + ec.message());
-    // the token never leaves in clear text for another machine (tls/client_policy.hpp)
-    if (const std::string no = tls::clear_text_token_refusal(!hello_.token().empty(),
-                                                             tls_ != nullptr, host_, endpoints);
-        !no.empty())
-      throw UsageError(no);
+    const auto endpoints =
+        client::resolve_peer(io_, host_, port_, !hello_.token().empty(), tls_ != nullptr);
     start_ns_ = rt::monotonic_ns();
     tls::async_connect(link_.stream(), endpoints, host_, port_, tls_,
                        [this](const std::string& failure) {
