@@ -36,7 +36,7 @@ namespace palp {
 // bytes in the key; prep.json's structures record every structure's source and voxels; 26: a
 // label map's arteries written as artery.nii.gz + d_artery.nii.gz, and a phantom drawn with
 // `structures` gives its own artery and liver truth as structures
-inline constexpr int kPrepAlgorithmVersion = 27;
+inline constexpr int kPrepAlgorithmVersion = 28;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

@@ -12,6 +12,7 @@
 //               contrast, below cortical HU, clear of cortical voxels, not a ridge, and not
 //               walled in by cortex (marrow)
 //   close       lumens -> closed by closing_mm, then one voxel of the wall's partial volume
+//   marrow      lumens, cortex -> less the voxels walled in by cortex on all six axis rays
 //   phase       the brightest lumen's level -> contrast_phase
 #include "prep/vessel/vessel_segmentation.hpp"
 
@@ -81,6 +82,9 @@ constexpr int kLumenNotchFaces = 4;
 // but where a blurred cortex leaves a gap; a lumen runs on along its length (two sides open,
 // however calcified its wall) and a lumen resting on bone is walled in on one.
 constexpr int kEnclosedSides = 5;
+// A lumen found by its own tests loses only the voxels walled in on all six: marrow the scan's
+// blurred cortex let through (a vertebra's, between its endplates).
+constexpr int kWalledInSides = 6;
 
 // cores' value for a voxel trunk_core_mm deep in the candidates (1: split_mm deep).
 constexpr std::uint8_t kTrunkCore = 2;
@@ -309,9 +313,9 @@ void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
 }
 
 // Enclosed by cortex: voxels of `of` from which at least `min_sides` of the six axis rays meet
-// cortex (`ridge`, or HU at or above `cortex_hu`) within `reach_mm`, passing only through voxels
-// at or above `through_hu` (enhanced: blood, marrow); a ray that meets anything darker (soft
-// tissue, fat) or runs out of reach or out of the scan does not count.
+// cortex (`ridge`, or HU at or above `cortex_hu`, outside `of`) within `reach_mm`, passing only
+// through voxels of `of` or at or above `through_hu` (enhanced: blood, marrow); a ray that meets
+// anything darker (soft tissue, fat) or runs out of reach or out of the scan does not count.
 Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, double cortex_hu,
                         double through_hu, double reach_mm, int min_sides) {
   const Grid& g = ct.grid;
@@ -335,6 +339,7 @@ Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, d
                 const std::int64_t q = at[a] + d * s;
                 if (q < 0 || q >= g.dims[a]) break;
                 const std::int64_t m = n + d * s * stride[a];
+                if (of.data[m]) continue;  // through the voxels judged, however bright
                 if (ridge.data[m] || ct.data[m] >= cortex_hu) {
                   ++sides;
                   break;
@@ -351,7 +356,7 @@ Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, d
 // the brightest lumen's contrast (`lumen_hu`), whose own HU is below `cortex_hu`, that hold no
 // voxel at or above it within branch_clearance_mm (face steps of the finest spacing), that are
 // not `ridge` (cortex) and that cortex does not wall in on kEnclosedSides sides within
-// branch_enclosure_mm.
+// marrow_enclosure_mm.
 void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::int16_t>& hu,
                    const Mask& ridge, double soft_hu, double lumen_hu, double cortex_hu,
                    const VesselParams& params, Mask& lumen) {
@@ -375,7 +380,7 @@ void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::
   // marrow at the lumen's level: walled in by cortex on five sides of six or more
   const Mask enclosed =
       enclosed_by_cortex(ct, band, ridge, cortex_hu, soft_hu + params.min_contrast_hu,
-                         params.branch_enclosure_mm, kEnclosedSides);
+                         params.marrow_enclosure_mm, kEnclosedSides);
   for (std::size_t n = 0; n < band.size(); ++n) band.data[n] &= !enclosed.data[n];
   grow_within(lumen, [&](std::size_t n) { return band.data[n] != 0; });
 }
@@ -389,7 +394,7 @@ void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
       !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0) ||
       !(p.branch_clearance_mm >= 0.0 && p.branch_clearance_mm <= 20.0) ||
       !(p.branch_cortex_margin_hu > 0.0) ||
-      !(p.branch_enclosure_mm >= 0.0 && p.branch_enclosure_mm <= 100.0))
+      !(p.marrow_enclosure_mm >= 0.0 && p.marrow_enclosure_mm <= 100.0))
     throw UsageError("segment_vessels: unusable parameters");
 }
 
@@ -506,6 +511,12 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
     grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu,
                   bone_seed_hu + params.branch_cortex_margin_hu, params, result.lumen);
   close_lumens(ct, body, cortex, near, hu, low_hu, max_pool_hu, params, result.lumen);
+  // marrow: lumen voxels walled in by cortex on all six axis rays are the bone's
+  const Mask walled_in = enclosed_by_cortex(
+      ct, result.lumen, cortex, bone_seed_hu + params.branch_cortex_margin_hu,
+      soft_peak_hu + params.min_contrast_hu, params.marrow_enclosure_mm, kWalledInSides);
+  for (std::size_t n = 0; n < walled_in.size(); ++n)
+    if (walled_in.data[n]) result.lumen.data[n] = 0;
   result.voxels = segmentation::count_nonzero(result.lumen);
   result.contrast_phase = result.lumen_level_hu - soft_peak_hu >= params.arterial_above_soft_hu
                               ? "arterial"

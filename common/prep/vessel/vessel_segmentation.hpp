@@ -28,11 +28,15 @@
 //              L plus half its height above S), below cortical HU (the bone seed level +
 //              branch_cortex_margin_hu: only cortical bone reaches it), with no cortical voxel
 //              within branch_clearance_mm, not a ridge, and not walled in by cortex (a ridge or
-//              cortical HU met within branch_enclosure_mm through enhanced voxels) on five of
+//              cortical HU met within marrow_enclosure_mm through enhanced voxels) on five of
 //              the six axis rays. A branch leaving a trunk carries the trunk's contrast and lies
 //              apart from cortex where the opening cut it off and bone's levels would take it (a
 //              carotid, a subclavian, the coeliac trunk); marrow at that level lies behind its
 //              cortex (the ridge and its cortical voxels fence it) and inside it (walled in)
+//   marrow     lumen voxels walled in by cortex on all six axis rays (within
+//              marrow_enclosure_mm, through enhanced voxels) are not a lumen: a vertebral body's
+//              marrow between its endplates that the scan's blurred cortex let through; a lumen
+//              runs on along its length, however calcified its wall
 //   closing    closed by closing_mm (a flap's shadow), then one voxel of contrast level beside
 //              them and not by cortex (the wall's partial volume)
 //   phase      from the brightest lumen's level above S (an enhancing organ never outshines
@@ -67,7 +71,7 @@ struct VesselParams {
   bool find_branches = true;              // grow the lumens into branches (the header's method)
   double branch_clearance_mm = 3.0;       // no cortical voxel this near a branch's voxel
   double branch_cortex_margin_hu = 400.0;  // cortical HU: the bone seed level + this
-  double branch_enclosure_mm = 20.0;  // marrow: cortex within this on five of six axis rays
+  double marrow_enclosure_mm = 30.0;  // marrow: cortex within this along the axis rays
 };
 
 struct VesselResult {

@@ -27,7 +27,8 @@ struct Scene {
 // The tube's centre at (30, 45) mm in-plane, radius 9 mm; the vertebra's at (30, 68) mm, radius
 // 12 mm, cortex 2 mm: 2 mm of soft tissue between them. With `branch_radius_mm`, a branch of the
 // tube's contrast leaves it along +x at z = 18 mm and runs out of the scene.
-Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 900.0) {
+Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 900.0,
+            bool endplates = false) {
   Grid g;
   g.dims = {60, 70, 24};
   g.spacing = {kSpacing, kSpacing, kSpacing};
@@ -52,13 +53,16 @@ Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 90
         hu += inside(9.0, r_tube) * (tube_hu - hu);
         hu += inside(branch_radius_mm, r_branch) * (tube_hu - hu);
         s.branch.at(i, j, k) = r_branch < branch_radius_mm - kSpacing && x > 45.0;
-        hu += inside(12.0, r_bone) * (cortex_hu - hu);
-        hu += inside(10.0, r_bone) * (220.0 - hu);
+        // With endplates the vertebra is a body from z = 4 to 32 mm, its marrow from 6 to 30 mm.
+        const double in_body = endplates ? (z > 4.0 && z < 32.0) : 1.0;
+        const double in_marrow = endplates ? (z > 6.0 && z < 30.0) : 1.0;
+        hu += in_body * inside(12.0, r_bone) * (cortex_hu - hu);
+        hu += in_marrow * inside(10.0, r_bone) * (220.0 - hu);
         if (r_tube < 9.0) {
           s.tube.at(i, j, k) = 1;
           s.tube_clear.at(i, j, k) = r_bone >= 12.0 + 2.0 * kSpacing;
         }
-        s.marrow.at(i, j, k) = r_bone < 10.0;
+        s.marrow.at(i, j, k) = r_bone < 10.0 && (!endplates || (z > 6.0 && z < 30.0));
         s.ct.at(i, j, k) = static_cast<std::int16_t>(hu);
       }
   return s;
@@ -155,6 +159,23 @@ TEST(SegmentVessels, BranchesStopAtTheCortexAroundMarrowAtTheLumensLevel) {
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, ridge_only);
   EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
   EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
+}
+
+TEST(SegmentVessels, MarrowWalledInOnEverySideIsNotALumen) {
+  // With the cortex-contact rule off, a vertebral body's marrow at a lumen's level is taken as one
+  // (MarrowInACortexIsKeptOutByTheCortexContact); walled in by its cortex and endplates on all six
+  // axis rays, it is given back, and the tube beside it, open along its length, stays.
+  const Scene s = scene(350.0, 0.0, 900.0, true);
+  VesselParams no_shell_rule;
+  no_shell_rule.max_cortex_contact = 1.0;
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, no_shell_rule);
+  EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
+  EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
+  VesselParams no_enclosure = no_shell_rule;
+  no_enclosure.marrow_enclosure_mm = 0.0;
+  EXPECT_GT(count_both(segment_vessels(s.ct, s.body, kSoftHu, 300.0, no_enclosure).lumen, s.marrow),
+            count(s.marrow) / 2)
+      << "the marrow is no test";
 }
 
 TEST(SegmentVessels, RefusesAMaskOnAnotherGrid) {
