@@ -402,8 +402,10 @@ void PrepRun::vessels() {
     stage("vessels", [&] {
       const HuLevels& h = result_.hu_levels;
       const double soft = h.peak_found ? h.soft_peak_hu : kNominalSoftTissueHu + h.offset_hu;
+      VesselParams vessels = params_.vessels;  // cortex at the bone mask's own level
+      vessels.cortex_margin_hu = segmentation_.bone_lumen_cortex_margin_hu;
       VesselResult v =
-          segment_vessels(*ct_owner_, body_, soft, segmentation_.bone_seed_hu, params_.vessels);
+          segment_vessels(*ct_owner_, body_, soft, segmentation_.bone_seed_hu, vessels);
       result_.contrast_phase = v.contrast_phase;
       result_.vessel_voxels = v.voxels;
       if (v.voxels > 0) record_.structures["vessel"] = vessel_json(v);

@@ -393,7 +393,7 @@ void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
       !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
       !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0) ||
       !(p.branch_clearance_mm >= 0.0 && p.branch_clearance_mm <= 20.0) ||
-      !(p.branch_cortex_margin_hu > 0.0) ||
+      !(p.cortex_margin_hu > 0.0) ||
       !(p.marrow_enclosure_mm >= 0.0 && p.marrow_enclosure_mm <= 100.0))
     throw UsageError("segment_vessels: unusable parameters");
 }
@@ -507,14 +507,15 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   if (brightest == stats.size()) return result;  // no lumen: phase none
   result.lumen_level_hu = stats[brightest].mean();
   // branches: the lumens grown through voxels at their contrast, apart from cortex
+  const double cortical_hu = bone_seed_hu + params.cortex_margin_hu;  // only cortical bone
   if (params.find_branches)
-    grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu,
-                  bone_seed_hu + params.branch_cortex_margin_hu, params, result.lumen);
+    grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu, cortical_hu, params,
+                  result.lumen);
   close_lumens(ct, body, cortex, near, hu, low_hu, max_pool_hu, params, result.lumen);
   // marrow: lumen voxels walled in by cortex on all six axis rays are the bone's
-  const Mask walled_in = enclosed_by_cortex(
-      ct, result.lumen, cortex, bone_seed_hu + params.branch_cortex_margin_hu,
-      soft_peak_hu + params.min_contrast_hu, params.marrow_enclosure_mm, kWalledInSides);
+  const Mask walled_in = enclosed_by_cortex(ct, result.lumen, cortex, cortical_hu,
+                                            soft_peak_hu + params.min_contrast_hu,
+                                            params.marrow_enclosure_mm, kWalledInSides);
   for (std::size_t n = 0; n < walled_in.size(); ++n)
     if (walled_in.data[n]) result.lumen.data[n] = 0;
   result.voxels = segmentation::count_nonzero(result.lumen);

@@ -26,13 +26,14 @@
 //   branches   the lumens grown through voxels at the brightest lumen's contrast L (smoothed HU
 //              from half way between S and L, and at least min_lumen_contrast_hu above S, up to
 //              L plus half its height above S), below cortical HU (the bone seed level +
-//              branch_cortex_margin_hu: only cortical bone reaches it), with no cortical voxel
-//              within branch_clearance_mm, not a ridge, and not walled in by cortex (a ridge or
-//              cortical HU met within marrow_enclosure_mm through enhanced voxels) on five of
-//              the six axis rays. A branch leaving a trunk carries the trunk's contrast and lies
-//              apart from cortex where the opening cut it off and bone's levels would take it (a
-//              carotid, a subclavian, the coeliac trunk); marrow at that level lies behind its
-//              cortex (the ridge and its cortical voxels fence it) and inside it (walled in)
+//              cortex_margin_hu, the bone mask's cortex level: only cortical bone reaches it), with
+//              no cortical voxel within branch_clearance_mm, not a ridge, and not walled in by
+//              cortex (a ridge or cortical HU met within marrow_enclosure_mm through enhanced
+//              voxels) on five of the six axis rays. A branch leaving a trunk carries the trunk's
+//              contrast and lies apart from cortex where the opening cut it off and bone's levels
+//              would take it (a carotid, a subclavian, the coeliac trunk); marrow at that level
+//              lies behind its cortex (the ridge and its cortical voxels fence it) and inside it
+//              (walled in)
 //   marrow     lumen voxels walled in by cortex on all six axis rays (within
 //              marrow_enclosure_mm, through enhanced voxels) are not a lumen: a vertebral body's
 //              marrow between its endplates that the scan's blurred cortex let through; a lumen
@@ -70,7 +71,9 @@ struct VesselParams {
   double arterial_above_soft_hu = 170.0;  // the phase's level: aorta of an arterial phase
   bool find_branches = true;              // grow the lumens into branches (the header's method)
   double branch_clearance_mm = 3.0;       // no cortical voxel this near a branch's voxel
-  double branch_cortex_margin_hu = 400.0;  // cortical HU: the bone seed level + this
+  // Cortical HU: the bone seed level + this, the bone mask's own cortex level
+  // (SegmentationParams::bone_lumen_cortex_margin_hu; prep passes the bone's).
+  double cortex_margin_hu = 400.0;
   double marrow_enclosure_mm = 30.0;  // marrow: cortex within this along the axis rays
 };
 

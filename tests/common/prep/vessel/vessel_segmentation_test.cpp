@@ -155,7 +155,7 @@ TEST(SegmentVessels, BranchesStopAtTheCortexAroundMarrowAtTheLumensLevel) {
   const Scene s = scene(350.0, 3.0, 500.0);
   VesselParams ridge_only;
   ridge_only.branch_clearance_mm = 0.0;
-  ridge_only.branch_cortex_margin_hu = 5000.0;
+  ridge_only.cortex_margin_hu = 5000.0;
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, ridge_only);
   EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
   EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
