@@ -23,25 +23,26 @@ nlohmann::json prep_json(const std::filesystem::path& dir) {
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
-  auto json = nlohmann::json::parse(text.str(), nullptr, false);
-  return json.is_object() ? json : nlohmann::json();
+  auto record = nlohmann::json::parse(text.str(), nullptr, false);
+  return record.is_object() ? record : nlohmann::json();
 }
 
 // prep.json's contrast phase ("unknown" when it cannot be read).
-std::string contrast_phase(const nlohmann::json& json) {
-  if (!json.is_object() || !json.contains("contrast_phase") || !json["contrast_phase"].is_string())
+std::string contrast_phase(const nlohmann::json& record) {
+  if (!record.is_object() || !record.contains("contrast_phase") ||
+      !record["contrast_phase"].is_string())
     return "unknown";
-  return json["contrast_phase"].get<std::string>();
+  return record["contrast_phase"].get<std::string>();
 }
 
 // The skeleton's labels prep kept from --labels: the volume (read as floats: a uint8 mask reads
 // as 0/1) and its name table (at most 255 names; a value the table does not name is dropped).
-void read_skeleton_labels(const std::filesystem::path& dir, const nlohmann::json& json,
+void read_skeleton_labels(const std::filesystem::path& dir, const nlohmann::json& record,
                           LandmarkInputs& in) {
   const auto path = dir / kSkeletonLabelsFile;
-  if (!json.is_object() || !json.contains("skeleton_labels") || !std::filesystem::exists(path))
+  if (!record.is_object() || !record.contains("skeleton_labels") || !std::filesystem::exists(path))
     return;
-  const nlohmann::json& table = json["skeleton_labels"];
+  const nlohmann::json& table = record["skeleton_labels"];
   if (!table.is_object() || !table.contains("labels") || !table["labels"].is_object()) return;
   std::vector<std::string> names(255);
   for (const auto& [key, name] : table["labels"].items()) {
@@ -84,8 +85,8 @@ LandmarkInputs read_landmark_inputs(const std::string& prep_dir, const std::stri
   in.d_surf = read_nifti_float(d_surf.string());
   if (in.body.grid.dims != in.bone.grid.dims)
     throw InputError(prep_dir + ": body.nii.gz and bone.nii.gz are on different grids");
-  const nlohmann::json json = prep_json(dir);
-  read_skeleton_labels(dir, json, in);
+  const nlohmann::json record = prep_json(dir);
+  read_skeleton_labels(dir, record, in);
   // The artery: labelled or the phantom's truth (artery.nii.gz), else in an arterial phase the
   // contrast-filled lumens (then the bright ones are arteries).
   const auto artery = dir / "artery.nii.gz";
@@ -93,7 +94,7 @@ LandmarkInputs read_landmark_inputs(const std::string& prep_dir, const std::stri
   if (std::filesystem::exists(artery)) {
     in.artery = read_nifti_mask(artery.string());
     in.artery_source = "artery.nii.gz";
-  } else if (std::filesystem::exists(vessel) && contrast_phase(json) == "arterial") {
+  } else if (std::filesystem::exists(vessel) && contrast_phase(record) == "arterial") {
     in.artery = read_nifti_mask(vessel.string());
     in.artery_source = "vessel.nii.gz (arterial phase)";
   }

@@ -20,7 +20,7 @@ struct MetaHeader {
 };
 
 // Reads "Key = Value" lines up to and including ElementDataFile.
-MetaHeader parse_lines(const std::string& path) {
+MetaHeader parse_meta_lines(const std::string& path) {
   const std::string head = ht::read_head(path, ht::kMaxHeaderBytes);
   MetaHeader header;
   ht::LineCursor lines(head);
@@ -162,7 +162,7 @@ void locate_voxels(const MetaFields& f, const MetaHeader& header, const std::str
 }  // namespace
 
 StoredImage read_metaimage_header(const std::string& path) {
-  const MetaHeader header = parse_lines(path);
+  const MetaHeader header = parse_meta_lines(path);
   const MetaFields f(header, path);
   check_image_kind(f);
 

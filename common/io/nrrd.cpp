@@ -49,7 +49,7 @@ std::string unescape(std::string_view text) {
 }
 
 // Reads the magic line and "field: value" lines up to the blank line (or the end of file).
-NrrdHeader parse_lines(const std::string& path) {
+NrrdHeader parse_nrrd_lines(const std::string& path) {
   const std::string head = ht::read_head(path, ht::kMaxHeaderBytes);
   NrrdHeader header;
   ht::LineCursor lines(head);
@@ -323,7 +323,7 @@ void locate_voxels(const NrrdFields& f, const NrrdHeader& header, StoredVoxels& 
 }
 
 NrrdLayeredImage read_layered(const std::string& path, bool layered) {
-  NrrdHeader header = parse_lines(path);
+  NrrdHeader header = parse_nrrd_lines(path);
   const NrrdFields f(header, path);
 
   NrrdLayeredImage out;

@@ -15,10 +15,6 @@ namespace palp::phantom_detail {
 namespace trunk {
 namespace {
 
-Vec3 to_array(const Vec3d& v) {
-  return {v.x, v.y, v.z};
-}
-
 void add_table(std::vector<TrunkLayer>& layers) {
   layers.push_back(make_layer(Box{-kInfinity, kInfinity, kPadTop + 20.0, kPadTop + 29.0}, 300.0,
                               Tissue::kEquipment));  // carbon board across the whole width

@@ -16,6 +16,11 @@
 
 namespace palp::phantom_detail::trunk {
 
+// A point as the paint shapes take it.
+inline Vec3 to_array(const Vec3d& v) {
+  return {v.x, v.y, v.z};
+}
+
 inline constexpr Vec3 kReferenceFov{400.0, 300.0, 561.0};
 // The body: an elliptic cross-section centred at (0, kBodyCy), half-depth kBodyB, half-width
 // body_half_width(z); the back rests on the pad at y = kBodyCy + kBodyB.

@@ -13,10 +13,6 @@ namespace {
 // cortex above about 700 HU), cancellous marrow below it.
 constexpr double kCortexHu = 1000.0, kMarrowHu = 250.0, kArchHu = 850.0;
 
-Vec3 to_array(const Vec3d& v) {
-  return {v.x, v.y, v.z};
-}
-
 Tube tube(const Vec3d& a, const Vec3d& b, double radius) {
   return {to_array(a), to_array(b), radius};
 }

@@ -18,12 +18,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string fixed(double v, int decimals) {
-  char text[48];
-  std::snprintf(text, sizeof text, "%.*f", decimals, std::isfinite(v) ? v : 0.0);
-  return text;
-}
-
 std::string maybe(const std::optional<double>& v, int decimals, const char* none) {
   return v ? fixed(*v, decimals) : std::string(none);
 }

@@ -17,12 +17,6 @@ constexpr const char* kMissColour = "#d73027";
 constexpr const char* kPathColour = "#2166ac";
 constexpr const char* kBoneColour = "#bdbdbd";
 
-std::string fixed(double v, int decimals) {
-  char text[48];
-  std::snprintf(text, sizeof text, "%.*f", decimals, std::isfinite(v) ? v : 0.0);
-  return text;
-}
-
 // Decimals that tell ticks `step` apart.
 int decimals_for(const std::vector<double>& ticks) {
   if (ticks.size() < 2) return 1;

@@ -160,4 +160,10 @@ std::vector<double> nice_ticks(double lo, double hi, int count) {
   return ticks;
 }
 
+std::string fixed(double v, int decimals) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.*f", decimals, std::isfinite(v) ? v : 0.0);
+  return text;
+}
+
 }  // namespace palp::training

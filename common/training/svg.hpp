@@ -60,4 +60,7 @@ class Svg {
 // "Nice" axis ticks (1, 2 or 5 times a power of ten) covering [lo, hi], about `count` of them.
 std::vector<double> nice_ticks(double lo, double hi, int count = 6);
 
+// `v` with `decimals` decimals (a label or a table cell); not finite: 0.
+std::string fixed(double v, int decimals);
+
 }  // namespace palp::training

@@ -13,6 +13,7 @@
 
 #include "base/errors.hpp"
 #include "cli_common/palpd_stats.hpp"
+#include "console/json_number.hpp"
 #include "loop/wake.hpp"
 #include "net/frame_pump.hpp"
 #include "net/frame_schedule.hpp"
@@ -62,13 +63,6 @@ std::string json_array(const std::array<std::uint64_t, rt::kJitterBuckets>& h) {
   std::string out = "[";
   for (std::size_t b = 0; b < h.size(); ++b) out.append(b ? "," : "").append(std::to_string(h[b]));
   return out + "]";
-}
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char text[48];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
 }
 
 // The network thread of palpd as far as the loop sees it: the snapshot ring it drains, the

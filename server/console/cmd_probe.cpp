@@ -26,6 +26,7 @@
 #include "client_core/host_port.hpp"
 #include "client_core/server_link.hpp"
 #include "console/check_rate.hpp"
+#include "console/json_number.hpp"
 #include "console/probe_dds.hpp"
 #include "loop/haptic_loop.hpp"
 #include "wire/framing.hpp"
@@ -85,7 +86,7 @@ struct Report {
   double tick_rate_hz = 0.0;
 };
 
-double percentile(std::vector<double>& v, double p) {
+double percentile_rounded_rank(std::vector<double>& v, double p) {
   if (v.empty()) return 0.0;
   const auto k = static_cast<std::size_t>(std::min<double>(
       static_cast<double>(v.size() - 1), std::floor(p * static_cast<double>(v.size() - 1) + 0.5)));
@@ -262,13 +263,6 @@ const char* device_state_text(v1::DeviceState state) {
   return known == DeviceState::Unknown ? "?" : to_string(known);
 }
 
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char text[64];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
-}
-
 }  // namespace
 
 int cmd_probe(const Arguments& argv) {
@@ -323,10 +317,10 @@ int cmd_probe(const Arguments& argv) {
   const double delivered =
       expected > 0 ? std::min(1.0, static_cast<double>(r.frames) / expected) : 0.0;
   const bool latency_ok = (probe.loopback() || args.has("same-host")) && !r.latency_us.empty();
-  const double p50 = latency_ok ? percentile(r.latency_us, 0.5) : NAN;
-  const double p90 = latency_ok ? percentile(r.latency_us, 0.9) : NAN;
-  const double p99 = latency_ok ? percentile(r.latency_us, 0.99) : NAN;
-  const double p999 = latency_ok ? percentile(r.latency_us, 0.999) : NAN;
+  const double p50 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.5) : NAN;
+  const double p90 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.9) : NAN;
+  const double p99 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.99) : NAN;
+  const double p999 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.999) : NAN;
   const double lmax =
       latency_ok ? *std::max_element(r.latency_us.begin(), r.latency_us.end()) : NAN;
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "base/errors.hpp"
+#include "console/json_number.hpp"
 #include "console/probe_dds.hpp"
 #include "dds_subscriber.hpp"
 #include "palp.pb.h"
@@ -49,14 +50,7 @@ bool wants_dds(const Arguments& argv) {
 
 namespace {
 
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char text[64];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
-}
-
-double percentile(std::vector<double> v, double q) {
+double percentile_floor_rank(std::vector<double> v, double q) {
   if (v.empty()) return NAN;
   const std::size_t i =
       std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
@@ -191,8 +185,10 @@ int cmd_probe_dds(const Arguments& argv_in) {
       frames > first_take && span_s > 0 ? static_cast<double>(frames - first_take) / span_s : 0.0;
   const double expected = frames ? static_cast<double>(last_index - first_index + 1) : 0.0;
   const double delivered = expected > 0 ? static_cast<double>(frames) / expected : 0.0;
-  const double p50 = percentile(latency_us, 0.5), p90 = percentile(latency_us, 0.9);
-  const double p99 = percentile(latency_us, 0.99), p999 = percentile(latency_us, 0.999);
+  const double p50 = percentile_floor_rank(latency_us, 0.5),
+               p90 = percentile_floor_rank(latency_us, 0.9);
+  const double p99 = percentile_floor_rank(latency_us, 0.99),
+               p999 = percentile_floor_rank(latency_us, 0.999);
   const double lmax =
       latency_us.empty() ? NAN : *std::max_element(latency_us.begin(), latency_us.end());
   if (!quiet) {

@@ -21,12 +21,6 @@ namespace {
 using asio::ip::tcp;
 using Bytes = std::shared_ptr<const std::vector<unsigned char>>;
 
-struct Sample {
-  std::int64_t t_ns = 0;
-  Pose pose{};
-  Vec3d force{}, u{};
-};
-
 // CLOCK_MONOTONIC tick time -> wall-clock seconds and nanoseconds for the message header.
 void wall_time_of(std::int64_t t_ns, std::uint32_t& sec, std::uint32_t& nsec) {
   timespec now{};
@@ -63,6 +57,14 @@ Matrix4 translation(const Vec3d& v) {
 }  // namespace
 
 class IgtlServer::Impl {
+  // One tick's tool state as the loop hands it over (a member type: the class is not in this
+  // file's anonymous namespace).
+  struct Sample {
+    std::int64_t t_ns = 0;
+    Pose pose{};
+    Vec3d force{}, u{};
+  };
+
  public:
   Impl(IgtlConfig config, const Grid& grid)
       : config_(std::move(config)), frame_(ras_from_scene(grid)), acceptor_(io_) {

@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "base/errors.hpp"
+#include "loop/atomic_max.hpp"
 
 namespace palp::rt {
 namespace {
@@ -21,12 +22,6 @@ namespace {
 std::size_t contact_capacity_for(const LoopConfig& config, const Model& model) {
   if (config.contact_capacity > 0) return config.contact_capacity;
   return std::max<std::size_t>(model.contact_count(), 64);
-}
-
-void store_max(std::atomic<std::int64_t>& target, std::int64_t value) {
-  // Single writer (the loop): a plain load-compare-store is enough.
-  if (value > target.load(std::memory_order_relaxed))
-    target.store(value, std::memory_order_relaxed);
 }
 
 std::int64_t period_for(double rate_hz) {

@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "base/errors.hpp"
+#include "loop/atomic_max.hpp"
 
 namespace palp::rt {
 namespace {
@@ -34,12 +35,6 @@ class SystemClock final : public WakeClock {
     }
   }
 };
-
-void store_max(std::atomic<std::int64_t>& target, std::int64_t value) noexcept {
-  // Single writer (the loop): a plain load-compare-store is enough.
-  if (value > target.load(std::memory_order_relaxed))
-    target.store(value, std::memory_order_relaxed);
-}
 
 std::int64_t us_to_ns(double us) {
   return static_cast<std::int64_t>(std::llround(us * 1e3));
