@@ -76,14 +76,18 @@ TEST_F(FrameWakeTest, AClientAt50HzIsWokenForItsFramesNotForEveryTick) {
   ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kFrame, m));
   const rt::LoopStats a = loop_->stats();
   const std::int64_t first = m.frame().server_time_ns();
-  for (int i = 1; i <= 10; ++i) {
+  // At least 10 frames, and on until the loop has ticked 200 times (a loaded machine runs the
+  // non-real-time loop below 1 kHz; at most 100 frames, 2 s).
+  rt::LoopStats b = a;
+  for (int i = 1; i <= 100 && (i <= 10 || b.ticks - a.ticks < 200); ++i) {
     ASSERT_TRUE(c.wait_for_case(v1::ServerMessage::kFrame, m));
     EXPECT_GE(m.frame().server_time_ns() - first, i * 20'000'000LL - 1);  // its rate, kept
+    b = loop_->stats();
   }
-  const rt::LoopStats b = loop_->stats();
   const std::uint64_t ticks = b.ticks - a.ticks, signals = b.net_signals - a.net_signals;
   ASSERT_GT(ticks, 100u);
-  // 10 frames: about 10 wake-ups (and a few for the ring or the device); every tick before.
+  // A frame every 20 ms: about one wake-up per frame (and a few for the ring or the device);
+  // every tick before.
   EXPECT_GE(signals, 1u);
   EXPECT_LE(signals, ticks / 5) << ticks << " ticks";
 }
