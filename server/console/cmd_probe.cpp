@@ -263,6 +263,259 @@ const char* device_state_text(v1::DeviceState state) {
   return known == DeviceState::Unknown ? "?" : to_string(known);
 }
 
+// What the command line asks of one probe run: the server, how long, and the Hello to send.
+struct ProbeRequest {
+  std::string target, host;
+  std::uint16_t port = 0;
+  double duration = 5.0, rate = 0.0, stall = 1.0;
+  bool quiet = false, same_host = false;
+  v1::Hello hello;
+};
+
+// The probe's options read and checked, and the Hello they ask for.
+ProbeRequest probe_request(const Args& args) {
+  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT (or --check-rate HZ)");
+  ProbeRequest q;
+  q.target = args.positional()[0];
+  if (const std::string why = client::host_port_problem(q.target, q.host, q.port); !why.empty())
+    throw UsageError("probe needs HOST:PORT, got '" + q.target + "': " + why);
+  q.duration = args.number("duration", 5.0);
+  q.rate = args.number("rate", 0.0);
+  q.stall = args.number("stall", 1.0);
+  const double max_dim = args.number("volume-max-dim", 0.0);
+  if (!(q.duration > 0)) throw UsageError("--duration must be positive");
+  if (q.rate < 0) throw UsageError("--rate must not be negative");
+  if (!(q.stall > 0)) throw UsageError("--stall must be positive");
+  if (max_dim < 0 || max_dim > 65535) throw UsageError("--volume-max-dim must be in 0..65535");
+  const std::string role = args.get("role").value_or("observer");
+  if (role != "observer" && role != "controller")
+    throw UsageError("--role must be observer or controller");
+  q.quiet = args.has("quiet");
+  q.same_host = args.has("same-host");
+
+  q.hello.set_protocol_version(wire::kProtocolVersion);
+  q.hello.set_role(role == "controller" ? v1::CONTROLLER : v1::OBSERVER);
+  q.hello.set_token(args.get("token").value_or(""));
+  q.hello.set_client_name(args.get("name").value_or("palp-probe"));
+  q.hello.set_frame_rate_hz(q.rate);
+  q.hello.set_want_contacts(args.has("contacts"));
+  q.hello.set_volume_max_dim(static_cast<std::uint32_t>(max_dim));
+  return q;
+}
+
+// The run's figures: frames/s, the delivered fraction and latency percentiles (NaN if unknown).
+struct Summary {
+  double span_s = 0.0, fps = 0.0, delivered = 0.0;
+  bool latency_ok = false;
+  double p50 = NAN, p90 = NAN, p99 = NAN, p999 = NAN, lmax = NAN;
+};
+
+// The figures of a run asked at `rate` frames/s (0: every tick); latency only when `latency_ok`.
+Summary summarize(Report& r, double rate, bool latency_ok) {
+  Summary s;
+  s.span_s = static_cast<double>(r.last_rx_ns - r.first_rx_ns) * 1e-9;
+  s.fps = r.frames > 1 && s.span_s > 0 ? static_cast<double>(r.frames - 1) / s.span_s : 0.0;
+  double expected = 0.0;
+  if (r.frames > 0) {
+    expected = rate > 0
+                   ? std::floor(static_cast<double>(r.last_t_ns - r.first_t_ns) * 1e-9 * rate) + 1
+                   : static_cast<double>(r.last_seq - r.first_seq + 1);
+  }
+  s.delivered = expected > 0 ? std::min(1.0, static_cast<double>(r.frames) / expected) : 0.0;
+  s.latency_ok = latency_ok && !r.latency_us.empty();
+  if (s.latency_ok) {
+    s.p50 = percentile_rounded_rank(r.latency_us, 0.5);
+    s.p90 = percentile_rounded_rank(r.latency_us, 0.9);
+    s.p99 = percentile_rounded_rank(r.latency_us, 0.99);
+    s.p999 = percentile_rounded_rank(r.latency_us, 0.999);
+    s.lmax = *std::max_element(r.latency_us.begin(), r.latency_us.end());
+  }
+  return s;
+}
+
+// The scene line and the patient's orientation in the scene frame.
+void print_scene(const Report& r) {
+  if (!r.have_scene) return;
+  std::printf("  scene     %s, tool %s, device %s, %.6g Hz\n", r.scene.source().c_str(),
+              r.scene.tool().name().c_str(), r.scene.device().c_str(), r.scene.tick_rate_hz());
+  if (r.scene.grid().direction_size() == 9) {
+    WorldPlacement world;
+    for (int i = 0; i < 9; ++i)
+      world.direction[static_cast<std::size_t>(i)] = r.scene.grid().direction(i);
+    const PatientFrame frame = patient_frame(world);
+    std::printf("  patient   CT stored %s: anterior is %s, superior %s in the scene frame\n",
+                frame.orientation_code().c_str(),
+                to_string(frame.nearest_axis(Anatomy::Anterior)).c_str(),
+                to_string(frame.nearest_axis(Anatomy::Superior)).c_str());
+  }
+}
+
+// Where the device is placed on the patient, and how often it was re-centred.
+void print_placement(const Report& r) {
+  if (!r.have_scene) return;
+  if (!r.scene.has_registration()) {
+    std::printf("  device    moves in the scene frame (no registration)\n");
+    return;
+  }
+  const v1::Registration& g = r.scene.registration();
+  std::printf(
+      "  device    placed at home '%s': axes %s, scale %g, workspace +-(%g, %g, %g) mm, "
+      "centre (%.1f, %.1f, %.1f) mm, skin below it at (%.1f, %.1f, %.1f)",
+      g.home_site().c_str(), g.axes().c_str(), g.scale(),
+      g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(0) : 0.0,
+      g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(1) : 0.0,
+      g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(2) : 0.0, g.home().x(), g.home().y(),
+      g.home().z(), g.home_skin().x(), g.home_skin().y(), g.home_skin().z());
+  if (r.have_stats && r.stats.recentres() > 0)
+    std::printf("; re-centred %llu times, centre now (%.1f, %.1f, %.1f)",
+                static_cast<unsigned long long>(r.stats.recentres()),
+                r.stats.registration_home().x(), r.stats.registration_home().y(),
+                r.stats.registration_home().z());
+  std::printf("\n");
+}
+
+// The force limits the server applies, what the device declares, and the safety chain's state.
+void print_limits(const Report& r) {
+  if (!r.have_scene) return;
+  if (!r.scene.has_limits()) {
+    std::printf("  limits    none (%s)\n", r.scene.device().c_str());
+    return;
+  }
+  const v1::ForceLimits& l = r.scene.limits();
+  std::printf("  limits    %s: %.2f N", l.profile().c_str(), l.max_force_n());
+  if (r.have_stats && r.stats.declared_max_force_n() > 0) {
+    std::printf(" (the device declares %.2f N", r.stats.declared_max_force_n());
+    if (r.stats.declared_max_stiffness_n_per_mm() > 0)
+      std::printf(", %.2f N/mm", r.stats.declared_max_stiffness_n_per_mm());
+    if (r.stats.declared_damping_n_s_per_mm() > 0)
+      std::printf(", %.3f N s/mm", r.stats.declared_damping_n_s_per_mm());
+    std::printf(")");
+  }
+  std::printf(
+      ", %.2f N/mm, step <= %.2f N per tick", l.max_stiffness_n_per_mm(),
+      r.scene.tick_rate_hz() > 0 ? l.max_force_rate_n_per_s() / r.scene.tick_rate_hz() : 0.0);
+  if (l.coupling_stiffness_n_per_mm() > 0)
+    std::printf(", virtual coupling %.2f N/mm and %.4f N s/mm", l.coupling_stiffness_n_per_mm(),
+                l.coupling_damping_n_s_per_mm());
+  if (l.engage_threshold_n() > 0)
+    std::printf(", engages below %.2f N over %.1f s", l.engage_threshold_n(), l.engage_ramp_s());
+  if (l.max_damping_n_s_per_mm() > 0)
+    std::printf(", passivity controller up to %.3f N s/mm", l.max_damping_n_s_per_mm());
+  if (r.have_stats)
+    std::printf("; engagement gain now %.2f; passivity controller damped %llu ticks, %.3f mJ",
+                r.stats.engage_gain(), static_cast<unsigned long long>(r.stats.passivity_ticks()),
+                r.stats.passivity_dissipated_mj());
+  std::printf("\n");
+}
+
+// What arrived: frames, gaps, latency, silences and the volume's chunks.
+void print_stream(const Report& r, const Summary& s) {
+  std::printf(
+      "  frames    %llu in %.3f s: %.1f frames/s, delivered %.4f (%llu gaps, %llu frames "
+      "missing, largest gap %llu), %llu with contact, %llu zeroed by faults\n",
+      static_cast<unsigned long long>(r.frames), s.span_s, s.fps, s.delivered,
+      static_cast<unsigned long long>(r.gaps), static_cast<unsigned long long>(r.gap_frames),
+      static_cast<unsigned long long>(r.max_gap), static_cast<unsigned long long>(r.contact_frames),
+      static_cast<unsigned long long>(r.fault_frames));
+  if (s.latency_ok)
+    std::printf("  latency   p50 %.1f us, p90 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
+                s.p50, s.p90, s.p99, s.p999, s.lmax);
+  else
+    std::printf("  latency   n/a (not on the server's host, or no frames)\n");
+  std::printf("  arrivals  longest silence %.1f ms, %llu silences over 50 ms\n",
+              static_cast<double>(r.max_interval_ns) * 1e-6,
+              static_cast<unsigned long long>(r.intervals_over_50ms));
+  if (r.volume_chunks)
+    std::printf("  volume    %llu chunks, %llu bytes\n",
+                static_cast<unsigned long long>(r.volume_chunks),
+                static_cast<unsigned long long>(r.volume_bytes));
+}
+
+// One histogram over the loop's buckets (jitter_bucket_upper_us; the last one: beyond them).
+void print_buckets(const v1::Stats& s,
+                   const google::protobuf::RepeatedField<std::uint64_t>& counts) {
+  for (int b = 0; b < counts.size(); ++b) {
+    if (b < s.jitter_bucket_upper_us_size())
+      std::printf(" <%gus:%llu", s.jitter_bucket_upper_us(b),
+                  static_cast<unsigned long long>(counts[b]));
+    else
+      std::printf(" more:%llu", static_cast<unsigned long long>(counts[b]));
+  }
+  std::printf("\n");
+}
+
+// The server's own figures: its rate, the device and its link, tuning, maps and the wake-ups.
+void print_server(const v1::Stats& s) {
+  std::printf(
+      "  server    %.1f Hz (target %.6g), %llu ticks, %llu overruns, %llu faults, "
+      "jitter max %.1f us, tick mean %.2f us, %u clients, %s\n",
+      s.rate_hz(), s.target_rate_hz(), static_cast<unsigned long long>(s.ticks()),
+      static_cast<unsigned long long>(s.overruns()), static_cast<unsigned long long>(s.faults()),
+      s.jitter_max_us(), s.tick_mean_us(), s.clients(),
+      s.realtime() ? "real time" : "not real time");
+  // the device as palpd sees it (e.g. a Falcon: homing, what to do), and its link
+  std::printf("  status    device %s%s%s", device_state_text(s.device_state()),
+              s.device_message().empty() ? "" : ": ", s.device_message().c_str());
+  if (s.device_exchanges() > 0)
+    std::printf(
+        "; link %llu exchanges, %llu corrupt and %llu short frames, %llu lost replies, "
+        "%llu commands force-limited",
+        static_cast<unsigned long long>(s.device_exchanges()),
+        static_cast<unsigned long long>(s.device_corrupt_frames()),
+        static_cast<unsigned long long>(s.device_short_frames()),
+        static_cast<unsigned long long>(s.device_lost_replies()),
+        static_cast<unsigned long long>(s.device_force_limited()));
+  std::printf("\n");
+  if (!s.tuning().empty() || !s.tuning_note().empty())
+    std::printf("  tuning    %s%s%s\n", s.tuning().empty() ? "defaults" : s.tuning().c_str(),
+                s.tuning_note().empty() ? "" : ": ", s.tuning_note().c_str());
+  if (!s.maps().empty()) std::printf("  maps      %s\n", s.maps().c_str());
+  std::printf("  jitter   ");
+  print_buckets(s, s.jitter_counts());
+  if (!s.wake_mode().empty()) {
+    std::printf(
+        "  wake-up   %s, spin window %.0f us; the loop thread uses %.1f %% of a CPU, "
+        "%.1f %% spinning; kernel wake-up latency max %.1f us:\n           ",
+        s.wake_mode().c_str(), s.spin_window_us(), 100 * s.loop_cpu_fraction(),
+        100 * s.spin_cpu_fraction(), s.wake_latency_max_us());
+    print_buckets(s, s.wake_latency_counts());
+  }
+}
+
+// The report for a reader: the outcome, then a line per subject.
+void print_report(const std::string& target, const Report& r, const Summary& s) {
+  std::printf("probe %s: %s\n", target.c_str(), r.failure.empty() ? "ok" : r.failure.c_str());
+  print_scene(r);
+  print_placement(r);
+  print_limits(r);
+  print_stream(r, s);
+  if (r.have_stats) print_server(r.stats);
+}
+
+// The last line: the run as JSON.
+void print_json(const Report& r, const Summary& s) {
+  std::printf(
+      "{\"ok\":%s,\"frames\":%llu,\"frames_per_s\":%s,\"delivered\":%s,\"gaps\":%llu,"
+      "\"gap_frames\":%llu,\"max_gap\":%llu,\"max_interval_ms\":%s,\"intervals_over_50ms\":%llu,"
+      "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
+      "\"server_rate_hz\":%s,\"overruns\":%llu,\"faults\":%llu,\"jitter_max_us\":%s,"
+      "\"clients\":%u,\"wake\":\"%s\",\"spin_window_us\":%s,\"spin_cpu_fraction\":%s}\n",
+      r.failure.empty() && r.frames > 0 ? "true" : "false",
+      static_cast<unsigned long long>(r.frames), json_number(s.fps).c_str(),
+      json_number(s.delivered).c_str(), static_cast<unsigned long long>(r.gaps),
+      static_cast<unsigned long long>(r.gap_frames), static_cast<unsigned long long>(r.max_gap),
+      json_number(static_cast<double>(r.max_interval_ns) * 1e-6).c_str(),
+      static_cast<unsigned long long>(r.intervals_over_50ms), json_number(s.p50).c_str(),
+      json_number(s.p90).c_str(), json_number(s.p99).c_str(), json_number(s.p999).c_str(),
+      json_number(s.lmax).c_str(), json_number(r.have_stats ? r.stats.rate_hz() : NAN).c_str(),
+      static_cast<unsigned long long>(r.stats.overruns()),
+      static_cast<unsigned long long>(r.stats.faults()),
+      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients(),
+      r.stats.wake_mode().c_str(),
+      json_number(r.have_stats ? r.stats.spin_window_us() : NAN).c_str(),
+      json_number(r.have_stats ? r.stats.spin_cpu_fraction() : NAN).c_str());
+}
+
 }  // namespace
 
 int cmd_probe(const Arguments& argv) {
@@ -275,212 +528,13 @@ int cmd_probe(const Arguments& argv) {
     std::cout << kProbeUsage << kCheckRateHelp << kProbeDdsHelp;
     return 0;
   }
-  if (args.positional().size() != 1) throw UsageError("probe needs HOST:PORT (or --check-rate HZ)");
-  const std::string target = args.positional()[0];
-  std::string host;
-  std::uint16_t port = 0;
-  if (const std::string why = client::host_port_problem(target, host, port); !why.empty())
-    throw UsageError("probe needs HOST:PORT, got '" + target + "': " + why);
-  const double duration = args.number("duration", 5.0);
-  const double rate = args.number("rate", 0.0);
-  const double stall = args.number("stall", 1.0);
-  const double max_dim = args.number("volume-max-dim", 0.0);
-  if (!(duration > 0)) throw UsageError("--duration must be positive");
-  if (rate < 0) throw UsageError("--rate must not be negative");
-  if (!(stall > 0)) throw UsageError("--stall must be positive");
-  if (max_dim < 0 || max_dim > 65535) throw UsageError("--volume-max-dim must be in 0..65535");
-  const std::string role = args.get("role").value_or("observer");
-  if (role != "observer" && role != "controller")
-    throw UsageError("--role must be observer or controller");
-  const bool quiet = args.has("quiet");
-
-  v1::Hello hello;
-  hello.set_protocol_version(wire::kProtocolVersion);
-  hello.set_role(role == "controller" ? v1::CONTROLLER : v1::OBSERVER);
-  hello.set_token(args.get("token").value_or(""));
-  hello.set_client_name(args.get("name").value_or("palp-probe"));
-  hello.set_frame_rate_hz(rate);
-  hello.set_want_contacts(args.has("contacts"));
-  hello.set_volume_max_dim(static_cast<std::uint32_t>(max_dim));
-
+  const ProbeRequest q = probe_request(args);
   const std::unique_ptr<tls::ClientContext> tls = client_tls(args);
-  Probe probe(host, std::to_string(port), hello, duration, stall, tls.get());
+  Probe probe(q.host, std::to_string(q.port), q.hello, q.duration, q.stall, tls.get());
   Report r = probe.run();
-  const double span_s = static_cast<double>(r.last_rx_ns - r.first_rx_ns) * 1e-9;
-  const double fps = r.frames > 1 && span_s > 0 ? static_cast<double>(r.frames - 1) / span_s : 0.0;
-  double expected = 0.0;
-  if (r.frames > 0) {
-    expected = rate > 0
-                   ? std::floor(static_cast<double>(r.last_t_ns - r.first_t_ns) * 1e-9 * rate) + 1
-                   : static_cast<double>(r.last_seq - r.first_seq + 1);
-  }
-  const double delivered =
-      expected > 0 ? std::min(1.0, static_cast<double>(r.frames) / expected) : 0.0;
-  const bool latency_ok = (probe.loopback() || args.has("same-host")) && !r.latency_us.empty();
-  const double p50 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.5) : NAN;
-  const double p90 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.9) : NAN;
-  const double p99 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.99) : NAN;
-  const double p999 = latency_ok ? percentile_rounded_rank(r.latency_us, 0.999) : NAN;
-  const double lmax =
-      latency_ok ? *std::max_element(r.latency_us.begin(), r.latency_us.end()) : NAN;
-
-  if (!quiet) {
-    std::printf("probe %s: %s\n", target.c_str(), r.failure.empty() ? "ok" : r.failure.c_str());
-    if (r.have_scene)
-      std::printf("  scene     %s, tool %s, device %s, %.6g Hz\n", r.scene.source().c_str(),
-                  r.scene.tool().name().c_str(), r.scene.device().c_str(), r.scene.tick_rate_hz());
-    if (r.have_scene && r.scene.grid().direction_size() == 9) {
-      WorldPlacement world;
-      for (int i = 0; i < 9; ++i)
-        world.direction[static_cast<std::size_t>(i)] = r.scene.grid().direction(i);
-      const PatientFrame frame = patient_frame(world);
-      std::printf("  patient   CT stored %s: anterior is %s, superior %s in the scene frame\n",
-                  frame.orientation_code().c_str(),
-                  to_string(frame.nearest_axis(Anatomy::Anterior)).c_str(),
-                  to_string(frame.nearest_axis(Anatomy::Superior)).c_str());
-    }
-    if (r.have_scene && r.scene.has_registration()) {
-      const v1::Registration& g = r.scene.registration();
-      std::printf(
-          "  device    placed at home '%s': axes %s, scale %g, workspace +-(%g, %g, %g) mm, "
-          "centre (%.1f, %.1f, %.1f) mm, skin below it at (%.1f, %.1f, %.1f)",
-          g.home_site().c_str(), g.axes().c_str(), g.scale(),
-          g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(0) : 0.0,
-          g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(1) : 0.0,
-          g.workspace_half_mm_size() == 3 ? g.workspace_half_mm(2) : 0.0, g.home().x(),
-          g.home().y(), g.home().z(), g.home_skin().x(), g.home_skin().y(), g.home_skin().z());
-      if (r.have_stats && r.stats.recentres() > 0)
-        std::printf("; re-centred %llu times, centre now (%.1f, %.1f, %.1f)",
-                    static_cast<unsigned long long>(r.stats.recentres()),
-                    r.stats.registration_home().x(), r.stats.registration_home().y(),
-                    r.stats.registration_home().z());
-      std::printf("\n");
-    } else if (r.have_scene) {
-      std::printf("  device    moves in the scene frame (no registration)\n");
-    }
-    if (r.have_scene && r.scene.has_limits()) {
-      const v1::ForceLimits& l = r.scene.limits();
-      std::printf("  limits    %s: %.2f N", l.profile().c_str(), l.max_force_n());
-      if (r.have_stats && r.stats.declared_max_force_n() > 0) {
-        std::printf(" (the device declares %.2f N", r.stats.declared_max_force_n());
-        if (r.stats.declared_max_stiffness_n_per_mm() > 0)
-          std::printf(", %.2f N/mm", r.stats.declared_max_stiffness_n_per_mm());
-        if (r.stats.declared_damping_n_s_per_mm() > 0)
-          std::printf(", %.3f N s/mm", r.stats.declared_damping_n_s_per_mm());
-        std::printf(")");
-      }
-      std::printf(
-          ", %.2f N/mm, step <= %.2f N per tick", l.max_stiffness_n_per_mm(),
-          r.scene.tick_rate_hz() > 0 ? l.max_force_rate_n_per_s() / r.scene.tick_rate_hz() : 0.0);
-      if (l.coupling_stiffness_n_per_mm() > 0)
-        std::printf(", virtual coupling %.2f N/mm and %.4f N s/mm", l.coupling_stiffness_n_per_mm(),
-                    l.coupling_damping_n_s_per_mm());
-      if (l.engage_threshold_n() > 0)
-        std::printf(", engages below %.2f N over %.1f s", l.engage_threshold_n(),
-                    l.engage_ramp_s());
-      if (l.max_damping_n_s_per_mm() > 0)
-        std::printf(", passivity controller up to %.3f N s/mm", l.max_damping_n_s_per_mm());
-      if (r.have_stats)
-        std::printf("; engagement gain now %.2f; passivity controller damped %llu ticks, %.3f mJ",
-                    r.stats.engage_gain(),
-                    static_cast<unsigned long long>(r.stats.passivity_ticks()),
-                    r.stats.passivity_dissipated_mj());
-      std::printf("\n");
-    } else if (r.have_scene) {
-      std::printf("  limits    none (%s)\n", r.scene.device().c_str());
-    }
-    std::printf(
-        "  frames    %llu in %.3f s: %.1f frames/s, delivered %.4f (%llu gaps, %llu frames "
-        "missing, largest gap %llu), %llu with contact, %llu zeroed by faults\n",
-        static_cast<unsigned long long>(r.frames), span_s, fps, delivered,
-        static_cast<unsigned long long>(r.gaps), static_cast<unsigned long long>(r.gap_frames),
-        static_cast<unsigned long long>(r.max_gap),
-        static_cast<unsigned long long>(r.contact_frames),
-        static_cast<unsigned long long>(r.fault_frames));
-    if (latency_ok)
-      std::printf("  latency   p50 %.1f us, p90 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
-                  p50, p90, p99, p999, lmax);
-    else
-      std::printf("  latency   n/a (not on the server's host, or no frames)\n");
-    std::printf("  arrivals  longest silence %.1f ms, %llu silences over 50 ms\n",
-                static_cast<double>(r.max_interval_ns) * 1e-6,
-                static_cast<unsigned long long>(r.intervals_over_50ms));
-    if (r.volume_chunks)
-      std::printf("  volume    %llu chunks, %llu bytes\n",
-                  static_cast<unsigned long long>(r.volume_chunks),
-                  static_cast<unsigned long long>(r.volume_bytes));
-    if (r.have_stats) {
-      const v1::Stats& s = r.stats;
-      std::printf(
-          "  server    %.1f Hz (target %.6g), %llu ticks, %llu overruns, %llu faults, "
-          "jitter max %.1f us, tick mean %.2f us, %u clients, %s\n",
-          s.rate_hz(), s.target_rate_hz(), static_cast<unsigned long long>(s.ticks()),
-          static_cast<unsigned long long>(s.overruns()),
-          static_cast<unsigned long long>(s.faults()), s.jitter_max_us(), s.tick_mean_us(),
-          s.clients(), s.realtime() ? "real time" : "not real time");
-      // the device as palpd sees it (e.g. a Falcon: homing, what to do), and its link
-      std::printf("  status    device %s%s%s", device_state_text(s.device_state()),
-                  s.device_message().empty() ? "" : ": ", s.device_message().c_str());
-      if (s.device_exchanges() > 0)
-        std::printf(
-            "; link %llu exchanges, %llu corrupt and %llu short frames, %llu lost replies, "
-            "%llu commands force-limited",
-            static_cast<unsigned long long>(s.device_exchanges()),
-            static_cast<unsigned long long>(s.device_corrupt_frames()),
-            static_cast<unsigned long long>(s.device_short_frames()),
-            static_cast<unsigned long long>(s.device_lost_replies()),
-            static_cast<unsigned long long>(s.device_force_limited()));
-      std::printf("\n");
-      if (!s.tuning().empty() || !s.tuning_note().empty())
-        std::printf("  tuning    %s%s%s\n", s.tuning().empty() ? "defaults" : s.tuning().c_str(),
-                    s.tuning_note().empty() ? "" : ": ", s.tuning_note().c_str());
-      if (!s.maps().empty()) std::printf("  maps      %s\n", s.maps().c_str());
-      std::printf("  jitter   ");
-      for (int b = 0; b < s.jitter_counts_size(); ++b) {
-        if (b < s.jitter_bucket_upper_us_size())
-          std::printf(" <%gus:%llu", s.jitter_bucket_upper_us(b),
-                      static_cast<unsigned long long>(s.jitter_counts(b)));
-        else
-          std::printf(" more:%llu", static_cast<unsigned long long>(s.jitter_counts(b)));
-      }
-      std::printf("\n");
-      if (!s.wake_mode().empty()) {
-        std::printf(
-            "  wake-up   %s, spin window %.0f us; the loop thread uses %.1f %% of a CPU, "
-            "%.1f %% spinning; kernel wake-up latency max %.1f us:\n           ",
-            s.wake_mode().c_str(), s.spin_window_us(), 100 * s.loop_cpu_fraction(),
-            100 * s.spin_cpu_fraction(), s.wake_latency_max_us());
-        for (int b = 0; b < s.wake_latency_counts_size(); ++b) {
-          if (b < s.jitter_bucket_upper_us_size())
-            std::printf(" <%gus:%llu", s.jitter_bucket_upper_us(b),
-                        static_cast<unsigned long long>(s.wake_latency_counts(b)));
-          else
-            std::printf(" more:%llu", static_cast<unsigned long long>(s.wake_latency_counts(b)));
-        }
-        std::printf("\n");
-      }
-    }
-  }
-  std::printf(
-      "{\"ok\":%s,\"frames\":%llu,\"frames_per_s\":%s,\"delivered\":%s,\"gaps\":%llu,"
-      "\"gap_frames\":%llu,\"max_gap\":%llu,\"max_interval_ms\":%s,\"intervals_over_50ms\":%llu,"
-      "\"latency_us\":{\"p50\":%s,\"p90\":%s,\"p99\":%s,\"p999\":%s,\"max\":%s},"
-      "\"server_rate_hz\":%s,\"overruns\":%llu,\"faults\":%llu,\"jitter_max_us\":%s,"
-      "\"clients\":%u,\"wake\":\"%s\",\"spin_window_us\":%s,\"spin_cpu_fraction\":%s}\n",
-      r.failure.empty() && r.frames > 0 ? "true" : "false",
-      static_cast<unsigned long long>(r.frames), json_number(fps).c_str(),
-      json_number(delivered).c_str(), static_cast<unsigned long long>(r.gaps),
-      static_cast<unsigned long long>(r.gap_frames), static_cast<unsigned long long>(r.max_gap),
-      json_number(static_cast<double>(r.max_interval_ns) * 1e-6).c_str(),
-      static_cast<unsigned long long>(r.intervals_over_50ms), json_number(p50).c_str(),
-      json_number(p90).c_str(), json_number(p99).c_str(), json_number(p999).c_str(),
-      json_number(lmax).c_str(), json_number(r.have_stats ? r.stats.rate_hz() : NAN).c_str(),
-      static_cast<unsigned long long>(r.stats.overruns()),
-      static_cast<unsigned long long>(r.stats.faults()),
-      json_number(r.have_stats ? r.stats.jitter_max_us() : NAN).c_str(), r.stats.clients(),
-      r.stats.wake_mode().c_str(),
-      json_number(r.have_stats ? r.stats.spin_window_us() : NAN).c_str(),
-      json_number(r.have_stats ? r.stats.spin_cpu_fraction() : NAN).c_str());
+  const Summary s = summarize(r, q.rate, probe.loopback() || q.same_host);
+  if (!q.quiet) print_report(q.target, r, s);
+  print_json(r, s);
   if (!r.failure.empty()) {
     std::fprintf(stderr, "palp: error: probe: %s\n", r.failure.c_str());
     return 1;
