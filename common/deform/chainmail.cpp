@@ -159,12 +159,20 @@ void ChainMail::hold_anchors(std::span<const ChainMailAnchor> anchors) {
 }
 
 std::int64_t ChainMail::propagate() {
+  std::array<Index3, 3> comp_lo{}, comp_hi{};
+  Index3 lo{}, hi{};
+  influence_boxes(comp_lo, comp_hi, lo, hi);
+  for (int c = 0; c < 3; ++c) propagate_component(c, comp_lo[c], comp_hi[c]);
+  return measure_moved(lo, hi);
+}
+
+void ChainMail::influence_boxes(std::array<Index3, 3>& comp_lo, std::array<Index3, 3>& comp_hi,
+                                Index3& lo, Index3& hi) const {
   // The influence box of each component: beyond ceil(max |v_c| / slack) links along an axis no
   // bound of component c reaches 0 (each component is its own problem, so a press along y
   // with little drag sweeps the x and z components over a much smaller box). The union of the
   // three is where anything can move.
-  std::array<Index3, 3> comp_lo{}, comp_hi{};
-  Index3 lo{}, hi{}, anchor_lo{}, anchor_hi{};
+  Index3 anchor_lo{}, anchor_hi{};
   std::array<double, 3> largest{};
   for (int a = 0; a < 3; ++a) {
     anchor_lo[a] = dims_[a];
@@ -187,82 +195,93 @@ std::int64_t ChainMail::propagate() {
       lo[a] = std::min(lo[a], comp_lo[c][a]);
       hi[a] = std::max(hi[a], comp_hi[c][a]);
     }
-  const std::int64_t stride_j = dims_[0], stride_k = dims_[0] * dims_[1];
+}
 
-  for (int c = 0; c < 3; ++c) {
-    const Index3& clo = comp_lo[c];
-    const Index3& chi = comp_hi[c];
-    const std::int64_t nx = chi[0] - clo[0];
-    double* upper = upper_.data();
-    double* lower = lower_.data();
-    for (std::int64_t k = clo[2]; k < chi[2]; ++k)
-      for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
-        const auto row = index(clo[0], j, k);
-        std::fill(upper + row, upper + row + nx, 0.0);
-        std::fill(lower + row, lower + row + nx, 0.0);
-      }
-    for (const auto& anchor : held_) {
-      const auto n = index(anchor.element[0], anchor.element[1], anchor.element[2]);
-      upper[n] = lower[n] = component(anchor.displacement, c);
+void ChainMail::propagate_component(int c, const Index3& clo, const Index3& chi) {
+  const std::int64_t nx = chi[0] - clo[0];
+  double* upper = upper_.data();
+  double* lower = lower_.data();
+  for (std::int64_t k = clo[2]; k < chi[2]; ++k)
+    for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
+      const auto row = index(clo[0], j, k);
+      std::fill(upper + row, upper + row + nx, 0.0);
+      std::fill(lower + row, lower + row + nx, 0.0);
     }
-    // Axis 0: along each row, a dependency chain.
-    const double up0 = link_max_[c][0], down0 = -link_min_[c][0];
-    for (std::int64_t k = clo[2]; k < chi[2]; ++k)
-      for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
-        double* u = upper + index(0, j, k);
-        double* l = lower + index(0, j, k);
-        for (std::int64_t i = clo[0] + 1; i < chi[0]; ++i) {
-          u[i] = std::min(u[i], u[i - 1] + up0);
-          l[i] = std::max(l[i], l[i - 1] - down0);
-        }
-        for (std::int64_t i = chi[0] - 2; i >= clo[0]; --i) {
-          u[i] = std::min(u[i], u[i + 1] + down0);
-          l[i] = std::max(l[i], l[i + 1] - up0);
-        }
-      }
-    // Axes 1 and 2: whole rows at a time (independent along i, so they vectorise).
-    for (int a = 1; a < 3; ++a) {
-      const double up = link_max_[c][a], down = -link_min_[c][a];
-      const std::int64_t stride = a == 1 ? stride_j : stride_k;
-      const std::int64_t outer_lo = a == 1 ? clo[2] : clo[1], outer_hi = a == 1 ? chi[2] : chi[1];
-      for (std::int64_t outer = outer_lo; outer < outer_hi; ++outer) {
-        const auto base = a == 1 ? index(clo[0], 0, outer) : index(clo[0], outer, 0);
-        for (std::int64_t s = clo[a] + 1; s < chi[a]; ++s) {
-          double* u = upper + base + s * stride;
-          double* l = lower + base + s * stride;
-          const double* up_prev = u - stride;
-          const double* low_prev = l - stride;
-          for (std::int64_t i = 0; i < nx; ++i) {
-            u[i] = std::min(u[i], up_prev[i] + up);
-            l[i] = std::max(l[i], low_prev[i] - down);
-          }
-        }
-        for (std::int64_t s = chi[a] - 2; s >= clo[a]; --s) {
-          double* u = upper + base + s * stride;
-          double* l = lower + base + s * stride;
-          const double* up_next = u + stride;
-          const double* low_next = l + stride;
-          for (std::int64_t i = 0; i < nx; ++i) {
-            u[i] = std::min(u[i], up_next[i] + down);
-            l[i] = std::max(l[i], low_next[i] - up);
-          }
-        }
-      }
-    }
-    // The solution nearest rest: lower where it is above 0, upper where it is below (never both
-    // once the anchors are compatible). Outside this component's box it is 0 (reset() left it).
-    double* d = disp_[c].data();
-    for (std::int64_t k = clo[2]; k < chi[2]; ++k)
-      for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
-        const auto row = index(0, j, k);
-        for (std::int64_t i = clo[0]; i < chi[0]; ++i)
-          d[row + i] = lower[row + i] > 0.0 ? lower[row + i] : upper[row + i];
-      }
-    for (const auto& anchor : held_)
-      d[index(anchor.element[0], anchor.element[1], anchor.element[2])] =
-          component(anchor.displacement, c);
+  for (const auto& anchor : held_) {
+    const auto n = index(anchor.element[0], anchor.element[1], anchor.element[2]);
+    upper[n] = lower[n] = component(anchor.displacement, c);
   }
+  sweep_rows(c, clo, chi);
+  sweep_columns_and_slices(c, clo, chi);
+  // The solution nearest rest: lower where it is above 0, upper where it is below (never both
+  // once the anchors are compatible). Outside this component's box it is 0 (reset() left it).
+  double* d = disp_[c].data();
+  for (std::int64_t k = clo[2]; k < chi[2]; ++k)
+    for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
+      const auto row = index(0, j, k);
+      for (std::int64_t i = clo[0]; i < chi[0]; ++i)
+        d[row + i] = lower[row + i] > 0.0 ? lower[row + i] : upper[row + i];
+    }
+  for (const auto& anchor : held_)
+    d[index(anchor.element[0], anchor.element[1], anchor.element[2])] =
+        component(anchor.displacement, c);
+}
 
+void ChainMail::sweep_rows(int c, const Index3& clo, const Index3& chi) {
+  // Axis 0: along each row, a dependency chain.
+  const double up0 = link_max_[c][0], down0 = -link_min_[c][0];
+  for (std::int64_t k = clo[2]; k < chi[2]; ++k)
+    for (std::int64_t j = clo[1]; j < chi[1]; ++j) {
+      double* u = upper_.data() + index(0, j, k);
+      double* l = lower_.data() + index(0, j, k);
+      for (std::int64_t i = clo[0] + 1; i < chi[0]; ++i) {
+        u[i] = std::min(u[i], u[i - 1] + up0);
+        l[i] = std::max(l[i], l[i - 1] - down0);
+      }
+      for (std::int64_t i = chi[0] - 2; i >= clo[0]; --i) {
+        u[i] = std::min(u[i], u[i + 1] + down0);
+        l[i] = std::max(l[i], l[i + 1] - up0);
+      }
+    }
+}
+
+void ChainMail::sweep_columns_and_slices(int c, const Index3& clo, const Index3& chi) {
+  // Axes 1 and 2: whole rows at a time (independent along i, so they vectorise).
+  const std::int64_t nx = chi[0] - clo[0];
+  const std::int64_t stride_j = dims_[0], stride_k = dims_[0] * dims_[1];
+  double* upper = upper_.data();
+  double* lower = lower_.data();
+  for (int a = 1; a < 3; ++a) {
+    const double up = link_max_[c][a], down = -link_min_[c][a];
+    const std::int64_t stride = a == 1 ? stride_j : stride_k;
+    const std::int64_t outer_lo = a == 1 ? clo[2] : clo[1], outer_hi = a == 1 ? chi[2] : chi[1];
+    for (std::int64_t outer = outer_lo; outer < outer_hi; ++outer) {
+      const auto base = a == 1 ? index(clo[0], 0, outer) : index(clo[0], outer, 0);
+      for (std::int64_t s = clo[a] + 1; s < chi[a]; ++s) {
+        double* u = upper + base + s * stride;
+        double* l = lower + base + s * stride;
+        const double* up_prev = u - stride;
+        const double* low_prev = l - stride;
+        for (std::int64_t i = 0; i < nx; ++i) {
+          u[i] = std::min(u[i], up_prev[i] + up);
+          l[i] = std::max(l[i], low_prev[i] - down);
+        }
+      }
+      for (std::int64_t s = chi[a] - 2; s >= clo[a]; --s) {
+        double* u = upper + base + s * stride;
+        double* l = lower + base + s * stride;
+        const double* up_next = u + stride;
+        const double* low_next = l + stride;
+        for (std::int64_t i = 0; i < nx; ++i) {
+          u[i] = std::min(u[i], up_next[i] + down);
+          l[i] = std::max(l[i], low_next[i] - up);
+        }
+      }
+    }
+  }
+}
+
+std::int64_t ChainMail::measure_moved(const Index3& lo, const Index3& hi) {
   // Count what moved, the tight box around it, and each component's own (relax() starts from
   // those).
   // Row by row: the count (a branch-free loop) and each component's first and last nonzero

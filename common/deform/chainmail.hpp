@@ -107,7 +107,20 @@ class ChainMail {
   double chain_slack(int component, const std::array<std::int64_t, 3>& from,
                      const std::array<std::int64_t, 3>& to) const;
   void hold_anchors(std::span<const ChainMailAnchor> anchors);
+  using Index3 = std::array<std::int64_t, 3>;
+  // The anchors' bounds swept over the box; the solution nearest rest in disp_. Elements moved.
   std::int64_t propagate();
+  // Each component's influence box (comp_lo/comp_hi) and their union (lo/hi).
+  void influence_boxes(std::array<Index3, 3>& comp_lo, std::array<Index3, 3>& comp_hi, Index3& lo,
+                       Index3& hi) const;
+  // Component c's bounds seeded at the anchors, swept over its box, the nearest rest written.
+  void propagate_component(int c, const Index3& lo, const Index3& hi);
+  // Component c's bounds swept forward and back along axis 0, row by row.
+  void sweep_rows(int c, const Index3& lo, const Index3& hi);
+  // Component c's bounds swept along axes 1 and 2, a whole row at a time.
+  void sweep_columns_and_slices(int c, const Index3& lo, const Index3& hi);
+  // Counts the elements that moved in [lo, hi); sets support_lo_/hi_ and the active box.
+  std::int64_t measure_moved(const Index3& lo, const Index3& hi);
   void relax();
   void zero_box(std::array<std::int64_t, 3> lo, std::array<std::int64_t, 3> hi);
 
