@@ -106,14 +106,27 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
                      " values, the original " + std::to_string(original_.size()));
   DeformResult result;
   result.lattice = lattice_;
+  const AnchorBox box = place_anchors(contacts, result);  // anchors_, in volume elements
+  Index3 new_lo{}, new_hi{};                              // the voxels deformed this update
+  if (anchors_.empty()) {
+    roi_active_ = false;
+    mail_.reset();
+  } else {
+    solve_around(box, result, new_lo, new_hi);  // the ROI, the solve, what may have moved
+  }
+  rewrite(out, new_lo, new_hi, result);  // the last box restored, the new one resampled
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
 
+SkinDeformer::AnchorBox SkinDeformer::place_anchors(std::span<const DeformContact> contacts,
+                                                    DeformResult& result) {
   // Anchors, in volume voxels for now: the element nearest each proxy moves by x - p.
   anchors_.clear();
-  Index3 box_lo{}, box_hi{};
-  std::array<double, 3> largest{};
+  AnchorBox box;
   for (int a = 0; a < 3; ++a) {
-    box_lo[a] = std::numeric_limits<std::int64_t>::max();
-    box_hi[a] = std::numeric_limits<std::int64_t>::min();
+    box.lo[a] = std::numeric_limits<std::int64_t>::max();
+    box.hi[a] = std::numeric_limits<std::int64_t>::min();
   }
   for (const auto& contact : contacts) {
     if (!is_finite(contact.x) || !is_finite(contact.p)) continue;
@@ -135,63 +148,68 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
     result.mean_anchor_displacement += displacement;
     const std::array<double, 3> d{displacement.x, displacement.y, displacement.z};
     for (int a = 0; a < 3; ++a) {
-      box_lo[a] = std::min(box_lo[a], element[a]);
-      box_hi[a] = std::max(box_hi[a], element[a] + 1);
-      largest[a] = std::max(largest[a], std::abs(d[a]));
+      box.lo[a] = std::min(box.lo[a], element[a]);
+      box.hi[a] = std::max(box.hi[a], element[a] + 1);
+      box.largest[a] = std::max(box.largest[a], std::abs(d[a]));
     }
   }
+  return box;
+}
 
-  Index3 new_lo{}, new_hi{};  // the voxels deformed this update
-  if (anchors_.empty()) {
-    roi_active_ = false;
-    mail_.reset();
-  } else {
-    result.anchors = static_cast<std::int64_t>(anchors_.size());
-    result.mean_anchor_displacement *= 1.0 / static_cast<double>(anchors_.size());
-    // The ROI: the margin, and at least the links the largest displacement needs to fade to
-    // 0 (one more for the relaxation's reach, one more so the boundary lies beyond).
-    const ChainMailParams& cm = params_.chainmail;
-    const int relax_reach = cm.relax_iterations > 0 && cm.relax_rate > 0.0 ? 1 : 0;
-    Index3 elo{}, ehi{};  // the ROI in lattice elements
-    std::array<double, 3> h{};
+void SkinDeformer::place_roi(const AnchorBox& box, Index3& elo, Index3& ehi,
+                             std::array<double, 3>& h) {
+  // The ROI: the margin, and at least the links the largest displacement needs to fade to
+  // 0 (one more for the relaxation's reach, one more so the boundary lies beyond).
+  const ChainMailParams& cm = params_.chainmail;
+  const int relax_reach = cm.relax_iterations > 0 && cm.relax_rate > 0.0 ? 1 : 0;
+  for (int a = 0; a < 3; ++a) {
+    h[a] = spacing_[a] * static_cast<double>(lattice_[a]);
+    std::int64_t reach = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double slack =
+          (c == a ? std::min(cm.max_stretch - 1.0, 1.0 - cm.min_stretch) : cm.max_shear) * h[a];
+      reach = std::max(reach, static_cast<std::int64_t>(std::ceil(box.largest[c] / slack)));
+    }
+    const auto margin = std::max(static_cast<std::int64_t>(std::ceil(params_.roi_margin_mm / h[a])),
+                                 reach + relax_reach + 1);
+    elo[a] = std::max<std::int64_t>(0, box.lo[a] - margin);
+    ehi[a] = std::min<std::int64_t>(lattice_dims_[a], box.hi[a] + margin);
+    roi_lo_[a] = elo[a] * lattice_[a];
+    roi_hi_[a] = std::min<std::int64_t>(dims_[a], (ehi[a] - 1) * lattice_[a] + 1);
+  }
+}
+
+void SkinDeformer::solve_around(const AnchorBox& box, DeformResult& result, Index3& new_lo,
+                                Index3& new_hi) {
+  result.anchors = static_cast<std::int64_t>(anchors_.size());
+  result.mean_anchor_displacement *= 1.0 / static_cast<double>(anchors_.size());
+  Index3 elo{}, ehi{};  // the ROI in lattice elements
+  std::array<double, 3> h{};
+  place_roi(box, elo, ehi, h);
+  for (auto& anchor : anchors_)
+    for (int a = 0; a < 3; ++a) anchor.element[a] -= elo[a];
+  // The lattice origin too: the relaxation's colours then follow the element's place in the
+  // volume, not in the ROI, so the ROI's placement (margin, clipping) changes nothing.
+  mail_.resize({ehi[0] - elo[0], ehi[1] - elo[1], ehi[2] - elo[2]}, h, elo);
+  const auto solve_start = std::chrono::steady_clock::now();
+  mail_.solve(anchors_);
+  result.solve_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_start).count();
+  roi_active_ = true;
+  result.active = true;
+  result.roi_lo = roi_lo_;
+  result.roi_hi = roi_hi_;
+  result.elements = (ehi[0] - elo[0]) * (ehi[1] - elo[1]) * (ehi[2] - elo[2]);
+  // The voxels whose displacement may be nonzero: those next to a moved element.
+  if (!empty_box(mail_.active_lo(), mail_.active_hi()))
     for (int a = 0; a < 3; ++a) {
-      h[a] = spacing_[a] * static_cast<double>(lattice_[a]);
-      std::int64_t reach = 0;
-      for (int c = 0; c < 3; ++c) {
-        const double slack =
-            (c == a ? std::min(cm.max_stretch - 1.0, 1.0 - cm.min_stretch) : cm.max_shear) * h[a];
-        reach = std::max(reach, static_cast<std::int64_t>(std::ceil(largest[c] / slack)));
-      }
-      const auto margin =
-          std::max(static_cast<std::int64_t>(std::ceil(params_.roi_margin_mm / h[a])),
-                   reach + relax_reach + 1);
-      elo[a] = std::max<std::int64_t>(0, box_lo[a] - margin);
-      ehi[a] = std::min<std::int64_t>(lattice_dims_[a], box_hi[a] + margin);
-      roi_lo_[a] = elo[a] * lattice_[a];
-      roi_hi_[a] = std::min<std::int64_t>(dims_[a], (ehi[a] - 1) * lattice_[a] + 1);
+      new_lo[a] = std::max(roi_lo_[a], (mail_.active_lo()[a] - 1) * lattice_[a] + 1 + roi_lo_[a]);
+      new_hi[a] = std::min(roi_hi_[a], (mail_.active_hi()[a]) * lattice_[a] + roi_lo_[a]);
     }
-    for (auto& anchor : anchors_)
-      for (int a = 0; a < 3; ++a) anchor.element[a] -= elo[a];
-    // The lattice origin too: the relaxation's colours then follow the element's place in the
-    // volume, not in the ROI, so the ROI's placement (margin, clipping) changes nothing.
-    mail_.resize({ehi[0] - elo[0], ehi[1] - elo[1], ehi[2] - elo[2]}, h, elo);
-    const auto solve_start = std::chrono::steady_clock::now();
-    mail_.solve(anchors_);
-    result.solve_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_start).count();
-    roi_active_ = true;
-    result.active = true;
-    result.roi_lo = roi_lo_;
-    result.roi_hi = roi_hi_;
-    result.elements = (ehi[0] - elo[0]) * (ehi[1] - elo[1]) * (ehi[2] - elo[2]);
-    // The voxels whose displacement may be nonzero: those next to a moved element.
-    if (!empty_box(mail_.active_lo(), mail_.active_hi()))
-      for (int a = 0; a < 3; ++a) {
-        new_lo[a] = std::max(roi_lo_[a], (mail_.active_lo()[a] - 1) * lattice_[a] + 1 + roi_lo_[a]);
-        new_hi[a] = std::min(roi_hi_[a], (mail_.active_hi()[a]) * lattice_[a] + roi_lo_[a]);
-      }
-  }
+}
 
+void SkinDeformer::rewrite(std::span<float> out, const Index3& new_lo, const Index3& new_hi,
+                           DeformResult& result) {
   // Restore what the last update wrote and this one does not, then write the new box.
   const auto resample_start = std::chrono::steady_clock::now();
   restore(out, new_lo, new_hi);
@@ -214,9 +232,6 @@ DeformResult SkinDeformer::update(std::span<const DeformContact> contacts, std::
   if (has_new) resample(out);
   result.resample_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - resample_start).count();
-
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return result;
 }
 
 void SkinDeformer::restore(std::span<float> out, const Index3& keep_lo,

@@ -86,6 +86,21 @@ class SkinDeformer {
   std::array<double, 3> spacing() const { return spacing_; }
 
  private:
+  using Index3 = std::array<std::int64_t, 3>;
+  // The anchors' box in lattice elements [lo, hi) and their largest displacement per component.
+  struct AnchorBox {
+    Index3 lo{}, hi{};
+    std::array<double, 3> largest{};
+  };
+  // anchors_ from the contacts (the element nearest each proxy, moved by x - p, clamped).
+  AnchorBox place_anchors(std::span<const DeformContact> contacts, DeformResult& result);
+  // The ROI around the anchors in elements [elo, ehi) (roi_lo_/roi_hi_ in voxels), element size h.
+  void place_roi(const AnchorBox& box, Index3& elo, Index3& ehi, std::array<double, 3>& h);
+  // The ChainMail solved over the ROI; [new_lo, new_hi) the voxels it may have moved.
+  void solve_around(const AnchorBox& box, DeformResult& result, Index3& new_lo, Index3& new_hi);
+  // The last update's box restored, the new one resampled into `out`; result's written box.
+  void rewrite(std::span<float> out, const Index3& new_lo, const Index3& new_hi,
+               DeformResult& result);
   void restore(std::span<float> out, const std::array<std::int64_t, 3>& keep_lo,
                const std::array<std::int64_t, 3>& keep_hi) const;
   void resample(std::span<float> out);
