@@ -284,70 +284,76 @@ float SkinDeformer::sample(double i, double j, double k) const {
 }
 
 void SkinDeformer::resample(std::span<float> out) {
-  if (lattice_ != std::array<std::int64_t, 3>{1, 1, 1}) {  // interpolated between elements
-    const auto md = mail_.dims();
-    const double* comp[3] = {mail_.displacement_component(0).data(),
-                             mail_.displacement_component(1).data(),
-                             mail_.displacement_component(2).data()};
-    const double inv[3] = {1.0 / spacing_[0], 1.0 / spacing_[1], 1.0 / spacing_[2]};
-    // Element e and fraction f of a voxel along an axis (the last element has f = 0: e + 1 is
-    // clamped, its weight 0).
-    const auto split = [&](int a, std::int64_t v, std::int64_t& e0, std::int64_t& e1, double& f) {
-      const std::int64_t local = v - roi_lo_[a];
-      e0 = local / lattice_[a];
-      e1 = std::min(e0 + 1, md[a] - 1);
-      f = static_cast<double>(local - e0 * lattice_[a]) / static_cast<double>(lattice_[a]);
-    };
-    // The elements along i that the written box's rows interpolate between, and per voxel of
-    // a row its two elements (relative to the first) and fraction: the same for every row.
-    const std::int64_t e_first = (written_lo_[0] - roi_lo_[0]) / lattice_[0];
-    const std::int64_t e_count =
-        std::min((written_hi_[0] - 1 - roi_lo_[0]) / lattice_[0] + 1, md[0] - 1) - e_first + 1;
-    const std::int64_t nx = written_hi_[0] - written_lo_[0];
-    row_disp_.resize(static_cast<std::size_t>(3 * e_count));
-    column_.resize(static_cast<std::size_t>(nx));
-    for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
-      Column& c = column_[static_cast<std::size_t>(i - written_lo_[0])];
-      split(0, i, c.e0, c.e1, c.f);
-      c.e0 -= e_first;
-      c.e1 -= e_first;
-    }
-    double* row_d[3] = {row_disp_.data(), row_disp_.data() + e_count,
-                        row_disp_.data() + 2 * e_count};
-    for (std::int64_t k = written_lo_[2]; k < written_hi_[2]; ++k) {
-      std::int64_t k0, k1;
-      double fk;
-      split(2, k, k0, k1, fk);
-      for (std::int64_t j = written_lo_[1]; j < written_hi_[1]; ++j) {
-        std::int64_t j0, j1;
-        double fj;
-        split(1, j, j0, j1, fj);
-        const std::int64_t rows[4] = {md[0] * (j0 + md[1] * k0), md[0] * (j1 + md[1] * k0),
-                                      md[0] * (j0 + md[1] * k1), md[0] * (j1 + md[1] * k1)};
-        const double w[4] = {(1 - fj) * (1 - fk), fj * (1 - fk), (1 - fj) * fk, fj * fk};
-        // The row's displacement at its elements (interpolated along j and k once a row, not
-        // once a voxel), then along i per voxel.
-        for (int a = 0; a < 3; ++a)
-          for (std::int64_t e = 0; e < e_count; ++e) {
-            const std::int64_t n = e_first + e;
-            row_d[a][e] = w[0] * comp[a][rows[0] + n] + w[1] * comp[a][rows[1] + n] +
-                          w[2] * comp[a][rows[2] + n] + w[3] * comp[a][rows[3] + n];
-          }
-        const auto row = dims_[0] * (j + dims_[1] * k);
-        for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
-          const Column& c = column_[static_cast<std::size_t>(i - written_lo_[0])];
-          double d[3];
-          for (int a = 0; a < 3; ++a) d[a] = (1 - c.f) * row_d[a][c.e0] + c.f * row_d[a][c.e1];
-          out[row + i] = d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0
-                             ? original_[row + i]
-                             : sample(static_cast<double>(i) - d[0] * inv[0],
-                                      static_cast<double>(j) - d[1] * inv[1],
-                                      static_cast<double>(k) - d[2] * inv[2]);
+  if (lattice_ != std::array<std::int64_t, 3>{1, 1, 1})
+    resample_interpolated(out);
+  else
+    resample_at_elements(out);
+}
+
+void SkinDeformer::resample_interpolated(std::span<float> out) {
+  const auto md = mail_.dims();
+  const double* comp[3] = {mail_.displacement_component(0).data(),
+                           mail_.displacement_component(1).data(),
+                           mail_.displacement_component(2).data()};
+  const double inv[3] = {1.0 / spacing_[0], 1.0 / spacing_[1], 1.0 / spacing_[2]};
+  // Element e and fraction f of a voxel along an axis (the last element has f = 0: e + 1 is
+  // clamped, its weight 0).
+  const auto split = [&](int a, std::int64_t v, std::int64_t& e0, std::int64_t& e1, double& f) {
+    const std::int64_t local = v - roi_lo_[a];
+    e0 = local / lattice_[a];
+    e1 = std::min(e0 + 1, md[a] - 1);
+    f = static_cast<double>(local - e0 * lattice_[a]) / static_cast<double>(lattice_[a]);
+  };
+  // The elements along i that the written box's rows interpolate between, and per voxel of
+  // a row its two elements (relative to the first) and fraction: the same for every row.
+  const std::int64_t e_first = (written_lo_[0] - roi_lo_[0]) / lattice_[0];
+  const std::int64_t e_count =
+      std::min((written_hi_[0] - 1 - roi_lo_[0]) / lattice_[0] + 1, md[0] - 1) - e_first + 1;
+  const std::int64_t nx = written_hi_[0] - written_lo_[0];
+  row_disp_.resize(static_cast<std::size_t>(3 * e_count));
+  column_.resize(static_cast<std::size_t>(nx));
+  for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
+    Column& c = column_[static_cast<std::size_t>(i - written_lo_[0])];
+    split(0, i, c.e0, c.e1, c.f);
+    c.e0 -= e_first;
+    c.e1 -= e_first;
+  }
+  double* row_d[3] = {row_disp_.data(), row_disp_.data() + e_count, row_disp_.data() + 2 * e_count};
+  for (std::int64_t k = written_lo_[2]; k < written_hi_[2]; ++k) {
+    std::int64_t k0, k1;
+    double fk;
+    split(2, k, k0, k1, fk);
+    for (std::int64_t j = written_lo_[1]; j < written_hi_[1]; ++j) {
+      std::int64_t j0, j1;
+      double fj;
+      split(1, j, j0, j1, fj);
+      const std::int64_t rows[4] = {md[0] * (j0 + md[1] * k0), md[0] * (j1 + md[1] * k0),
+                                    md[0] * (j0 + md[1] * k1), md[0] * (j1 + md[1] * k1)};
+      const double w[4] = {(1 - fj) * (1 - fk), fj * (1 - fk), (1 - fj) * fk, fj * fk};
+      // The row's displacement at its elements (interpolated along j and k once a row, not
+      // once a voxel), then along i per voxel.
+      for (int a = 0; a < 3; ++a)
+        for (std::int64_t e = 0; e < e_count; ++e) {
+          const std::int64_t n = e_first + e;
+          row_d[a][e] = w[0] * comp[a][rows[0] + n] + w[1] * comp[a][rows[1] + n] +
+                        w[2] * comp[a][rows[2] + n] + w[3] * comp[a][rows[3] + n];
         }
+      const auto row = dims_[0] * (j + dims_[1] * k);
+      for (std::int64_t i = written_lo_[0]; i < written_hi_[0]; ++i) {
+        const Column& c = column_[static_cast<std::size_t>(i - written_lo_[0])];
+        double d[3];
+        for (int a = 0; a < 3; ++a) d[a] = (1 - c.f) * row_d[a][c.e0] + c.f * row_d[a][c.e1];
+        out[row + i] = d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0
+                           ? original_[row + i]
+                           : sample(static_cast<double>(i) - d[0] * inv[0],
+                                    static_cast<double>(j) - d[1] * inv[1],
+                                    static_cast<double>(k) - d[2] * inv[2]);
       }
     }
-    return;
   }
+}
+
+void SkinDeformer::resample_at_elements(std::span<float> out) {
   const auto mail_dims = mail_.dims();
   const double* dx = mail_.displacement_component(0).data();
   const double* dy = mail_.displacement_component(1).data();

@@ -103,7 +103,12 @@ class SkinDeformer {
                DeformResult& result);
   void restore(std::span<float> out, const std::array<std::int64_t, 3>& keep_lo,
                const std::array<std::int64_t, 3>& keep_hi) const;
+  // The written box of `out` resampled through the displacement.
   void resample(std::span<float> out);
+  // resample() on a coarser lattice: the displacement interpolated between elements.
+  void resample_interpolated(std::span<float> out);
+  // resample() at one element a voxel: each voxel's own displacement.
+  void resample_at_elements(std::span<float> out);
   float sample(double i, double j, double k) const;
   // The displacement at voxel (i, j, k) inside the ROI: the element's, or interpolated between
   // elements on a coarser lattice.
