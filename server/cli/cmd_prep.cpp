@@ -90,21 +90,8 @@ Options:
   return text;
 }
 
-}  // namespace
-
-int cmd_prep(const Arguments& argv) {
-  const Args args(
-      argv, {"help", "no-cache", "quiet", "not-hu-ok"},
-      {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed", "bone-grow",
-       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu", "bone-levels",
-       "skin-projection", "map-spacing", "vessels", "labels", "labels-map"});
-  if (args.has("help")) {
-    std::cout << prep_usage();
-    return 0;
-  }
-  if (args.positional().size() != 1) throw UsageError("prep needs one INPUT");
-  const auto out = args.get("out");
-  if (!out) throw UsageError("prep needs --out DIR");
+// The parameters the options ask for, checked (UsageError names the option at fault).
+PrepParams prep_params(const Args& args) {
   PrepParams params;
   params.use_cache = !args.has("no-cache");
   params.not_hu_ok = args.has("not-hu-ok");
@@ -159,23 +146,60 @@ int cmd_prep(const Arguments& argv) {
   if (seg.bone_grow_hu > seg.bone_seed_hu) {
     throw UsageError("--bone-grow must not exceed --bone-seed");
   }
-  const bool quiet = args.has("quiet");
+  return params;
+}
 
-  const std::string& input = args.positional()[0];
-  if (!quiet) std::fprintf(stderr, "palp prep: %s -> %s\n", input.c_str(), out->c_str());
-  PrepProgress progress;
-  if (!quiet) {
-    progress = [](const std::string& stage, bool finished, double seconds) {
-      if (!finished) {
-        std::fprintf(stderr, "  %-14s ...", stage.c_str());
-      } else {
-        std::fprintf(stderr, " %7.3f s\n", seconds);
-      }
-      std::fflush(stderr);
-    };
+// Prints each stage's name as it starts and its time as it ends, on stderr.
+void print_stage(const std::string& stage, bool finished, double seconds) {
+  if (!finished) {
+    std::fprintf(stderr, "  %-14s ...", stage.c_str());
+  } else {
+    std::fprintf(stderr, " %7.3f s\n", seconds);
   }
-  const PrepResult r = run_prep(input, *out, params, progress);
-  if (quiet) return 0;
+  std::fflush(stderr);
+}
+
+// The patient's orientation and the scan's HU levels (a fresh run only: the cache keeps neither).
+void print_patient_and_levels(const PrepResult& r, const PrepParams& params) {
+  std::printf("  patient   stored %s", r.orientation.c_str());
+  if (r.reoriented)
+    std::printf(", %.1f deg oblique: resampled onto the nearest axis-aligned frame (%s)",
+                r.obliquity_deg, patient_frame(r.grid).orientation_code().c_str());
+  std::printf("\n");
+  if (!r.hu_warning.empty()) std::printf("  warning   --not-hu-ok: %s\n", r.hu_warning.c_str());
+  const HuLevels& h = r.hu_levels;
+  if (h.peak_found)
+    std::printf("  HU        soft-tissue peak %.0f HU", h.soft_peak_hu);
+  else
+    std::printf("  HU        no soft-tissue peak");
+  if (h.fat_found) std::printf(", fat peak %.0f HU", h.fat_peak_hu);
+  if (!params.adapt_bone_levels)
+    std::printf(": bone levels as given\n");
+  else
+    std::printf(": bone levels %+.0f HU (seed %.0f, grow %.0f, surface %.0f)\n", h.offset_hu,
+                h.levels.seed_hu, h.levels.grow_hu, h.levels.iso_hu);
+  if (params.adapt_bone_levels && !h.note.empty()) std::printf("            %s\n", h.note.c_str());
+}
+
+// The body and a line per structure (bone, vessel, a label map's organs and muscles) in ml.
+void print_structures(const PrepResult& r, const PrepParams& params, double voxel_ml) {
+  std::printf("  body      %llu voxels (%.0f ml)\n",
+              static_cast<unsigned long long>(r.stats.body_voxels),
+              static_cast<double>(r.stats.body_voxels) * voxel_ml);
+  for (const PrepStructure& s : r.structures) {
+    std::printf("  %-9s %llu voxels (%.0f ml), %s", s.name.c_str(),
+                static_cast<unsigned long long>(s.voxels), static_cast<double>(s.voxels) * voxel_ml,
+                s.source.c_str());
+    if (s.name == "vessel" && s.source == "auto" && !r.from_cache)
+      std::printf(", contrast phase %s", r.contrast_phase.c_str());
+    std::printf("\n");
+  }
+  if (r.vessel_voxels == 0 && !r.from_cache && params.find_vessels)
+    std::printf("  vessels   none found (contrast phase %s)\n", r.contrast_phase.c_str());
+}
+
+// The summary on stdout: the grids, the patient, the structures, what was removed, the cost.
+void print_summary(const PrepResult& r, const PrepParams& params) {
   const Index3& d = r.grid.dims;
   const double voxel_ml = r.grid.spacing[0] * r.grid.spacing[1] * r.grid.spacing[2] / 1000.0;
   std::printf("prep %s%s\n", r.out_dir.c_str(),
@@ -188,47 +212,40 @@ int cmd_prep(const Arguments& argv) {
         "  maps      %lld x %lld x %lld nodes of %s mm (refined, --map-spacing)\n",
         static_cast<long long>(r.map_grid.dims[0]), static_cast<long long>(r.map_grid.dims[1]),
         static_cast<long long>(r.map_grid.dims[2]), format_triple(r.map_grid.spacing).c_str());
-  if (!r.from_cache) {
-    std::printf("  patient   stored %s", r.orientation.c_str());
-    if (r.reoriented)
-      std::printf(", %.1f deg oblique: resampled onto the nearest axis-aligned frame (%s)",
-                  r.obliquity_deg, patient_frame(r.grid).orientation_code().c_str());
-    std::printf("\n");
-    if (!r.hu_warning.empty()) std::printf("  warning   --not-hu-ok: %s\n", r.hu_warning.c_str());
-    const HuLevels& h = r.hu_levels;
-    if (h.peak_found)
-      std::printf("  HU        soft-tissue peak %.0f HU", h.soft_peak_hu);
-    else
-      std::printf("  HU        no soft-tissue peak");
-    if (h.fat_found) std::printf(", fat peak %.0f HU", h.fat_peak_hu);
-    if (!params.adapt_bone_levels)
-      std::printf(": bone levels as given\n");
-    else
-      std::printf(": bone levels %+.0f HU (seed %.0f, grow %.0f, surface %.0f)\n", h.offset_hu,
-                  h.levels.seed_hu, h.levels.grow_hu, h.levels.iso_hu);
-    if (params.adapt_bone_levels && !h.note.empty())
-      std::printf("            %s\n", h.note.c_str());
-  }
-  std::printf("  body      %llu voxels (%.0f ml)\n",
-              static_cast<unsigned long long>(r.stats.body_voxels),
-              static_cast<double>(r.stats.body_voxels) * voxel_ml);
-  // A line per structure: bone, vessel, a label map's organs and muscles, with its source.
-  for (const PrepStructure& s : r.structures) {
-    std::printf("  %-9s %llu voxels (%.0f ml), %s", s.name.c_str(),
-                static_cast<unsigned long long>(s.voxels), static_cast<double>(s.voxels) * voxel_ml,
-                s.source.c_str());
-    if (s.name == "vessel" && s.source == "auto" && !r.from_cache)
-      std::printf(", contrast phase %s", r.contrast_phase.c_str());
-    std::printf("\n");
-  }
-  if (r.vessel_voxels == 0 && !r.from_cache && params.find_vessels)
-    std::printf("  vessels   none found (contrast phase %s)\n", r.contrast_phase.c_str());
+  if (!r.from_cache) print_patient_and_levels(r, params);
+  print_structures(r, params, voxel_ml);
   if (!r.from_cache) {
     std::printf("  removed   %llu voxels that are not the patient (table, pad, cables)\n",
                 static_cast<unsigned long long>(r.stats.removed_non_patient_voxels));
   }
   std::printf("  total     %.3f s, peak memory %.0f MiB, %u threads\n", r.total_seconds,
               static_cast<double>(r.peak_rss_bytes) / 1048576.0, params.distance.threads);
+}
+
+}  // namespace
+
+int cmd_prep(const Arguments& argv) {
+  const Args args(
+      argv, {"help", "no-cache", "quiet", "not-hu-ok"},
+      {"out", "band", "threads", "body-threshold", "min-body-part", "bone-seed", "bone-grow",
+       "min-bone-island", "max-table-thickness", "surface", "skin-hu", "bone-hu", "bone-levels",
+       "skin-projection", "map-spacing", "vessels", "labels", "labels-map"});
+  if (args.has("help")) {
+    std::cout << prep_usage();
+    return 0;
+  }
+  if (args.positional().size() != 1) throw UsageError("prep needs one INPUT");
+  const auto out = args.get("out");
+  if (!out) throw UsageError("prep needs --out DIR");
+  const PrepParams params = prep_params(args);
+  const bool quiet = args.has("quiet");
+
+  const std::string& input = args.positional()[0];
+  if (!quiet) std::fprintf(stderr, "palp prep: %s -> %s\n", input.c_str(), out->c_str());
+  PrepProgress progress;
+  if (!quiet) progress = print_stage;
+  const PrepResult r = run_prep(input, *out, params, progress);
+  if (!quiet) print_summary(r, params);
   return 0;
 }
 
