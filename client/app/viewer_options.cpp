@@ -111,122 +111,168 @@ int parse_int(const std::string& option, const std::string& text, int lo, int hi
   return static_cast<int>(v);
 }
 
-// Returns nullopt for --help.
-
-}  // namespace
-
-std::optional<Options> parse_options(int argc, char** argv) {
-  Options o;
-  bool have_connect = false, have_frames = false;
-  std::optional<std::string> rig;
-  for (int n = 1; n < argc; ++n) {
-    const std::string arg = argv[n];
-    const auto value = [&]() -> std::string {
-      if (n + 1 >= argc) throw UsageError(arg + " needs a value");
-      return argv[++n];
-    };
-    if (arg == "-h" || arg == "--help") return std::nullopt;
-    if (arg == "--connect") {
-      client::parse_host_port(value(), o.host, o.port);
-      have_connect = true;
-    } else if (arg == "--dds") {  // [DOMAIN]
-      o.dds = true;
-      if (n + 1 < argc && std::isdigit(static_cast<unsigned char>(argv[n + 1][0])))
-        o.dds_domain = palp::dds::parse_domain(argv[++n]);
-    } else if (arg == "--rig") {
-      rig = value();
-    } else if (arg == "--observer") {
-      o.controller = false;
-    } else if (arg == "--controller") {
-      o.controller = true;
-    } else if (arg == "--token") {
-      o.token = value();
-    } else if (arg == "--tls-ca") {
-      o.tls_ca = value();
-    } else if (arg == "--tls-pin") {
-      o.tls_pin = value();
-    } else if (arg == "--tls-cert") {
-      o.tls_cert = value();
-    } else if (arg == "--tls-key") {
-      o.tls_key = value();
-    } else if (arg == "--name") {
-      o.name = value();
-    } else if (arg == "--rate") {
-      o.rate_hz = parse_number(arg, value());
-      if (o.rate_hz < 0 || o.rate_hz > 100000) throw UsageError("--rate: 0 to 100000 Hz");
-    } else if (arg == "--volume-max-dim") {
-      o.volume_max_dim = static_cast<std::uint32_t>(parse_int(arg, value(), 0, 4096));
-    } else if (arg == "--preset") {
-      o.preset = parse_preset(value());
-    } else if (arg == "--no-deformation") {
-      o.deformation = false;
-    } else if (arg == "--chart-seconds") {
-      o.chart_s = parse_number(arg, value());
-      if (!(o.chart_s >= 1 && o.chart_s <= 600)) throw UsageError("--chart-seconds: 1 .. 600");
-    } else if (arg == "--show-outside") {
-      o.show_outside = true;
-    } else if (arg == "--no-ct") {
-      o.ct = false;
-    } else if (arg == "--skin-hu") {
-      o.skin_hu = true;
-    } else if (arg == "--follow") {
-      o.follow_mm = parse_number(arg, value());
-      if (!(o.follow_mm >= 0 && o.follow_mm <= 10000)) throw UsageError("--follow: 0 .. 10000 mm");
-    } else if (arg == "--width") {
-      o.width = parse_int(arg, value(), 64, 8192);
-    } else if (arg == "--height") {
-      o.height = parse_int(arg, value(), 64, 8192);
-    } else if (arg == "--view") {
-      const std::string text = value();
-      if (!parse_anatomy(text, &o.view))
-        throw UsageError("--view: anterior, posterior, left, right, superior or inferior, got '" +
-                         text + "'");
-    } else if (arg == "--no-orientation-marker") {
-      o.orientation_marker = false;
-    } else if (arg == "--no-overlays") {
-      o.overlays = false;
-    } else if (arg == "--no-tool") {
-      o.tool_glyphs = false;
-    } else if (arg == "--show-landmarks") {
-      o.show_landmarks = true;
-    } else if (arg == "--camera") {
-      const std::string text = value();
-      const auto c1 = text.find(','), c2 = text.find(',', c1 == std::string::npos ? 0 : c1 + 1);
-      if (c1 == std::string::npos || c2 == std::string::npos)
-        throw UsageError("--camera: expected AZ,EL,DIST, got '" + text + "'");
-      o.az = parse_number(arg, text.substr(0, c1));
-      o.el = parse_number(arg, text.substr(c1 + 1, c2 - c1 - 1));
-      o.dist = parse_number(arg, text.substr(c2 + 1));
-      if (o.dist < 0) throw UsageError("--camera: the distance must be >= 0");
-      o.have_camera = true;
-    } else if (arg == "--screenshot") {
-      o.screenshot = value();
-    } else if (arg == "--frames") {
-      o.frames = parse_int(arg, value(), 1, 1000000);
-      have_frames = true;
-    } else if (arg == "--timeout") {
-      o.timeout_s = parse_number(arg, value());
-      if (o.timeout_s <= 0) throw UsageError("--timeout: must be > 0");
-    } else if (arg == "--script") {
-      o.script = value();
-    } else if (arg == "--stats-json") {
-      o.stats_json = value();
-    } else if (arg == "--duration") {
-      o.duration_s = parse_number(arg, value());
-      if (o.duration_s <= 0) throw UsageError("--duration: must be > 0");
-    } else {
-      throw UsageError("unknown option '" + arg + "'");
-    }
+// The command line, one option at a time: n is the option being read.
+struct ArgCursor {
+  int argc;
+  char** argv;
+  int n;
+  // The option's value (the next argument); UsageError when there is none.
+  std::string value(const std::string& option) {
+    if (n + 1 >= argc) throw UsageError(option + " needs a value");
+    return argv[++n];
   }
-  if (!have_connect && !o.dds) throw UsageError("--connect HOST:PORT is required (or --dds)");
-  if (have_connect && o.dds) throw UsageError("--connect and --dds: one or the other");
-  if (rig && !o.dds) throw UsageError("--rig needs --dds");
-  if (o.dds) palp::dds::check_rig(o.dds_rig = rig.value_or(palp::dds::default_rig()));
-  if (have_frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");
+};
+
+// What the options said that only the checks after them need.
+struct Seen {
+  bool connect = false, frames = false;
+  std::optional<std::string> rig;
+};
+
+// --camera AZ,EL,DIST.
+void parse_camera(const std::string& arg, const std::string& text, Options& o) {
+  const auto c1 = text.find(','), c2 = text.find(',', c1 == std::string::npos ? 0 : c1 + 1);
+  if (c1 == std::string::npos || c2 == std::string::npos)
+    throw UsageError("--camera: expected AZ,EL,DIST, got '" + text + "'");
+  o.az = parse_number(arg, text.substr(0, c1));
+  o.el = parse_number(arg, text.substr(c1 + 1, c2 - c1 - 1));
+  o.dist = parse_number(arg, text.substr(c2 + 1));
+  if (o.dist < 0) throw UsageError("--camera: the distance must be >= 0");
+  o.have_camera = true;
+}
+
+// The options that reach the server (palp.v1 or DDS) and say who palpview is; false: not one.
+bool connection_option(const std::string& arg, ArgCursor& in, Options& o, Seen& seen) {
+  if (arg == "--connect") {
+    client::parse_host_port(in.value(arg), o.host, o.port);
+    seen.connect = true;
+  } else if (arg == "--dds") {  // [DOMAIN]
+    o.dds = true;
+    if (in.n + 1 < in.argc && std::isdigit(static_cast<unsigned char>(in.argv[in.n + 1][0])))
+      o.dds_domain = palp::dds::parse_domain(in.argv[++in.n]);
+  } else if (arg == "--rig") {
+    seen.rig = in.value(arg);
+  } else if (arg == "--observer") {
+    o.controller = false;
+  } else if (arg == "--controller") {
+    o.controller = true;
+  } else if (arg == "--token") {
+    o.token = in.value(arg);
+  } else if (arg == "--tls-ca") {
+    o.tls_ca = in.value(arg);
+  } else if (arg == "--tls-pin") {
+    o.tls_pin = in.value(arg);
+  } else if (arg == "--tls-cert") {
+    o.tls_cert = in.value(arg);
+  } else if (arg == "--tls-key") {
+    o.tls_key = in.value(arg);
+  } else if (arg == "--name") {
+    o.name = in.value(arg);
+  } else if (arg == "--rate") {
+    o.rate_hz = parse_number(arg, in.value(arg));
+    if (o.rate_hz < 0 || o.rate_hz > 100000) throw UsageError("--rate: 0 to 100000 Hz");
+  } else if (arg == "--volume-max-dim") {
+    o.volume_max_dim = static_cast<std::uint32_t>(parse_int(arg, in.value(arg), 0, 4096));
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// The options that choose what the window shows and from where; false: not one.
+bool view_option(const std::string& arg, ArgCursor& in, Options& o) {
+  if (arg == "--preset") {
+    o.preset = parse_preset(in.value(arg));
+  } else if (arg == "--no-deformation") {
+    o.deformation = false;
+  } else if (arg == "--chart-seconds") {
+    o.chart_s = parse_number(arg, in.value(arg));
+    if (!(o.chart_s >= 1 && o.chart_s <= 600)) throw UsageError("--chart-seconds: 1 .. 600");
+  } else if (arg == "--show-outside") {
+    o.show_outside = true;
+  } else if (arg == "--no-ct") {
+    o.ct = false;
+  } else if (arg == "--skin-hu") {
+    o.skin_hu = true;
+  } else if (arg == "--follow") {
+    o.follow_mm = parse_number(arg, in.value(arg));
+    if (!(o.follow_mm >= 0 && o.follow_mm <= 10000)) throw UsageError("--follow: 0 .. 10000 mm");
+  } else if (arg == "--width") {
+    o.width = parse_int(arg, in.value(arg), 64, 8192);
+  } else if (arg == "--height") {
+    o.height = parse_int(arg, in.value(arg), 64, 8192);
+  } else if (arg == "--view") {
+    const std::string text = in.value(arg);
+    if (!parse_anatomy(text, &o.view))
+      throw UsageError("--view: anterior, posterior, left, right, superior or inferior, got '" +
+                       text + "'");
+  } else if (arg == "--no-orientation-marker") {
+    o.orientation_marker = false;
+  } else if (arg == "--no-overlays") {
+    o.overlays = false;
+  } else if (arg == "--no-tool") {
+    o.tool_glyphs = false;
+  } else if (arg == "--show-landmarks") {
+    o.show_landmarks = true;
+  } else if (arg == "--camera") {
+    parse_camera(arg, in.value(arg), o);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// The options of a run without a person: screenshots, scripts, limits, stats; false: not one.
+bool run_option(const std::string& arg, ArgCursor& in, Options& o, Seen& seen) {
+  if (arg == "--screenshot") {
+    o.screenshot = in.value(arg);
+  } else if (arg == "--frames") {
+    o.frames = parse_int(arg, in.value(arg), 1, 1000000);
+    seen.frames = true;
+  } else if (arg == "--timeout") {
+    o.timeout_s = parse_number(arg, in.value(arg));
+    if (o.timeout_s <= 0) throw UsageError("--timeout: must be > 0");
+  } else if (arg == "--script") {
+    o.script = in.value(arg);
+  } else if (arg == "--stats-json") {
+    o.stats_json = in.value(arg);
+  } else if (arg == "--duration") {
+    o.duration_s = parse_number(arg, in.value(arg));
+    if (o.duration_s <= 0) throw UsageError("--duration: must be > 0");
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// The checks between options, and the defaults that depend on others.
+void check_options(Options& o, const Seen& seen) {
+  if (!seen.connect && !o.dds) throw UsageError("--connect HOST:PORT is required (or --dds)");
+  if (seen.connect && o.dds) throw UsageError("--connect and --dds: one or the other");
+  if (seen.rig && !o.dds) throw UsageError("--rig needs --dds");
+  if (o.dds) palp::dds::check_rig(o.dds_rig = seen.rig.value_or(palp::dds::default_rig()));
+  if (seen.frames && o.screenshot.empty()) throw UsageError("--frames needs --screenshot FILE");
   if (o.follow_mm < 0) o.follow_mm = o.have_camera ? 0.0 : 150.0;
   if (!o.script.empty() && !o.controller) throw UsageError("--script needs --controller");
   // a certificate without --tls-ca/--tls-pin would mean plain text (tls/client_policy.hpp)
   palp::tls::check_client_options({o.tls_ca, o.tls_pin, o.tls_cert, o.tls_key});
+}
+
+}  // namespace
+
+// Returns nullopt for --help.
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options o;
+  Seen seen;
+  ArgCursor in{argc, argv, 1};
+  for (; in.n < argc; ++in.n) {
+    const std::string arg = argv[in.n];
+    if (arg == "-h" || arg == "--help") return std::nullopt;
+    if (!connection_option(arg, in, o, seen) && !view_option(arg, in, o) &&
+        !run_option(arg, in, o, seen))
+      throw UsageError("unknown option '" + arg + "'");
+  }
+  check_options(o, seen);
   return o;
 }
 
