@@ -194,6 +194,85 @@ std::string json_string(const std::string& text) {
   return out + "\"";
 }
 
+// The maps' window a path can reach: the box of its device positions widened by the tool's
+// reach and `margin_mm` (--window-mm), as a sampler over that window alone.
+std::shared_ptr<const FieldSampler> window_around_path(const Scene& scene, const Tool& tool,
+                                                       const Trajectory& path, double margin_mm) {
+  double reach = 0.0;
+  for (const Vec3d& p : tool.points) reach = std::max(reach, norm(p));
+  Vec3d lo = path.front().pose.position, hi = lo;
+  for (const TrajectorySample& row : path) {
+    lo = {std::min(lo.x, row.pose.position.x), std::min(lo.y, row.pose.position.y),
+          std::min(lo.z, row.pose.position.z)};
+    hi = {std::max(hi.x, row.pose.position.x), std::max(hi.y, row.pose.position.y),
+          std::max(hi.z, row.pose.position.z)};
+  }
+  const Vec3d widen{reach + margin_mm, reach + margin_mm, reach + margin_mm};
+  const MapWindow window = window_for_box(scene.fields->grid(), lo - widen, hi + widen);
+  const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
+  return window_sampler(maps.surf, maps.bone, *scene.fields, window, scene.fields->config());
+}
+
+// What one bench run measured and on what, for its two reports.
+struct BenchResult {
+  std::string scene, tool, path_name;
+  const char* scheme = "";
+  const char* storage = "";
+  std::size_t poses = 0, ticks = 0, warmup = 0, points = 0;
+  Summary tick;
+  Summary bare;  // the same ticks without the structure layers (zeros without layers)
+  std::size_t layers = 0;
+  std::string first_layer;
+  double in_contact_mean = 0, touching = 0, clock_ns = 0, model_mib = 0, whole_mib = 0;
+  const FieldSampler* window = nullptr;  // the maps' window (--window-mm), or null: the scene's
+};
+
+// The human lines: setup, tick percentiles, contacts, the clock, the maps, the layers' cost.
+void print_bench(const BenchResult& b) {
+  const Summary& s = b.tick;
+  std::printf(
+      "bench %s on %s (%s, %s): %zu ticks after %zu warm-up, path %s (%zu poses, back "
+      "and forth)\n",
+      b.tool.c_str(), b.scene.c_str(), b.scheme, b.storage, b.ticks, b.warmup, b.path_name.c_str(),
+      b.poses);
+  std::printf("  tick      p50 %.0f ns, p90 %.0f, p99 %.0f, p99.9 %.0f, max %.0f, mean %.1f\n",
+              s.p50, s.p90, s.p99, s.p999, s.max, s.mean);
+  std::printf("  contacts  %zu points, %.2f in contact on average, touching in %.1f%% of ticks\n",
+              b.points, b.in_contact_mean, 100.0 * b.touching);
+  std::printf("  clock     %.0f ns per pair of reads (included in the figures)\n", b.clock_ns);
+  if (b.window)
+    std::printf(
+        "  maps      %.1f MiB in a %lldx%lldx%lld window (the whole scene's: %.1f MiB, "
+        "%.1fx)\n",
+        b.model_mib, static_cast<long long>(b.window->grid().dims[0]),
+        static_cast<long long>(b.window->grid().dims[1]),
+        static_cast<long long>(b.window->grid().dims[2]), b.whole_mib,
+        b.model_mib > 0.0 ? b.whole_mib / b.model_mib : 0.0);
+  else
+    std::printf("  maps      %.1f MiB\n", b.model_mib);
+  if (b.bare.p50 > 0.0)
+    std::printf(
+        "  layers    %zu (%s%s): p50 %.2fx, p99 %.2fx the tick without them (%.0f, %.0f ns)\n",
+        b.layers, b.first_layer.c_str(), b.layers > 1 ? ", ..." : "", s.p50 / b.bare.p50,
+        s.p99 / b.bare.p99, b.bare.p50, b.bare.p99);
+}
+
+// The last line: the run as JSON.
+void print_bench_json(const BenchResult& b) {
+  const Summary& s = b.tick;
+  std::printf(
+      "{\"scene\":%s,\"tool\":%s,\"scheme\":\"%s\",\"storage\":\"%s\",\"path\":%s,"
+      "\"ticks\":%zu,\"warmup\":%zu,\"tick_ns_p50\":%.0f,\"tick_ns_p90\":%.0f,"
+      "\"tick_ns_p99\":%.0f,\"tick_ns_p999\":%.0f,\"tick_ns_max\":%.0f,\"tick_ns_mean\":%.1f,"
+      "\"contacts\":%zu,\"in_contact_mean\":%.3f,\"touching_fraction\":%.4f,"
+      "\"clock_pair_ns\":%.0f,\"maps_mib\":%.2f,\"whole_maps_mib\":%.2f,\"layers\":%zu,"
+      "\"tick_ns_p50_without_layers\":%.0f,\"tick_ns_p99_without_layers\":%.0f}\n",
+      json_string(b.scene).c_str(), json_string(b.tool).c_str(), b.scheme, b.storage,
+      json_string(b.path_name).c_str(), b.ticks, b.warmup, s.p50, s.p90, s.p99, s.p999, s.max,
+      s.mean, b.points, b.in_contact_mean, b.touching, b.clock_ns, b.model_mib, b.whole_mib,
+      b.layers, b.bare.p50, b.bare.p99);
+}
+
 }  // namespace
 
 int cmd_bench(const Arguments& argv_in) {
@@ -224,86 +303,45 @@ int cmd_bench(const Arguments& argv_in) {
 
   // Setup: scene, model, poses (not timed).
   const Scene scene = load_scene_for(args, "bench", quiet);
-  std::string path_name;
+  BenchResult b;
   const auto trajectory = args.get("trajectory");
   const Trajectory path = trajectory ? read_trajectory_csv(*trajectory)
-                                     : default_path(*scene.fields, pad_offset(tool), &path_name);
-  if (trajectory) path_name = *trajectory;
+                                     : default_path(*scene.fields, pad_offset(tool), &b.path_name);
+  if (trajectory) b.path_name = *trajectory;
   if (path.empty()) throw InputError("bench: the trajectory has no rows");
   std::shared_ptr<const FieldSampler> fields = scene.fields;
-  const double whole_mib = maps_mib(*scene.fields, params);
+  b.whole_mib = maps_mib(*scene.fields, params);
   if (args.get("window-mm")) {
     const double margin = args.number("window-mm", 0.0);
     if (!(margin >= 0.0 && margin <= 1000.0)) throw UsageError("--window-mm must be 0..1000");
-    double reach = 0.0;
-    for (const Vec3d& p : tool.points) reach = std::max(reach, norm(p));
-    Vec3d lo = path.front().pose.position, hi = lo;
-    for (const TrajectorySample& row : path) {
-      lo = {std::min(lo.x, row.pose.position.x), std::min(lo.y, row.pose.position.y),
-            std::min(lo.z, row.pose.position.z)};
-      hi = {std::max(hi.x, row.pose.position.x), std::max(hi.y, row.pose.position.y),
-            std::max(hi.z, row.pose.position.z)};
-    }
-    const Vec3d widen{reach + margin, reach + margin, reach + margin};
-    const MapWindow window = window_for_box(scene.fields->grid(), lo - widen, hi + widen);
-    const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
-    fields = window_sampler(maps.surf, maps.bone, *scene.fields, window, scene.fields->config());
+    fields = window_around_path(scene, tool, path, margin);
   }
   const Model model(fields, tool, params, scene.layers);
-  const double model_mib = maps_mib(*fields, params);
+  b.model_mib = maps_mib(*fields, params);
   // With structure layers, the same ticks without them, for the layers' cost as a ratio.
-  Summary bare;
   if (!model.layers().empty() && params.model == ModelKind::Palp)
-    bare = summarize(time_ticks(Model(fields, tool, params), path, warmup, ticks).ns);
+    b.bare = summarize(time_ticks(Model(fields, tool, params), path, warmup, ticks).ns);
 
   // Timing, then the summary.
-  const double clock_ns = clock_pair_ns();
+  b.clock_ns = clock_pair_ns();
   const Timings timings = time_ticks(model, path, warmup, ticks);
-  const Summary s = summarize(timings.ns);
+  b.tick = summarize(timings.ns);
   if (const auto csv = args.get("ticks-csv")) write_ticks_csv(*csv, timings);
-  const double in_contact_mean = timings.in_contact_sum / static_cast<double>(ticks);
-  const double touching = static_cast<double>(timings.ticks_touching) / static_cast<double>(ticks);
-  const char* scheme = to_string(scene.fields->config().gradient);
-  const char* storage = to_string(scene.fields->config().storage);
-  if (!quiet) {
-    std::printf(
-        "bench %s on %s (%s, %s): %zu ticks after %zu warm-up, path %s (%zu poses, back "
-        "and forth)\n",
-        tool.name.c_str(), scene.source.c_str(), scheme, storage, ticks, warmup, path_name.c_str(),
-        path.size());
-    std::printf("  tick      p50 %.0f ns, p90 %.0f, p99 %.0f, p99.9 %.0f, max %.0f, mean %.1f\n",
-                s.p50, s.p90, s.p99, s.p999, s.max, s.mean);
-    std::printf("  contacts  %zu points, %.2f in contact on average, touching in %.1f%% of ticks\n",
-                tool.points.size(), in_contact_mean, 100.0 * touching);
-    std::printf("  clock     %.0f ns per pair of reads (included in the figures)\n", clock_ns);
-    if (fields != scene.fields)
-      std::printf(
-          "  maps      %.1f MiB in a %lldx%lldx%lld window (the whole scene's: %.1f MiB, "
-          "%.1fx)\n",
-          model_mib, static_cast<long long>(fields->grid().dims[0]),
-          static_cast<long long>(fields->grid().dims[1]),
-          static_cast<long long>(fields->grid().dims[2]), whole_mib,
-          model_mib > 0.0 ? whole_mib / model_mib : 0.0);
-    else
-      std::printf("  maps      %.1f MiB\n", model_mib);
-    if (bare.p50 > 0.0)
-      std::printf(
-          "  layers    %zu (%s%s): p50 %.2fx, p99 %.2fx the tick without them (%.0f, %.0f ns)\n",
-          model.layers().size(), model.layers().name(0).c_str(),
-          model.layers().size() > 1 ? ", ..." : "", s.p50 / bare.p50, s.p99 / bare.p99, bare.p50,
-          bare.p99);
-  }
-  std::printf(
-      "{\"scene\":%s,\"tool\":%s,\"scheme\":\"%s\",\"storage\":\"%s\",\"path\":%s,"
-      "\"ticks\":%zu,\"warmup\":%zu,\"tick_ns_p50\":%.0f,\"tick_ns_p90\":%.0f,"
-      "\"tick_ns_p99\":%.0f,\"tick_ns_p999\":%.0f,\"tick_ns_max\":%.0f,\"tick_ns_mean\":%.1f,"
-      "\"contacts\":%zu,\"in_contact_mean\":%.3f,\"touching_fraction\":%.4f,"
-      "\"clock_pair_ns\":%.0f,\"maps_mib\":%.2f,\"whole_maps_mib\":%.2f,\"layers\":%zu,"
-      "\"tick_ns_p50_without_layers\":%.0f,\"tick_ns_p99_without_layers\":%.0f}\n",
-      json_string(scene.source).c_str(), json_string(tool.name).c_str(), scheme, storage,
-      json_string(path_name).c_str(), ticks, warmup, s.p50, s.p90, s.p99, s.p999, s.max, s.mean,
-      tool.points.size(), in_contact_mean, touching, clock_ns, model_mib, whole_mib,
-      model.layers().size(), bare.p50, bare.p99);
+  b.in_contact_mean = timings.in_contact_sum / static_cast<double>(ticks);
+  b.touching = static_cast<double>(timings.ticks_touching) / static_cast<double>(ticks);
+  b.scene = scene.source;
+  b.tool = tool.name;
+  b.scheme = to_string(scene.fields->config().gradient);
+  b.storage = to_string(scene.fields->config().storage);
+  b.poses = path.size();
+  b.ticks = ticks;
+  b.warmup = warmup;
+  b.points = tool.points.size();
+  b.layers = model.layers().size();
+  if (b.layers > 0) b.first_layer = model.layers().name(0);
+  if (fields != scene.fields) b.window = fields.get();
+  if (!quiet) print_bench(b);
+  print_bench_json(b);
   return 0;
 }
 
