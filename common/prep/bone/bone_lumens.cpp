@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -25,30 +26,41 @@ bool wide_enough_for_core(const ComponentBox& box, const Grid& g, double radius)
   return true;
 }
 
-}  // namespace
+// The levels the lumen search reads a voxel against: the bone's seed level and the cortex's.
+struct LumenLevels {
+  const CtVolume& ct;
+  const Mask& bone;
+  int cortex = 0, seed = 0;
+  // A bone voxel at the cortex level or above.
+  bool bright(std::int64_t m) const { return bone.data[m] && ct.data[m] >= cortex; }
+  // A voxel from the seed level up to below the cortex level.
+  bool between(std::size_t n) const { return ct.data[n] >= seed && ct.data[n] < cortex; }
+};
 
-std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone) {
-  if (params.bone_lumen_radius_mm <= 0.0) return 0;
-  const Grid& g = bone.grid;
-  const int cortex =
-      integer_floor(std::ceil(params.bone_seed_hu + params.bone_lumen_cortex_margin_hu));
-  const int seed = integer_floor(std::ceil(params.bone_seed_hu));
-  const auto bright = [&](std::int64_t m) { return bone.data[m] && ct.data[m] >= cortex; };
-  const auto between = [&](std::size_t n) { return ct.data[n] >= seed && ct.data[n] < cortex; };
-  // Pieces: the bone's voxels of seed level below the cortex level, apart from the cortex by one
-  // voxel (the rim: the voxels of that range beside the cortex, i.e. the rest of that range; its
-  // own mask is made only once a candidate is found, below).
+// The pieces: the bone's voxels of seed level below the cortex level, apart from the cortex by
+// one voxel (the rim: the voxels of that range beside the cortex, i.e. the rest of that range;
+// its own mask is made only once a candidate is found).
+Mask lumen_pieces(const LumenLevels& lv) {
+  const Grid& g = lv.bone.grid;
   Mask piece(g, 0, "bone lumen pieces");
-  for_each_nonzero(bone, [&](std::size_t n) {
-    if (between(n) && !any_face_neighbour(g, n, bright)) piece.data[n] = 1;
+  const auto bright = [&](std::int64_t m) { return lv.bright(m); };
+  for_each_nonzero(lv.bone, [&](std::size_t n) {
+    if (lv.between(n) && !any_face_neighbour(g, n, bright)) piece.data[n] = 1;
   });
-  const RunTable runs = extract_runs(piece, false);
-  if (runs.runs.empty()) return 0;
-  const RunLabels labels = label_runs(g, runs);
-  const std::size_t pieces = labels.voxels.size();
+  return piece;
+}
+
+// Per piece, whether it may be a lumen: resting on the rim along a minor share of its surface
+// (marrow of seed level is enclosed by its cortex), wide enough along every axis to hold a core.
+// A piece that touches no cortex at all is a region without any cortical voxel, which this
+// cannot tell from bone (a solid bone whose cortex reads below the level): it stays.
+std::vector<std::uint8_t> candidate_pieces(const LumenLevels& lv, const SegmentationParams& params,
+                                           const Mask& piece, const RunTable& runs,
+                                           const RunLabels& labels) {
+  const Grid& g = piece.grid;
   // Per piece: its surface voxels, those of them beside the rim, and its extent.
   const auto on_rim = [&](std::int64_t m) {
-    return bone.data[m] && between(static_cast<std::size_t>(m)) && !piece.data[m];
+    return lv.bone.data[m] && lv.between(static_cast<std::size_t>(m)) && !piece.data[m];
   };
   const auto off_piece = [&](std::int64_t m) { return !piece.data[m]; };
   const auto on_surface = [&](std::size_t n) { return any_face_neighbour(g, n, off_piece); };
@@ -57,32 +69,22 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
       g, runs, labels,
       [&](std::size_t n) { return on_surface(n) && any_face_neighbour(g, n, on_rim); });
   const std::vector<ComponentBox> boxes = component_boxes(g, runs, labels);
-  // Candidates: pieces resting on the rim along a minor share of their surface (marrow of seed
-  // level is enclosed by its cortex), wide enough along every axis to hold a core (below). A
-  // piece that touches no cortex at all is a region without any cortical voxel, which this
-  // cannot tell from bone (a solid bone whose cortex reads below the level): it stays.
-  const double radius = params.bone_lumen_radius_mm;
-  std::vector<std::uint8_t> candidate(pieces, 0);
-  bool any = false;
-  for (std::size_t c = 0; c < pieces; ++c) {
-    candidate[c] = wide_enough_for_core(boxes[c], g, radius) && contact[c] > 0 &&
+  std::vector<std::uint8_t> candidate(labels.voxels.size(), 0);
+  for (std::size_t c = 0; c < candidate.size(); ++c)
+    candidate[c] = wide_enough_for_core(boxes[c], g, params.bone_lumen_radius_mm) &&
+                   contact[c] > 0 &&
                    static_cast<double>(contact[c]) <
                        params.bone_lumen_max_contact * static_cast<double>(surface[c]);
-    any = any || candidate[c];
-  }
-  if (!any) return 0;
-  Mask rim(g, 0, "bone lumen rim");
-  for_each_nonzero(bone, [&](std::size_t n) {
-    if (between(n) && !piece.data[n]) rim.data[n] = 1;
-  });
-  Mask candidates(g, 0, "bone lumen candidates");
-  rewrite_runs(
-      g, runs, labels, [&](std::int64_t c) { return candidate[c]; }, candidates);
-  // The lumens: the candidates' opening by a ball of the radius, i.e. the voxels within the
-  // radius of a core voxel (one at least the radius from every voxel outside the candidates),
-  // and one voxel more (the wedges where the tube meets the cortex, which the ball cannot enter).
-  // A thin part — a rib, a cortex, a shell of dim cortex joined to a lumen — holds no core and
-  // lies beyond that reach.
+  return candidate;
+}
+
+// The lumens: the candidates' opening by a ball of the radius, i.e. the voxels within the
+// radius of a core voxel (one at least the radius from every voxel outside the candidates),
+// and one voxel more (the wedges where the tube meets the cortex, which the ball cannot enter).
+// A thin part — a rib, a cortex, a shell of dim cortex joined to a lumen — holds no core and
+// lies beyond that reach. Nothing when no candidate holds a core.
+std::optional<Mask> open_lumens(const Mask& candidates, double radius) {
+  const Grid& g = candidates.grid;
   const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const DistanceParams band{radius + 2.0 * largest, 0};
@@ -91,20 +93,27 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
   for_each_nonzero(candidates, [&](std::size_t n) {
     if (depth.data[n] + 0.5 * h >= radius) core.data[n] = 1;
   });
-  if (count_nonzero(core) == 0) return 0;
+  if (count_nonzero(core) == 0) return std::nullopt;
   const DistanceParams wider{radius + 3.0 * largest, 0};
   // The depth is done with: its grid-size float map takes the reach (the same values as a fresh
   // map, signed_distance's contract; a second fresh map costs its page faults, ~0.1 s at 512).
   DistanceMap reach = std::move(depth);
   signed_distance(core, wider, reach);
-  Mask lumen(g, 0, "bone lumens");
+  std::optional<Mask> lumen(std::in_place, g, 0, "bone lumens");
   for_each_nonzero(candidates, [&](std::size_t n) {
-    if (0.5 * h - reach.data[n] <= radius + largest) lumen.data[n] = 1;
+    if (0.5 * h - reach.data[n] <= radius + largest) lumen->data[n] = 1;
   });
-  // The lumen's edge against the cortex: a rim voxel beside the lumen stays bone only when it is
-  // brighter than its lumen neighbours (their mean) and passes the edge trim's partial-volume
-  // level (bone_edge_fraction of the way up to its brightest cortex neighbour) with the lumen as
-  // its outside; the rest of the rim is the lumen's and goes with it.
+  return lumen;
+}
+
+// The lumen's edge against the cortex: a rim voxel beside the lumen stays bone only when it is
+// brighter than its lumen neighbours (their mean) and passes the edge trim's partial-volume
+// level (bone_edge_fraction of the way up to its brightest cortex neighbour) with the lumen as
+// its outside; the rest of the rim is the lumen's and goes with it. `rim` keeps what goes.
+void trim_rim(const LumenLevels& lv, const SegmentationParams& params, const Mask& lumen,
+              Mask& rim) {
+  const Grid& g = rim.grid;
+  const CtVolume& ct = lv.ct;
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
   for_each_nonzero(rim, [&](std::size_t n) {
@@ -119,7 +128,7 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
       if (lumen.data[o]) {
         lumen_sum += ct.data[o];
         ++lumen_count;
-      } else if (bright(static_cast<std::int64_t>(o))) {
+      } else if (lv.bright(static_cast<std::int64_t>(o))) {
         top = std::max(top, static_cast<double>(ct.data[o]));
       }
     }
@@ -132,8 +141,35 @@ std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params
         ct.data[n] <= out || ct.data[n] < out + params.bone_edge_fraction * (top - out);
     rim.data[n] = edge;
   });
-  const std::uint64_t removed = count_nonzero(lumen) + count_nonzero(rim);
-  for_each_nonzero(lumen, [&](std::size_t n) { bone.data[n] = 0; });
+}
+
+}  // namespace
+
+std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone) {
+  if (params.bone_lumen_radius_mm <= 0.0) return 0;
+  const Grid& g = bone.grid;
+  const LumenLevels lv{
+      ct, bone, integer_floor(std::ceil(params.bone_seed_hu + params.bone_lumen_cortex_margin_hu)),
+      integer_floor(std::ceil(params.bone_seed_hu))};
+  const Mask piece = lumen_pieces(lv);
+  const RunTable runs = extract_runs(piece, false);
+  if (runs.runs.empty()) return 0;
+  const RunLabels labels = label_runs(g, runs);
+  const std::vector<std::uint8_t> candidate = candidate_pieces(lv, params, piece, runs, labels);
+  if (std::none_of(candidate.begin(), candidate.end(), [](std::uint8_t c) { return c != 0; }))
+    return 0;
+  Mask rim(g, 0, "bone lumen rim");
+  for_each_nonzero(bone, [&](std::size_t n) {
+    if (lv.between(n) && !piece.data[n]) rim.data[n] = 1;
+  });
+  Mask candidates(g, 0, "bone lumen candidates");
+  rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return candidate[c]; }, candidates);
+  const std::optional<Mask> lumen = open_lumens(candidates, params.bone_lumen_radius_mm);
+  if (!lumen) return 0;
+  trim_rim(lv, params, *lumen, rim);
+  const std::uint64_t removed = count_nonzero(*lumen) + count_nonzero(rim);
+  for_each_nonzero(*lumen, [&](std::size_t n) { bone.data[n] = 0; });
   for_each_nonzero(rim, [&](std::size_t n) { bone.data[n] = 0; });
   return removed;
 }
