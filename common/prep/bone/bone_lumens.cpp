@@ -143,6 +143,101 @@ void trim_rim(const LumenLevels& lv, const SegmentationParams& params, const Mas
   });
 }
 
+// One island in its own box with one voxel of outside around it; `first` is the box's first
+// voxel in the scan's grid.
+Mask island_in_box(const Grid& g, const RunTable& runs, const RunLabels& labels, std::size_t c,
+                   const ComponentBox& bounds, Index3& first) {
+  const Index3& lo = bounds.lo;
+  const Index3& hi = bounds.hi;
+  Grid box;
+  for (int axis = 0; axis < 3; ++axis) {
+    first[axis] = lo[axis] - 1;
+    box.dims[axis] = hi[axis] - lo[axis] + 3;
+  }
+  box.spacing = g.spacing;
+  Mask island(box, 0, "bone lumen island");
+  for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
+    for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
+      const std::int64_t row = j + g.dims[1] * k;
+      for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
+        if (static_cast<std::size_t>(labels.of_run[r]) != c) continue;
+        for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i)
+          island.data[box.linear(i - first[0], j - first[1], k - first[2])] = 1;
+      }
+    }
+  return island;
+}
+
+// Whether island c is a lumen: it holds a core of the radius, and that core's mean HU is below
+// the cortex level and not below the mean of the island's surface.
+bool island_is_lumen(const CtVolume& ct, const Grid& g, const RunTable& runs,
+                     const RunLabels& labels, std::size_t c, const ComponentBox& bounds,
+                     double radius, double cortex) {
+  const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
+  const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
+  Index3 first;
+  const Mask island = island_in_box(g, runs, labels, c, bounds, first);
+  const Grid& box = island.grid;
+  const Index3& dims = box.dims;
+  const DistanceMap depth = signed_distance(island, DistanceParams{radius + 2.0 * largest, 1});
+  double core_sum = 0.0, surface_sum = 0.0;
+  std::int64_t core_count = 0, surface_count = 0;
+  // Outside the island and inside the scan: the scan's own border is no surface (a bone it
+  // cuts shows its interior there).
+  const auto outside = [&](std::int64_t m) {
+    if (island.data[m] != 0) return false;
+    const std::int64_t i = m % dims[0], j = (m / dims[0]) % dims[1], k = m / (dims[0] * dims[1]);
+    const Index3 at{first[0] + i, first[1] + j, first[2] + k};
+    for (int axis = 0; axis < 3; ++axis)
+      if (at[axis] < 0 || at[axis] >= g.dims[axis]) return false;
+    return true;
+  };
+  // The core first: an island without one (a rib) needs no surface (the sums, each in the
+  // same voxel order as ever, are the same).
+  const auto each_voxel = [&](auto visit) {
+    for (std::int64_t k = 1; k + 1 < dims[2]; ++k)
+      for (std::int64_t j = 1; j + 1 < dims[1]; ++j)
+        for (std::int64_t i = 1; i + 1 < dims[0]; ++i) {
+          const std::size_t m = box.linear(i, j, k);
+          if (island.data[m])
+            visit(m,
+                  static_cast<double>(ct.data[g.linear(first[0] + i, first[1] + j, first[2] + k)]));
+        }
+  };
+  each_voxel([&](std::size_t m, double hu) {
+    if (depth.data[m] + 0.5 * h < radius) return;
+    core_sum += hu;
+    ++core_count;
+  });
+  if (core_count == 0) return false;
+  each_voxel([&](std::size_t m, double hu) {
+    if (!any_face_neighbour(box, m, outside)) return;
+    surface_sum += hu;
+    ++surface_count;
+  });
+  if (surface_count == 0) return false;
+  const double core_hu = core_sum / static_cast<double>(core_count);
+  return core_hu < cortex && core_hu >= surface_sum / static_cast<double>(surface_count);
+}
+
+// A bone the scan shows apart from the skeleton across a joint space (a femoral head, a
+// vertebra across its facet joints) lies within the joint gap of it (bone_islands.hpp): a
+// candidate that near the skeleton stays. (Not near any other island: loops of bowel lie beside
+// each other and beside pieces of themselves too thin to hold a core.)
+void keep_beside_skeleton(const Grid& g, const RunTable& runs, const RunLabels& labels,
+                          std::size_t skeleton, const std::vector<ComponentBox>& boxes,
+                          std::vector<std::uint8_t>& lumen) {
+  Mask skeleton_only(g, 0, "bone lumen islands' skeleton");
+  rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return static_cast<std::size_t>(c) == skeleton; },
+      skeleton_only);
+  const double reach = kBoneJointGapMm + g.max_spacing();
+  for (std::size_t c = 0; c < lumen.size(); ++c)
+    if (lumen[c] && near_other_bone(skeleton_only, runs, labels, static_cast<std::int64_t>(c),
+                                    boxes[c].lo, boxes[c].hi, reach))
+      lumen[c] = 0;
+}
+
 }  // namespace
 
 std::uint64_t remove_lumens(const CtVolume& ct, const SegmentationParams& params, Mask& bone) {
@@ -188,91 +283,15 @@ std::uint64_t remove_lumen_islands(const CtVolume& ct, const SegmentationParams&
   const auto skeleton = static_cast<std::size_t>(
       std::max_element(labels.voxels.begin(), labels.voxels.end()) - labels.voxels.begin());
   const std::vector<ComponentBox> boxes = component_boxes(g, runs, labels);
-  const double h = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
-  const double largest = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   std::vector<std::uint8_t> lumen(islands, 0);
   bool any = false;
   for (std::size_t c = 0; c < islands; ++c) {
     if (c == skeleton || !wide_enough_for_core(boxes[c], g, radius)) continue;
-    const Index3& lo = boxes[c].lo;
-    const Index3& hi = boxes[c].hi;
-    // The island alone, in its box with one voxel of outside around it.
-    Index3 first, dims;
-    for (int axis = 0; axis < 3; ++axis) {
-      first[axis] = lo[axis] - 1;
-      dims[axis] = hi[axis] - lo[axis] + 3;
-    }
-    Grid box;
-    box.dims = dims;
-    box.spacing = g.spacing;
-    Mask island(box, 0, "bone lumen island");
-    const auto in_box = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
-      return box.linear(i - first[0], j - first[1], k - first[2]);
-    };
-    for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
-      for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
-        const std::int64_t row = j + g.dims[1] * k;
-        for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r) {
-          if (static_cast<std::size_t>(labels.of_run[r]) != c) continue;
-          for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i)
-            island.data[in_box(i, j, k)] = 1;
-        }
-      }
-    const DistanceMap depth = signed_distance(island, DistanceParams{radius + 2.0 * largest, 1});
-    double core_sum = 0.0, surface_sum = 0.0;
-    std::int64_t core_count = 0, surface_count = 0;
-    // Outside the island and inside the scan: the scan's own border is no surface (a bone it
-    // cuts shows its interior there).
-    const auto outside = [&](std::int64_t m) {
-      if (island.data[m] != 0) return false;
-      const std::int64_t i = m % dims[0], j = (m / dims[0]) % dims[1], k = m / (dims[0] * dims[1]);
-      const Index3 at{first[0] + i, first[1] + j, first[2] + k};
-      for (int axis = 0; axis < 3; ++axis)
-        if (at[axis] < 0 || at[axis] >= g.dims[axis]) return false;
-      return true;
-    };
-    // The core first: an island without one (a rib) needs no surface (the sums, each in the
-    // same voxel order as ever, are the same).
-    const auto each_voxel = [&](auto visit) {
-      for (std::int64_t k = 1; k + 1 < dims[2]; ++k)
-        for (std::int64_t j = 1; j + 1 < dims[1]; ++j)
-          for (std::int64_t i = 1; i + 1 < dims[0]; ++i) {
-            const std::size_t m = box.linear(i, j, k);
-            if (island.data[m])
-              visit(m, static_cast<double>(
-                           ct.data[g.linear(first[0] + i, first[1] + j, first[2] + k)]));
-          }
-    };
-    each_voxel([&](std::size_t m, double hu) {
-      if (depth.data[m] + 0.5 * h < radius) return;
-      core_sum += hu;
-      ++core_count;
-    });
-    if (core_count == 0) continue;
-    each_voxel([&](std::size_t m, double hu) {
-      if (!any_face_neighbour(box, m, outside)) return;
-      surface_sum += hu;
-      ++surface_count;
-    });
-    if (surface_count == 0) continue;
-    const double core_hu = core_sum / static_cast<double>(core_count);
-    lumen[c] = core_hu < cortex && core_hu >= surface_sum / static_cast<double>(surface_count);
+    lumen[c] = island_is_lumen(ct, g, runs, labels, c, boxes[c], radius, cortex);
     any = any || lumen[c];
   }
   if (!any) return 0;
-  // A bone the scan shows apart from the skeleton across a joint space (a femoral head, a
-  // vertebra across its facet joints) lies within the joint gap of it (bone_islands.hpp): a
-  // candidate that near the skeleton stays. (Not near any other island: loops of bowel lie beside
-  // each other and beside pieces of themselves too thin to hold a core.)
-  Mask skeleton_only(g, 0, "bone lumen islands' skeleton");
-  rewrite_runs(
-      g, runs, labels, [&](std::int64_t c) { return static_cast<std::size_t>(c) == skeleton; },
-      skeleton_only);
-  const double reach = kBoneJointGapMm + g.max_spacing();
-  for (std::size_t c = 0; c < islands; ++c)
-    if (lumen[c] && near_other_bone(skeleton_only, runs, labels, static_cast<std::int64_t>(c),
-                                    boxes[c].lo, boxes[c].hi, reach))
-      lumen[c] = 0;
+  keep_beside_skeleton(g, runs, labels, skeleton, boxes, lumen);
   std::uint64_t removed = 0;
   for (std::size_t c = 0; c < islands; ++c)
     if (lumen[c]) removed += static_cast<std::uint64_t>(labels.voxels[c]);
