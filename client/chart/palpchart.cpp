@@ -91,6 +91,66 @@ struct Options {
   bool xlabel_set = false, ylabel_set = false;
 };
 
+// --style line|points|linepoints.
+chart::Style parse_style(const std::string& s) {
+  if (s == "line") return chart::Style::Line;
+  if (s == "points") return chart::Style::Points;
+  if (s == "linepoints") return chart::Style::LinePoints;
+  throw UsageError("--style must be line, points or linepoints");
+}
+
+// --legend tr|tl|br|bl|none, into the chart's spec.
+void parse_legend(const std::string& s, chart::ChartSpec& spec) {
+  if (s == "none")
+    spec.legend = false;
+  else if (s == "tr")
+    spec.legend_corner = chart::LegendCorner::TopRight;
+  else if (s == "tl")
+    spec.legend_corner = chart::LegendCorner::TopLeft;
+  else if (s == "br")
+    spec.legend_corner = chart::LegendCorner::BottomRight;
+  else if (s == "bl")
+    spec.legend_corner = chart::LegendCorner::BottomLeft;
+  else
+    throw UsageError("--legend must be tr, tl, br, bl or none");
+}
+
+// --xrange or --yrange LO,HI (either end may be empty), into the chart's spec.
+void parse_range(std::string_view option, const std::string& text, chart::ChartSpec& spec) {
+  const std::vector<std::string> ends = split(text, ',');
+  if (ends.size() != 2) throw UsageError(std::string(option) + " needs LO,HI");
+  std::optional<double> lo, hi;
+  if (!ends[0].empty()) lo = number(ends[0], option);
+  if (!ends[1].empty()) hi = number(ends[1], option);
+  (option == "--xrange" ? spec.x_min : spec.y_min) = lo;
+  (option == "--xrange" ? spec.x_max : spec.y_max) = hi;
+}
+
+// --size WxH, into the chart's spec.
+void parse_size(const std::string& s, chart::ChartSpec& spec) {
+  int w = 0, h = 0;
+  char extra = 0;
+  if (std::sscanf(s.c_str(), "%dx%d%c", &w, &h, &extra) != 2)
+    throw UsageError("--size must be WxH, e.g. 900x600");
+  spec.width = w;
+  spec.height = h;
+}
+
+// The checks between options, and the axis titles that default to the columns.
+void check_args(Options& o) {
+  if (o.csv.empty() || o.out.empty() || o.x.empty() || o.y.empty())
+    throw UsageError("--csv, --out, --x and --y are required");
+  if (!o.names.empty() && o.names.size() != o.y.size())
+    throw UsageError("--names needs one name per --y column");
+  if (o.pareto && o.y.size() != 1) throw UsageError("--pareto needs exactly one --y column");
+  if (o.pareto && !o.mark.empty()) throw UsageError("use either --pareto or --mark");
+  if (o.csv.size() > 1 && (o.pareto || !o.mark.empty()))
+    throw UsageError("--pareto and --mark take one --csv");
+  if (!o.xlabel_set) o.spec.x_title = o.x;
+  if (!o.ylabel_set) o.spec.y_title = o.y.size() == 1 ? o.y[0] : "";
+}
+
+// The chart's command line (--help prints the usage and exits).
 Options parse_args(int argc, char** argv) {
   Options o;
   auto value = [&](int& i) -> std::string {
@@ -117,15 +177,7 @@ Options parse_args(int argc, char** argv) {
       if (eq == std::string::npos || eq == 0) throw UsageError("--where needs COL=VALUE");
       o.where.emplace_back(w.substr(0, eq), split(w.substr(eq + 1), '|'));
     } else if (a == "--style") {
-      const std::string s = value(i);
-      if (s == "line")
-        o.style = chart::Style::Line;
-      else if (s == "points")
-        o.style = chart::Style::Points;
-      else if (s == "linepoints")
-        o.style = chart::Style::LinePoints;
-      else
-        throw UsageError("--style must be line, points or linepoints");
+      o.style = parse_style(value(i));
     } else if (a == "--mark") {
       o.mark = value(i);
     } else if (a == "--mark-label") {
@@ -141,39 +193,15 @@ Options parse_args(int argc, char** argv) {
       o.spec.y_title = value(i);
       o.ylabel_set = true;
     } else if (a == "--xrange" || a == "--yrange") {
-      const std::vector<std::string> ends = split(value(i), ',');
-      if (ends.size() != 2) throw UsageError(std::string(a) + " needs LO,HI");
-      std::optional<double> lo, hi;
-      if (!ends[0].empty()) lo = number(ends[0], a);
-      if (!ends[1].empty()) hi = number(ends[1], a);
-      (a == "--xrange" ? o.spec.x_min : o.spec.y_min) = lo;
-      (a == "--xrange" ? o.spec.x_max : o.spec.y_max) = hi;
+      parse_range(a, value(i), o.spec);
     } else if (a == "--logx") {
       o.spec.log_x = true;
     } else if (a == "--logy") {
       o.spec.log_y = true;
     } else if (a == "--size") {
-      const std::string s = value(i);
-      int w = 0, h = 0;
-      char extra = 0;
-      if (std::sscanf(s.c_str(), "%dx%d%c", &w, &h, &extra) != 2)
-        throw UsageError("--size must be WxH, e.g. 900x600");
-      o.spec.width = w;
-      o.spec.height = h;
+      parse_size(value(i), o.spec);
     } else if (a == "--legend") {
-      const std::string s = value(i);
-      if (s == "none")
-        o.spec.legend = false;
-      else if (s == "tr")
-        o.spec.legend_corner = chart::LegendCorner::TopRight;
-      else if (s == "tl")
-        o.spec.legend_corner = chart::LegendCorner::TopLeft;
-      else if (s == "br")
-        o.spec.legend_corner = chart::LegendCorner::BottomRight;
-      else if (s == "bl")
-        o.spec.legend_corner = chart::LegendCorner::BottomLeft;
-      else
-        throw UsageError("--legend must be tr, tl, br, bl or none");
+      parse_legend(value(i), o.spec);
     } else if (a == "-h" || a == "--help") {
       std::cout << kUsage;
       std::exit(0);
@@ -181,16 +209,7 @@ Options parse_args(int argc, char** argv) {
       throw UsageError("unknown argument '" + std::string(a) + "'");
     }
   }
-  if (o.csv.empty() || o.out.empty() || o.x.empty() || o.y.empty())
-    throw UsageError("--csv, --out, --x and --y are required");
-  if (!o.names.empty() && o.names.size() != o.y.size())
-    throw UsageError("--names needs one name per --y column");
-  if (o.pareto && o.y.size() != 1) throw UsageError("--pareto needs exactly one --y column");
-  if (o.pareto && !o.mark.empty()) throw UsageError("use either --pareto or --mark");
-  if (o.csv.size() > 1 && (o.pareto || !o.mark.empty()))
-    throw UsageError("--pareto and --mark take one --csv");
-  if (!o.xlabel_set) o.spec.x_title = o.x;
-  if (!o.ylabel_set) o.spec.y_title = o.y.size() == 1 ? o.y[0] : "";
+  check_args(o);
   return o;
 }
 
@@ -208,10 +227,9 @@ void sort_by_x(chart::Series& s) {
   s.y = std::move(y);
 }
 
-// The series of one CSV file (with its name before each series when `prefix` is not empty).
-chart::ChartSpec build(const Options& o, const chart::Table& table, const std::string& csv,
-                       const std::string& prefix) {
-  // Rows kept by --where.
+// The rows of `table` that every --where filter keeps.
+std::vector<std::size_t> kept_rows(const Options& o, const chart::Table& table,
+                                   const std::string& csv) {
   std::vector<std::size_t> where_cols;
   for (const auto& w : o.where) where_cols.push_back(table.column(w.first));
   std::vector<std::size_t> rows;
@@ -225,77 +243,93 @@ chart::ChartSpec build(const Options& o, const chart::Table& table, const std::s
     if (keep) rows.push_back(r);
   }
   if (rows.empty()) throw UsageError("no row of '" + csv + "' passes the --where filters");
+  return rows;
+}
 
+// The series of --y column `yi`: one per --group key, in order of first appearance.
+void add_column_series(const Options& o, const chart::Table& table,
+                       const std::vector<std::size_t>& rows,
+                       const std::vector<std::size_t>& group_cols, const std::vector<double>& xs,
+                       std::size_t yi, const std::string& prefix, chart::ChartSpec& spec) {
+  const std::vector<double> ys = table.numbers(o.y[yi]);
+  const std::string yname = o.names.empty() ? o.y[yi] : o.names[yi];
+  std::vector<std::string> keys;
+  std::map<std::string, chart::Series> by_key;
+  for (std::size_t r : rows) {
+    std::string key;
+    for (std::size_t c : group_cols) key += (key.empty() ? "" : " / ") + table.rows[r][c];
+    auto [it, fresh] = by_key.try_emplace(key);
+    if (fresh) {
+      keys.push_back(key);
+      it->second.style = o.style;
+      if (key.empty())
+        it->second.name = yname;
+      else
+        it->second.name = o.y.size() > 1 ? yname + ": " + key : key;
+      if (!prefix.empty())
+        it->second.name = prefix + (key.empty() && o.y.size() == 1 ? "" : ": " + it->second.name);
+    }
+    it->second.x.push_back(xs[r]);
+    it->second.y.push_back(ys[r]);
+  }
+  for (const std::string& k : keys) {
+    chart::Series s = std::move(by_key[k]);
+    if (o.style != chart::Style::Points) sort_by_x(s);
+    spec.series.push_back(std::move(s));
+  }
+}
+
+// The highlighted series: rows marked by the --mark column, or the computed Pareto front.
+chart::Series highlighted_series(const Options& o, const chart::Table& table,
+                                 const std::vector<std::size_t>& rows,
+                                 const std::vector<double>& xs, const chart::ChartSpec& spec) {
+  chart::Series m;
+  m.highlight = true;
+  m.style = chart::Style::LinePoints;
+  m.line_width = 1.5f;
+  if (o.pareto) {
+    m.name = o.mark_label.empty() ? "Pareto front" : o.mark_label;
+    const std::vector<double> ys = table.numbers(o.y[0]);
+    std::vector<double> fx, fy;
+    for (std::size_t r : rows) {
+      const bool ok = (!spec.log_x || xs[r] > 0.0) && (!spec.log_y || ys[r] > 0.0);
+      fx.push_back(ok ? xs[r] : std::nan(""));
+      fy.push_back(ok ? ys[r] : std::nan(""));
+    }
+    for (std::size_t i : chart::pareto_front(fx, fy)) {
+      m.x.push_back(fx[i]);
+      m.y.push_back(fy[i]);
+    }
+  } else {
+    m.name = o.mark_label.empty() ? o.mark : o.mark_label;
+    if (o.y.size() > 1) m.style = chart::Style::Points;  // marks on several curves
+    const std::vector<double> flags = table.numbers(o.mark);
+    for (std::size_t yi = 0; yi < o.y.size(); ++yi) {
+      const std::vector<double> ys = table.numbers(o.y[yi]);
+      for (std::size_t r : rows)
+        if (std::isfinite(flags[r]) && flags[r] != 0.0) {
+          m.x.push_back(xs[r]);
+          m.y.push_back(ys[r]);
+        }
+    }
+    sort_by_x(m);
+  }
+  if (m.x.size() == 1) m.style = chart::Style::Points;  // a line needs two points
+  return m;
+}
+
+// The series of one CSV file (with its name before each series when `prefix` is not empty).
+chart::ChartSpec build(const Options& o, const chart::Table& table, const std::string& csv,
+                       const std::string& prefix) {
+  const std::vector<std::size_t> rows = kept_rows(o, table, csv);
   std::vector<std::size_t> group_cols;
   for (const std::string& g : o.group) group_cols.push_back(table.column(g));
   const std::vector<double> xs = table.numbers(o.x);
-
   chart::ChartSpec spec = o.spec;
-  const bool sorted = o.style != chart::Style::Points;
-  for (std::size_t yi = 0; yi < o.y.size(); ++yi) {
-    const std::vector<double> ys = table.numbers(o.y[yi]);
-    const std::string yname = o.names.empty() ? o.y[yi] : o.names[yi];
-    // Series per group key, in order of first appearance.
-    std::vector<std::string> keys;
-    std::map<std::string, chart::Series> by_key;
-    for (std::size_t r : rows) {
-      std::string key;
-      for (std::size_t c : group_cols) key += (key.empty() ? "" : " / ") + table.rows[r][c];
-      auto [it, fresh] = by_key.try_emplace(key);
-      if (fresh) {
-        keys.push_back(key);
-        it->second.style = o.style;
-        if (key.empty())
-          it->second.name = yname;
-        else
-          it->second.name = o.y.size() > 1 ? yname + ": " + key : key;
-        if (!prefix.empty())
-          it->second.name = prefix + (key.empty() && o.y.size() == 1 ? "" : ": " + it->second.name);
-      }
-      it->second.x.push_back(xs[r]);
-      it->second.y.push_back(ys[r]);
-    }
-    for (const std::string& k : keys) {
-      chart::Series s = std::move(by_key[k]);
-      if (sorted) sort_by_x(s);
-      spec.series.push_back(std::move(s));
-    }
-  }
-
-  // The highlighted series: rows marked by a column, or the computed Pareto front.
+  for (std::size_t yi = 0; yi < o.y.size(); ++yi)
+    add_column_series(o, table, rows, group_cols, xs, yi, prefix, spec);
   if (!o.mark.empty() || o.pareto) {
-    chart::Series m;
-    m.highlight = true;
-    m.style = chart::Style::LinePoints;
-    m.line_width = 1.5f;
-    if (o.pareto) {
-      m.name = o.mark_label.empty() ? "Pareto front" : o.mark_label;
-      const std::vector<double> ys = table.numbers(o.y[0]);
-      std::vector<double> fx, fy;
-      for (std::size_t r : rows) {
-        const bool ok = (!spec.log_x || xs[r] > 0.0) && (!spec.log_y || ys[r] > 0.0);
-        fx.push_back(ok ? xs[r] : std::nan(""));
-        fy.push_back(ok ? ys[r] : std::nan(""));
-      }
-      for (std::size_t i : chart::pareto_front(fx, fy)) {
-        m.x.push_back(fx[i]);
-        m.y.push_back(fy[i]);
-      }
-    } else {
-      m.name = o.mark_label.empty() ? o.mark : o.mark_label;
-      if (o.y.size() > 1) m.style = chart::Style::Points;  // marks on several curves
-      const std::vector<double> flags = table.numbers(o.mark);
-      for (std::size_t yi = 0; yi < o.y.size(); ++yi) {
-        const std::vector<double> ys = table.numbers(o.y[yi]);
-        for (std::size_t r : rows)
-          if (std::isfinite(flags[r]) && flags[r] != 0.0) {
-            m.x.push_back(xs[r]);
-            m.y.push_back(ys[r]);
-          }
-      }
-      sort_by_x(m);
-    }
-    if (m.x.size() == 1) m.style = chart::Style::Points;  // a line needs two points
+    chart::Series m = highlighted_series(o, table, rows, xs, spec);
     if (!m.x.empty()) spec.series.push_back(std::move(m));
   }
   return spec;
