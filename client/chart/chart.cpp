@@ -122,6 +122,98 @@ std::string no_display_message(std::string_view program) {
          std::string(program) + " ...";
 }
 
+namespace {
+
+// The axes' titles, scales and ranges, from the points the chart keeps.
+void style_axes(vtkChartXY* chart, const ChartSpec& spec) {
+  double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, y_lo = x_lo, y_hi = -x_lo;
+  for (const Series& s : spec.series)
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!keep_point(s.x[i], s.y[i], spec)) continue;
+      x_lo = std::min(x_lo, s.x[i]);
+      x_hi = std::max(x_hi, s.x[i]);
+      y_lo = std::min(y_lo, s.y[i]);
+      y_hi = std::max(y_hi, s.y[i]);
+    }
+  style_axis(chart->GetAxis(vtkAxis::BOTTOM), spec.x_title, spec.log_x, x_lo, x_hi, spec.x_min,
+             spec.x_max);
+  style_axis(chart->GetAxis(vtkAxis::LEFT), spec.y_title, spec.log_y, y_lo, y_hi, spec.y_min,
+             spec.y_max);
+}
+
+// The legend, shown or not, in its corner.
+void place_legend(vtkChartXY* chart, const ChartSpec& spec) {
+  chart->SetShowLegend(spec.legend);
+  if (!spec.legend) return;
+  vtkChartLegend* legend = chart->GetLegend();
+  legend->SetLabelSize(13);
+  const bool right = spec.legend_corner == LegendCorner::TopRight ||
+                     spec.legend_corner == LegendCorner::BottomRight;
+  const bool top =
+      spec.legend_corner == LegendCorner::TopRight || spec.legend_corner == LegendCorner::TopLeft;
+  legend->SetHorizontalAlignment(right ? vtkChartLegend::RIGHT : vtkChartLegend::LEFT);
+  legend->SetVerticalAlignment(top ? vtkChartLegend::TOP : vtkChartLegend::BOTTOM);
+}
+
+// One series as a plot of the chart (none when no point is kept); `plain_index` counts the
+// series that are not highlighted, for their colours and markers.
+void add_plot(vtkChartXY* chart, const ChartSpec& spec, const Series& s, std::size_t& plain_index) {
+  vtkNew<vtkTable> table;
+  vtkNew<vtkDoubleArray> xs, ys;
+  xs->SetName("x");
+  ys->SetName(s.name.empty() ? "y" : s.name.c_str());
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    if (!keep_point(s.x[i], s.y[i], spec)) continue;
+    xs->InsertNextValue(s.x[i]);
+    ys->InsertNextValue(s.y[i]);
+  }
+  if (xs->GetNumberOfTuples() == 0) return;
+  table->AddColumn(xs);
+  table->AddColumn(ys);
+
+  const bool line = s.style != Style::Points;
+  vtkPlot* plot = chart->AddPlot(line ? vtkChart::LINE : vtkChart::POINTS);
+  plot->SetInputData(table, 0, 1);
+  plot->SetLabel(s.name);
+  const std::size_t index = s.highlight ? 0 : plain_index++;
+  const Color c = s.color ? *s.color : (s.highlight ? Color{0, 0, 0} : palette(index));
+  plot->SetColor(c.r, c.g, c.b, 255);
+  plot->SetWidth(s.style == Style::Points ? 1.0f : s.line_width);
+  if (auto* points = vtkPlotPoints::SafeDownCast(plot)) {
+    const int marker = s.highlight ? vtkPlotPoints::DIAMOND : kMarkers[(index / 10) % 5];
+    points->SetMarkerStyle(s.style == Style::Line ? vtkPlotPoints::NONE : marker);
+    points->SetMarkerSize(s.highlight ? s.marker_size * 1.6f : s.marker_size);
+  }
+}
+
+// The rendered window as a PNG, written under a temporary name and renamed, so a failed write
+// leaves no partial PNG.
+void write_png(vtkRenderWindow* window, const std::string& path) {
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(window);
+  grab->SetInputBufferTypeToRGB();
+  grab->ReadFrontBufferOff();
+  grab->Update();
+
+  const std::string tmp = path + ".tmp.png";
+  vtkNew<vtkPNGWriter> writer;
+  writer->SetFileName(tmp.c_str());
+  writer->SetInputConnection(grab->GetOutputPort());
+  writer->Write();
+  std::error_code ec;
+  if (writer->GetErrorCode() != 0 || std::filesystem::file_size(tmp, ec) == 0 || ec) {
+    std::filesystem::remove(tmp, ec);
+    throw InputError("cannot write chart PNG '" + path + "'");
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw InputError("cannot write chart PNG '" + path + "': " + ec.message());
+  }
+}
+
+}  // namespace
+
 void render_png(const ChartSpec& spec, const std::string& path) {
   validate(spec);
   if (!display_available()) throw ResourceError(no_display_message("chart"));
@@ -138,91 +230,18 @@ void render_png(const ChartSpec& spec, const std::string& path) {
   chart->SetTitle(spec.title);
   chart->GetTitleProperties()->SetFontSize(18);
   chart->GetTitleProperties()->BoldOn();
-  double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, y_lo = x_lo, y_hi = -x_lo;
-  for (const Series& s : spec.series)
-    for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!keep_point(s.x[i], s.y[i], spec)) continue;
-      x_lo = std::min(x_lo, s.x[i]);
-      x_hi = std::max(x_hi, s.x[i]);
-      y_lo = std::min(y_lo, s.y[i]);
-      y_hi = std::max(y_hi, s.y[i]);
-    }
-  style_axis(chart->GetAxis(vtkAxis::BOTTOM), spec.x_title, spec.log_x, x_lo, x_hi, spec.x_min,
-             spec.x_max);
-  style_axis(chart->GetAxis(vtkAxis::LEFT), spec.y_title, spec.log_y, y_lo, y_hi, spec.y_min,
-             spec.y_max);
-  chart->SetShowLegend(spec.legend);
-  if (spec.legend) {
-    vtkChartLegend* legend = chart->GetLegend();
-    legend->SetLabelSize(13);
-    const bool right = spec.legend_corner == LegendCorner::TopRight ||
-                       spec.legend_corner == LegendCorner::BottomRight;
-    const bool top =
-        spec.legend_corner == LegendCorner::TopRight || spec.legend_corner == LegendCorner::TopLeft;
-    legend->SetHorizontalAlignment(right ? vtkChartLegend::RIGHT : vtkChartLegend::LEFT);
-    legend->SetVerticalAlignment(top ? vtkChartLegend::TOP : vtkChartLegend::BOTTOM);
-  }
+  style_axes(chart, spec);
+  place_legend(chart, spec);
 
   // Highlighted series go last so they sit on top.
-  std::vector<const Series*> order;
-  for (const Series& s : spec.series)
-    if (!s.highlight) order.push_back(&s);
-  for (const Series& s : spec.series)
-    if (s.highlight) order.push_back(&s);
-
   std::size_t plain_index = 0;
-  for (const Series* s : order) {
-    vtkNew<vtkTable> table;
-    vtkNew<vtkDoubleArray> xs, ys;
-    xs->SetName("x");
-    ys->SetName(s->name.empty() ? "y" : s->name.c_str());
-    for (std::size_t i = 0; i < s->x.size(); ++i) {
-      if (!keep_point(s->x[i], s->y[i], spec)) continue;
-      xs->InsertNextValue(s->x[i]);
-      ys->InsertNextValue(s->y[i]);
-    }
-    if (xs->GetNumberOfTuples() == 0) continue;
-    table->AddColumn(xs);
-    table->AddColumn(ys);
-
-    const bool line = s->style != Style::Points;
-    vtkPlot* plot = chart->AddPlot(line ? vtkChart::LINE : vtkChart::POINTS);
-    plot->SetInputData(table, 0, 1);
-    plot->SetLabel(s->name);
-    const std::size_t index = s->highlight ? 0 : plain_index++;
-    const Color c = s->color ? *s->color : (s->highlight ? Color{0, 0, 0} : palette(index));
-    plot->SetColor(c.r, c.g, c.b, 255);
-    plot->SetWidth(s->style == Style::Points ? 1.0f : s->line_width);
-    if (auto* points = vtkPlotPoints::SafeDownCast(plot)) {
-      const int marker = s->highlight ? vtkPlotPoints::DIAMOND : kMarkers[(index / 10) % 5];
-      points->SetMarkerStyle(s->style == Style::Line ? vtkPlotPoints::NONE : marker);
-      points->SetMarkerSize(s->highlight ? s->marker_size * 1.6f : s->marker_size);
-    }
-  }
+  for (const Series& s : spec.series)
+    if (!s.highlight) add_plot(chart, spec, s, plain_index);
+  for (const Series& s : spec.series)
+    if (s.highlight) add_plot(chart, spec, s, plain_index);
 
   window->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  grab->Update();
-
-  // Written under a temporary name and renamed, so a failed write leaves no partial PNG.
-  const std::string tmp = path + ".tmp.png";
-  vtkNew<vtkPNGWriter> writer;
-  writer->SetFileName(tmp.c_str());
-  writer->SetInputConnection(grab->GetOutputPort());
-  writer->Write();
-  std::error_code ec;
-  if (writer->GetErrorCode() != 0 || std::filesystem::file_size(tmp, ec) == 0 || ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InputError("cannot write chart PNG '" + path + "'");
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InputError("cannot write chart PNG '" + path + "': " + ec.message());
-  }
+  write_png(window, path);
 }
 
 // ---------------------------------------------------------------------------------------------
