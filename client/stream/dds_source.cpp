@@ -51,6 +51,45 @@ void to_proto(const palp_dds_HapticFrame& f, v1::HapticFrame* out) {
 
 }  // namespace
 
+void StreamClient::Impl::dds_refused(const std::string& why) {
+  std::lock_guard lock(shared_mutex);
+  shared.link.state = LinkState::Refused;
+  shared.link.message = why;
+}
+
+StreamClient::Impl::ConnectionPtr StreamClient::Impl::start_dds_link(const std::string& where) {
+  auto c = std::make_shared<Connection>(io);
+  c->welcomed = true;
+  c->started_ns = 0;  // frames' stamps give the clock offset (ClockSync accepts any time)
+  std::lock_guard lock(shared_mutex);
+  ++shared.link.connections;
+  shared.connection = shared.link.connections;
+  shared.link.state = LinkState::Loading;
+  shared.link.message = where + ": waiting for palpd";
+  shared.link.volume_progress = opts.volume_max_dim > 0 ? 0.0 : 1.0;
+  return c;
+}
+
+void StreamClient::Impl::dds_housekeeping(Connection& c, const std::string& where) {
+  // What housekeeping() does for palp.v1: rates, latency, stalls.
+  const std::int64_t now = now_ns();
+  while (!c.arrivals.empty() && c.arrivals.front().first < now - kSecond) c.arrivals.pop_front();
+  double fps = 0;
+  if (c.frames > 0)
+    fps = static_cast<double>(c.arrivals.size()) /
+          std::clamp(static_cast<double>(now - c.first_frame_ns) * 1e-9, 0.25, 1.0);
+  const double median = net::median_latency_ms(c.arrivals, c.clock, latencies);
+  std::lock_guard lock(shared_mutex);
+  LinkStats& l = shared.link;
+  l.frames_per_s = fps;
+  l.latency_ms = median;
+  if (l.state == LinkState::Live && c.frames > 0 &&
+      static_cast<double>(now - last_frame_ns) > opts.stall_s * 1e9) {
+    l.state = LinkState::Stalled;
+    l.message = where + ": no frame for a while";
+  }
+}
+
 void StreamClient::Impl::run_dds() {
   const std::string where =
       "DDS domain " + std::to_string(opts.dds_domain) + ", rig " + opts.dds_rig;
@@ -63,22 +102,10 @@ void StreamClient::Impl::run_dds() {
     so.volume = opts.volume_max_dim > 0;
     sub = std::make_unique<palp::dds::RigSubscriber>(so);
   } catch (const std::exception& e) {
-    std::lock_guard lock(shared_mutex);
-    shared.link.state = LinkState::Refused;
-    shared.link.message = e.what();
+    dds_refused(e.what());
     return;
   }
-  auto c = std::make_shared<Connection>(io);
-  c->welcomed = true;
-  c->started_ns = 0;  // frames' stamps give the clock offset (ClockSync accepts any time)
-  {
-    std::lock_guard lock(shared_mutex);
-    ++shared.link.connections;
-    shared.connection = shared.link.connections;
-    shared.link.state = LinkState::Loading;
-    shared.link.message = where + ": waiting for palpd";
-    shared.link.volume_progress = opts.volume_max_dim > 0 ? 0.0 : 1.0;
-  }
+  const ConnectionPtr c = start_dds_link(where);
   DdsVolumeChunks chunks;  // until all are there and the scene has come
   std::uint64_t scene_version = 0;
   bool volume_fed = opts.volume_max_dim == 0;
@@ -130,24 +157,7 @@ void StreamClient::Impl::run_dds() {
   };
   while (!dds_stop.load()) {
     if (sub->wait(0.02)) sub->take(h);
-    // What housekeeping() does for palp.v1: rates, latency, stalls.
-    const std::int64_t now = now_ns();
-    while (!c->arrivals.empty() && c->arrivals.front().first < now - kSecond)
-      c->arrivals.pop_front();
-    double fps = 0;
-    if (c->frames > 0)
-      fps = static_cast<double>(c->arrivals.size()) /
-            std::clamp(static_cast<double>(now - c->first_frame_ns) * 1e-9, 0.25, 1.0);
-    const double median = net::median_latency_ms(c->arrivals, c->clock, latencies);
-    std::lock_guard lock(shared_mutex);
-    LinkStats& l = shared.link;
-    l.frames_per_s = fps;
-    l.latency_ms = median;
-    if (l.state == LinkState::Live && c->frames > 0 &&
-        static_cast<double>(now - last_frame_ns) > opts.stall_s * 1e9) {
-      l.state = LinkState::Stalled;
-      l.message = where + ": no frame for a while";
-    }
+    dds_housekeeping(*c, where);
   }
 }
 

@@ -30,8 +30,7 @@ struct StreamClient::Impl {
 
   // One TCP connection attempt and its session.
   struct Connection {
-    explicit Connection(asio::io_context& io)
-        : stream(io), resolver(io), reader("the server") {}
+    explicit Connection(asio::io_context& io) : stream(io), resolver(io), reader("the server") {}
     palp::tls::Stream stream;  // plain, or TLS once connected (opts.tls_*)
     tcp::resolver resolver;
     client::ServerMessageReader reader;  // the frames decoded into ServerMessages
@@ -124,6 +123,12 @@ struct StreamClient::Impl {
   // dds_source.cpp: with opts.dds, the thread's body instead of the Asio loop (until dds_stop).
   void run_dds();
   std::atomic<bool> dds_stop{false};
+  // run_dds(): no subscriber for the rig; the link says why.
+  void dds_refused(const std::string& why);
+  // run_dds(): the one Connection a DDS link has, welcomed, the link loading.
+  ConnectionPtr start_dds_link(const std::string& where);
+  // run_dds()'s housekeeping() after each take: rates, latency, stalls.
+  void dds_housekeeping(Connection& c, const std::string& where);
 
   // ------------------------------------------------------------------ housekeeping
   void schedule_house();
