@@ -34,9 +34,15 @@ struct ViewWindow::Impl {
   bool glfw_initialised = false;
 
   static Impl* of(GLFWwindow* w) { return static_cast<Impl*>(glfwGetWindowUserPointer(w)); }
+  // GLFW up and an OpenGL 3.2 core window open, its context current; ResourceError if not.
+  void open_window(const WindowOptions& options);
+  // VTK's render window on the GLFW context: VTK's three context events answered by GLFW.
+  void host_render_window();
+  // GLFW's resize and input callbacks handed to `events`.
+  void forward_input();
 };
 
-ViewWindow::ViewWindow(const WindowOptions& options) : impl_(std::make_unique<Impl>()) {
+void ViewWindow::Impl::open_window(const WindowOptions& options) {
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display)
     throw ResourceError(
@@ -45,7 +51,7 @@ ViewWindow::ViewWindow(const WindowOptions& options) : impl_(std::make_unique<Im
   glfwSetErrorCallback(on_glfw_error);
   if (!glfwInit())
     throw ResourceError("palpview: cannot initialise GLFW (" + g_last_glfw_error + ")");
-  impl_->glfw_initialised = true;
+  glfw_initialised = true;
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 2);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
@@ -55,28 +61,28 @@ ViewWindow::ViewWindow(const WindowOptions& options) : impl_(std::make_unique<Im
   glfwWindowHint(GLFW_STENCIL_BITS, 8);
   glfwWindowHint(GLFW_ALPHA_BITS, 8);
   glfwWindowHint(GLFW_SAMPLES, 0);
-  impl_->window =
-      glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
-  if (!impl_->window) {
+  window = glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
+  if (!window) {
     glfwTerminate();
-    impl_->glfw_initialised = false;
+    glfw_initialised = false;
     throw ResourceError("palpview: cannot create an OpenGL 3.2 window (" + g_last_glfw_error + ")");
   }
-  glfwSetWindowUserPointer(impl_->window, impl_.get());
-  glfwMakeContextCurrent(impl_->window);
+  glfwSetWindowUserPointer(window, this);
+  glfwMakeContextCurrent(window);
   glfwSwapInterval(0);  // never wait for vertical sync: the frame time is what it costs
+}
 
-  auto& rw = impl_->render_window;
+void ViewWindow::Impl::host_render_window() {
+  auto& rw = render_window;
   rw = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
   int fb_width = 0, fb_height = 0;
-  glfwGetFramebufferSize(impl_->window, &fb_width, &fb_height);
+  glfwGetFramebufferSize(window, &fb_width, &fb_height);
   rw->SetSize(fb_width, fb_height);
   rw->SetOwnContext(false);
   rw->SetIsDirect(true);
   rw->SetSupportsOpenGL(true);
   rw->SetMapped(1);
 
-  GLFWwindow* window = impl_->window;
   vtkNew<vtkCallbackCommand> make_current;
   make_current->SetClientData(window);
   make_current->SetCallback([](vtkObject*, unsigned long, void* client, void*) {
@@ -99,7 +105,9 @@ ViewWindow::ViewWindow(const WindowOptions& options) : impl_(std::make_unique<Im
   if (!rw->InitializeFromCurrentContext())
     throw ResourceError("palpview: VTK cannot use the window's OpenGL context (needs OpenGL 3.2)");
   rw->SetReadyForRendering(true);
+}
 
+void ViewWindow::Impl::forward_input() {
   glfwSetFramebufferSizeCallback(window, [](GLFWwindow* w, int width, int height) {
     Impl* self = Impl::of(w);
     self->render_window->SetSize(width, height);
@@ -129,6 +137,12 @@ ViewWindow::ViewWindow(const WindowOptions& options) : impl_(std::make_unique<Im
     Impl* self = Impl::of(w);
     if (self->events.key && action != GLFW_RELEASE) self->events.key(key, mods);
   });
+}
+
+ViewWindow::ViewWindow(const WindowOptions& options) : impl_(std::make_unique<Impl>()) {
+  impl_->open_window(options);
+  impl_->host_render_window();
+  impl_->forward_input();
 }
 
 ViewWindow::~ViewWindow() {
