@@ -141,8 +141,94 @@ std::string tune_cache_key(const std::string& prep_dir, double map_spacing_mm,
   return hex;
 }
 
-StartTuning tune_at_start(const cli::Args& args, Scene& scene, Tool& tool, const ForceParams& params,
-                          double rate_hz, bool quiet) {
+namespace {
+
+// The one-line account of a tuning: candidates, the chosen tick and force difference, the maps.
+std::string tune_summary(const tune::Outcome& o) {
+  const tune::Judged& c = o.results[o.chosen];
+  const tune::Judged& ref = o.results.front();
+  char summary[320];
+  std::snprintf(summary, sizeof summary,
+                "of %zu candidates, tick p50 %.2f us (reference %.2f us), force difference "
+                "beyond its tick's tolerance on %.2f %% of ticks (RMS %.4f N), maps %.1f MiB "
+                "(reference %.1f MiB)%s",
+                o.results.size(), c.measured.tick_p50_us, ref.measured.tick_p50_us,
+                100.0 * c.measured.beyond_share, c.measured.rms_error_n,
+                static_cast<double>(c.measured.map_bytes) / 1048576.0,
+                static_cast<double>(ref.measured.map_bytes) / 1048576.0,
+                c.accepted ? "" : "; NOTHING passes at this rate: the reference");
+  return summary;
+}
+
+// What one tuning at start needs beyond the scene: the tool, rate, parameters, budget and cache.
+struct TuneRun {
+  const Tool& tool;
+  double rate_hz;
+  const ForceParams& params;
+  double budget;
+  std::chrono::steady_clock::time_point start;
+  std::string machine;
+  fs::path cache_file;
+  bool quiet;
+};
+
+// Tunes now and caches the choice; over the budget, nothing (out.note says so, on stderr too).
+std::optional<Cached> tune_now(const Scene& scene, const TuneRun& run, StartTuning& out) {
+  const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
+  tune::Setup setup;
+  setup.tool = run.tool.name;
+  setup.rate_hz = run.rate_hz;
+  setup.params = run.params;
+  setup.budget_s =
+      run.budget -
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - run.start).count();
+  if (!run.quiet)
+    std::fprintf(stderr, "palpd: --tune: tuning %s at %g Hz on this scene (budget %g s)...\n",
+                 run.tool.name.c_str(), run.rate_hz, run.budget);
+  try {
+    if (setup.budget_s <= 0.0)
+      throw tune::OverBudget("tune: over the time budget of " + number_text(run.budget) +
+                             " s (reading the maps)");
+    const tune::Outcome o = tune::tune(maps.surf, maps.bone, setup);
+    const tune::Judged& c = o.results[o.chosen];
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - run.start).count();
+    Cached choice{c.candidate.tool, c.candidate.sampler, tune_summary(o)};
+    char note[64];
+    std::snprintf(note, sizeof note, "tuned in %.1f s: ", seconds);
+    out.note = note + choice.summary;
+    write_cached(run.cache_file, choice,
+                 "scene " + scene.source + " (" + scene.prep_dir + "), tool " + run.tool.name +
+                     ", rate " + number(run.rate_hz) + " Hz, " + run.machine);
+    return choice;
+  } catch (const tune::OverBudget& e) {
+    out.note = std::string(e.what()) + ": running the defaults (" + run.tool.name + " " +
+               to_string(scene.fields->config().gradient) + " " +
+               to_string(scene.fields->config().storage) +
+               "); raise --tune-budget-s, or run palp tune --out FILE once and start palpd "
+               "with --config FILE";
+    std::fprintf(stderr, "palpd: --tune: %s\n", out.note.c_str());
+    return std::nullopt;
+  }
+}
+
+// The chosen tool, and the scene's sampler rebuilt when the choice stores its maps otherwise.
+void apply_choice(const Cached& choice, Scene& scene, Tool& tool) {
+  tool = parse_tool(choice.tool);
+  const SamplerConfig now = scene.fields->config();
+  if (now.gradient != choice.sampler.gradient || now.storage != choice.sampler.storage) {
+    // the whole sampler goes before the new one is built: one set of maps at a time
+    scene.fields.reset();
+    SceneMaps maps = read_scene_maps(scene);
+    scene.fields = std::make_shared<const FieldSampler>(std::move(maps.surf), std::move(maps.bone),
+                                                        choice.sampler);
+  }
+}
+
+}  // namespace
+
+StartTuning tune_at_start(const cli::Args& args, Scene& scene, Tool& tool,
+                          const ForceParams& params, double rate_hz, bool quiet) {
   if (!args.has("tune")) {
     if (args.get("tune-budget-s")) throw UsageError("--tune-budget-s needs --tune");
     return {};
@@ -167,64 +253,12 @@ StartTuning tune_at_start(const cli::Args& args, Scene& scene, Tool& tool, const
     out.cached = true;
     out.note = "cached (" + cache_file.string() + "): " + choice->summary;
   } else {
-    const SceneMaps maps = read_scene_maps(scene);  // as the scene's sampler has them
-    const DistanceMap& surf = maps.surf;
-    const DistanceMap& bone = maps.bone;
-    tune::Setup setup;
-    setup.tool = tool.name;
-    setup.rate_hz = rate_hz;
-    setup.params = params;
-    setup.budget_s =
-        budget - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!quiet)
-      std::fprintf(stderr, "palpd: --tune: tuning %s at %g Hz on this scene (budget %g s)...\n",
-                   tool.name.c_str(), rate_hz, budget);
-    try {
-      if (setup.budget_s <= 0.0)
-        throw tune::OverBudget("tune: over the time budget of " + number_text(budget) +
-                               " s (reading the maps)");
-      const tune::Outcome o = tune::tune(surf, bone, setup);
-      const tune::Judged& c = o.results[o.chosen];
-      const tune::Judged& ref = o.results.front();
-      const double seconds =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      char summary[320];
-      std::snprintf(summary, sizeof summary,
-                    "of %zu candidates, tick p50 %.2f us (reference %.2f us), force difference "
-                    "beyond its tick's tolerance on %.2f %% of ticks (RMS %.4f N), maps %.1f MiB "
-                    "(reference %.1f MiB)%s",
-                    o.results.size(), c.measured.tick_p50_us, ref.measured.tick_p50_us,
-                    100.0 * c.measured.beyond_share, c.measured.rms_error_n,
-                    static_cast<double>(c.measured.map_bytes) / 1048576.0,
-                    static_cast<double>(ref.measured.map_bytes) / 1048576.0,
-                    c.accepted ? "" : "; NOTHING passes at this rate: the reference");
-      choice = Cached{c.candidate.tool, c.candidate.sampler, summary};
-      char note[64];
-      std::snprintf(note, sizeof note, "tuned in %.1f s: ", seconds);
-      out.note = note + choice->summary;
-      write_cached(cache_file, *choice,
-                   "scene " + scene.source + " (" + scene.prep_dir + "), tool " + tool.name +
-                       ", rate " + number(rate_hz) + " Hz, " + machine);
-    } catch (const tune::OverBudget& e) {
-      out.note = std::string(e.what()) + ": running the defaults (" + tool.name + " " +
-                 to_string(scene.fields->config().gradient) + " " +
-                 to_string(scene.fields->config().storage) +
-                 "); raise --tune-budget-s, or run palp tune --out FILE once and start palpd "
-                 "with --config FILE";
-      std::fprintf(stderr, "palpd: --tune: %s\n", out.note.c_str());
-      return out;
-    }
+    choice =
+        tune_now(scene, {tool, rate_hz, params, budget, start, machine, cache_file, quiet}, out);
+    if (!choice) return out;
   }
   out.choice = label(choice->tool, choice->sampler);
-  tool = parse_tool(choice->tool);
-  const SamplerConfig now = scene.fields->config();
-  if (now.gradient != choice->sampler.gradient || now.storage != choice->sampler.storage) {
-    // the whole sampler goes before the new one is built: one set of maps at a time
-    scene.fields.reset();
-    SceneMaps maps = read_scene_maps(scene);
-    scene.fields = std::make_shared<const FieldSampler>(std::move(maps.surf), std::move(maps.bone),
-                                                        choice->sampler);
-  }
+  apply_choice(*choice, scene, tool);
   if (!quiet) std::fprintf(stderr, "palpd: --tune: %s, %s\n", out.choice.c_str(), out.note.c_str());
   return out;
 }
