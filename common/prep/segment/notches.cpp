@@ -14,43 +14,38 @@
 
 namespace palp::segmentation {
 
-void fill_notches(const Mask& room, int faces, Mask& mask) {
-  if (faces <= 0) return;
+namespace {
+
+// Each row's span of the mask, [lo, hi) (empty: lo >= hi).
+struct RowSpans {
+  std::vector<std::int64_t> lo, hi;
+};
+
+// The mask's span in every row, slices in parallel.
+RowSpans row_spans(const Mask& mask) {
   const Grid& g = mask.grid;
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
-  const auto open_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
-    return std::array<bool, 6>{i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
-  };
-  const auto mask_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k, std::size_t n) {
-    const std::array<bool, 6> in = open_faces(i, j, k);
-    int c = 0;
-    for (int d = 0; d < 6; ++d)
-      c += in[d] && mask.data[static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d])];
-    return c;
-  };
-  const auto is_notch = [&](std::size_t n) {
-    if (mask.data[n] || !room.data[n]) return false;
-    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
-    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
-    return mask_faces(i, jk % ny, jk / ny, n) >= faces;
-  };
-  // Each row's span of the mask, [span_lo, span_hi) (empty: span_lo >= span_hi). A voxel outside
-  // the spans of its four neighbouring rows and its own row's span grown by one has no face on the
-  // mask, count 0 < faces: the scan below leaves it out and finds the same notches in the same
-  // order.
   const std::int64_t rows = ny * nz;
-  std::vector<std::int64_t> span_lo(static_cast<std::size_t>(rows)),
-      span_hi(static_cast<std::size_t>(rows));
+  RowSpans spans{std::vector<std::int64_t>(static_cast<std::size_t>(rows)),
+                 std::vector<std::int64_t>(static_cast<std::size_t>(rows))};
   parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t r = k0 * ny; r < k1 * ny; ++r) {
       const std::uint8_t* row = mask.data.data() + r * nx;
-      span_lo[r] = next_byte(row, 0, nx, true);
-      span_hi[r] = span_lo[r] < nx ? last_nonzero_byte(row, nx) + 1 : 0;
+      spans.lo[r] = next_byte(row, 0, nx, true);
+      spans.hi[r] = spans.lo[r] < nx ? last_nonzero_byte(row, nx) + 1 : 0;
     }
   });
-  // The notches of the mask as it is, slice by slice (each row's face counts summed from the six
-  // neighbouring rows, a loop that vectorises); then each filled voxel's neighbours again.
+  return spans;
+}
+
+// The notches of the mask as it is, slice by slice, in slice order (each row's face counts
+// summed from the six neighbouring rows, a loop that vectorises). A voxel outside the spans of
+// its four neighbouring rows and its own row's span grown by one has no face on the mask, count
+// 0 < faces: the scan leaves it out and finds the same notches in the same order.
+std::vector<std::size_t> notches_now(const Mask& room, int faces, const Mask& mask,
+                                     const RowSpans& spans) {
+  const Grid& g = mask.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   std::vector<std::vector<std::size_t>> found(static_cast<std::size_t>(nz));
   const std::vector<std::uint8_t> none(static_cast<std::size_t>(nx), 0);
   parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
@@ -61,9 +56,9 @@ void fill_notches(const Mask& room, int faces, Mask& mask) {
         const std::int64_t r = j + ny * k;
         std::int64_t lo = nx, hi = 0;
         const auto widen = [&](bool exists, std::int64_t o, std::int64_t by) {
-          if (!exists || span_lo[o] >= span_hi[o]) return;
-          lo = std::min(lo, std::max<std::int64_t>(0, span_lo[o] - by));
-          hi = std::max(hi, std::min(nx, span_hi[o] + by));
+          if (!exists || spans.lo[o] >= spans.hi[o]) return;
+          lo = std::min(lo, std::max<std::int64_t>(0, spans.lo[o] - by));
+          hi = std::max(hi, std::min(nx, spans.hi[o] + by));
         };
         widen(true, r, 1);
         widen(j > 0, r - 1, 0);
@@ -89,6 +84,34 @@ void fill_notches(const Mask& room, int faces, Mask& mask) {
   });
   std::vector<std::size_t> todo;
   for (const auto& slice : found) todo.insert(todo.end(), slice.begin(), slice.end());
+  return todo;
+}
+
+}  // namespace
+
+void fill_notches(const Mask& room, int faces, Mask& mask) {
+  if (faces <= 0) return;
+  const Grid& g = mask.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t steps[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  const auto open_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return std::array<bool, 6>{i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+  };
+  const auto mask_faces = [&](std::int64_t i, std::int64_t j, std::int64_t k, std::size_t n) {
+    const std::array<bool, 6> in = open_faces(i, j, k);
+    int c = 0;
+    for (int d = 0; d < 6; ++d)
+      c += in[d] && mask.data[static_cast<std::size_t>(static_cast<std::int64_t>(n) + steps[d])];
+    return c;
+  };
+  const auto is_notch = [&](std::size_t n) {
+    if (mask.data[n] || !room.data[n]) return false;
+    const auto i = static_cast<std::int64_t>(n % static_cast<std::size_t>(nx));
+    const auto jk = static_cast<std::int64_t>(n / static_cast<std::size_t>(nx));
+    return mask_faces(i, jk % ny, jk / ny, n) >= faces;
+  };
+  // The notches of the mask as it is; then each filled voxel's neighbours again.
+  std::vector<std::size_t> todo = notches_now(room, faces, mask, row_spans(mask));
   while (!todo.empty()) {
     const std::size_t n = todo.back();
     todo.pop_back();
