@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -229,6 +230,54 @@ bool map_gradient(const DistanceMap& map, const View& view, const std::int64_t c
   return true;
 }
 
+// One map node's projection onto the trilinear HU's iso-surface, and what it reads.
+struct NodeProjection {
+  const CtVolume& ct;
+  const Mask& mask;
+  const DistanceMap& map;
+  const View& ct_view;
+  const View& map_view;
+  const Trilinear& hu;
+  const std::int64_t (&step)[3];  // map nodes per CT voxel along each canonical axis
+  double iso_hu, max_change_mm;
+  float clamp;
+
+  // The node (i, j, k) at map distance d: its distance to the iso-surface, signed by its side;
+  // nothing where the mask overrides the HU, the map has no gradient, no surface point is found
+  // in a cell the mask cuts, or the distance would change by more than max_change_mm.
+  std::optional<float> at(std::int64_t i, std::int64_t j, std::int64_t k, double d) const {
+    std::int64_t c[3];  // the node's canonical index
+    map_view.canonical(i, j, k, c);
+    const double q[3] = {static_cast<double>(c[0]) * map_view.spacing[0],
+                         static_cast<double>(c[1]) * map_view.spacing[1],
+                         static_cast<double>(c[2]) * map_view.spacing[2]};
+    bool inside;
+    if (c[0] % step[0] == 0 && c[1] % step[1] == 0 && c[2] % step[2] == 0) {
+      const std::size_t n_ct = ct_view.linear(c[0] / step[0], c[1] / step[1], c[2] / step[2]);
+      inside = mask.data[n_ct] != 0;
+      if ((ct.data[n_ct] - iso_hu >= 0.0) != inside) return std::nullopt;  // the mask overrides
+    } else {
+      // Between the CT's nodes: the upsampled map's sign, unless the cell is cut by
+      // the mask, where the trilinear HU's own sign says which side the node is on.
+      const Sample at_q = hu.at(q);
+      inside = d > 0.0;
+      if ((at_q.f >= 0.0) != inside) {
+        if (!cell_cut_by_mask(mask, ct_view, at_q.cell)) return std::nullopt;
+        inside = at_q.f >= 0.0;
+      }
+    }
+    double nd[3];
+    if (!map_gradient(map, map_view, c, nd)) return std::nullopt;
+    double x[3] = {q[0] - d * nd[0], q[1] - d * nd[1], q[2] - d * nd[2]};
+    const double dist = closest_point(hu, q, x);
+    if (!(dist >= 0.0)) return std::nullopt;
+    if (!cell_cut_by_mask(mask, ct_view, hu.at(x).cell)) return std::nullopt;
+    if (std::abs(dist - std::abs(d)) > max_change_mm) return std::nullopt;
+    const float rounded = std::min(clamp, round_to_map_step(static_cast<float>(dist)));
+    return inside ? rounded : -rounded;
+  }
+};
+
 }  // namespace
 
 double distance_to_iso_surface(const CtVolume& ct, double iso_hu, const double q[3],
@@ -263,6 +312,8 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
   const Trilinear hu(ct, ct_view, iso_hu);
   const Index3 n = grid.dims;
   const float clamp = static_cast<float>(clamp_mm);
+  const NodeProjection node{ct, mask, map,    ct_view,       map_view,
+                            hu, step, iso_hu, max_change_mm, clamp};
   using Update = std::pair<std::size_t, float>;
   std::vector<std::vector<Update>> updates(static_cast<std::size_t>(n[2]));
   std::vector<std::size_t> visited(static_cast<std::size_t>(n[2]), 0);
@@ -278,37 +329,8 @@ IsoProjectionStats project_onto_iso_surface(const CtVolume& ct, const Mask& mask
               const double d = map.data[v];
               if (!(d <= reach_mm && d >= -outside_mm) || std::abs(d) >= clamp_mm) continue;
               ++seen;
-              std::int64_t c[3];  // the node's canonical index
-              map_view.canonical(i, j, k, c);
-              const double q[3] = {static_cast<double>(c[0]) * map_view.spacing[0],
-                                   static_cast<double>(c[1]) * map_view.spacing[1],
-                                   static_cast<double>(c[2]) * map_view.spacing[2]};
-              bool inside;
-              if (c[0] % step[0] == 0 && c[1] % step[1] == 0 && c[2] % step[2] == 0) {
-                const std::size_t n_ct =
-                    ct_view.linear(c[0] / step[0], c[1] / step[1], c[2] / step[2]);
-                inside = mask.data[n_ct] != 0;
-                if ((ct.data[n_ct] - iso_hu >= 0.0) != inside)
-                  continue;  // the mask overrides the HU
-              } else {
-                // Between the CT's nodes: the upsampled map's sign, unless the cell is cut by
-                // the mask, where the trilinear HU's own sign says which side the node is on.
-                const Sample at_q = hu.at(q);
-                inside = d > 0.0;
-                if ((at_q.f >= 0.0) != inside) {
-                  if (!cell_cut_by_mask(mask, ct_view, at_q.cell)) continue;
-                  inside = at_q.f >= 0.0;
-                }
-              }
-              double nd[3];
-              if (!map_gradient(map, map_view, c, nd)) continue;
-              double x[3] = {q[0] - d * nd[0], q[1] - d * nd[1], q[2] - d * nd[2]};
-              const double dist = closest_point(hu, q, x);
-              if (!(dist >= 0.0)) continue;
-              if (!cell_cut_by_mask(mask, ct_view, hu.at(x).cell)) continue;
-              if (std::abs(dist - std::abs(d)) > max_change_mm) continue;
-              const float rounded = std::min(clamp, round_to_map_step(static_cast<float>(dist)));
-              out.emplace_back(v, inside ? rounded : -rounded);
+              if (const std::optional<float> value = node.at(i, j, k, d))
+                out.emplace_back(v, *value);
             }
           visited[static_cast<std::size_t>(k)] = seen;
         }
