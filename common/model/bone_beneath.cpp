@@ -10,23 +10,30 @@
 
 namespace palp {
 
-std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneathOptions& opt) {
-  if (!fields.has_bone()) throw UsageError("bone beneath the skin: the scene has no bone map");
+namespace {
+
+// The centre of voxel (i, j, k) in the scene frame.
+Vec3d voxel_centre(const Grid& g, const Vec3d& origin, std::int64_t i, std::int64_t j,
+                   std::int64_t k) {
+  return origin + Vec3d{static_cast<double>(i) * g.spacing[0],
+                        static_cast<double>(j) * g.spacing[1],
+                        static_cast<double>(k) * g.spacing[2]};
+}
+
+// Each voxel's bone beneath: the nearest bone, or within the skin's band the length of the ray
+// along the inward normal to the bone (those voxels marked in `traced` when it is not empty).
+std::vector<float> trace_bone_beneath(const FieldSampler& fields, const BoneBeneathOptions& opt,
+                                      std::vector<std::uint8_t>& traced) {
   const Grid& g = fields.grid();
-  check_allocation(g, sizeof(float), "bone-beneath map");
   std::vector<float> out(g.voxel_count(), 0.0f);
-  std::vector<std::uint8_t> traced(opt.pad_widen ? g.voxel_count() : 0, 0);
   const double outside_margin = 2.0 * std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const Vec3d origin = fields.origin();
-
   parallel_for_chunks(nz, 1, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
       for (std::int64_t j = 0; j < ny; ++j)
         for (std::int64_t i = 0; i < nx; ++i) {
-          const Vec3d c = origin + Vec3d{static_cast<double>(i) * g.spacing[0],
-                                         static_cast<double>(j) * g.spacing[1],
-                                         static_cast<double>(k) * g.spacing[2]};
+          const Vec3d c = voxel_centre(g, origin, i, j, k);
           const double near = -fields.bone_value(c);  // distance to the nearest bone
           double beneath = std::max(0.0, near);
           const FieldSample skin = fields.sample_surf(c);
@@ -48,12 +55,20 @@ std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneat
           out[g.linear(i, j, k)] = static_cast<float>(beneath);
         }
   });
-  if (!opt.pad_widen) return out;
-  // The pad's reach: each traced voxel also takes its neighbours' rays, moved to it along its
-  // normal (t_n + (n - c) . dir: the same value where the bone beneath is flat), and keeps the
-  // nearest. The tick interpolates the map trilinearly, and between a ray that hits a rib and
-  // one that misses it (80 mm) the average reads as no rib at all; a finger's pad, 15 mm across,
-  // feels a rib anywhere under it. So a rib's edge moves out by one voxel at most.
+  return out;
+}
+
+// The pad's reach: each traced voxel also takes its neighbours' rays, moved to it along its
+// normal (t_n + (n - c) . dir: the same value where the bone beneath is flat), and keeps the
+// nearest. The tick interpolates the map trilinearly, and between a ray that hits a rib and
+// one that misses it (80 mm) the average reads as no rib at all; a finger's pad, 15 mm across,
+// feels a rib anywhere under it. So a rib's edge moves out by one voxel at most.
+std::vector<float> widen_under_pad(const FieldSampler& fields, const BoneBeneathOptions& opt,
+                                   const std::vector<float>& out,
+                                   const std::vector<std::uint8_t>& traced) {
+  const Grid& g = fields.grid();
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const Vec3d origin = fields.origin();
   std::vector<float> widened = out;
   parallel_for_chunks(nz, 1, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
@@ -61,9 +76,7 @@ std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneat
         for (std::int64_t i = 0; i < nx; ++i) {
           const std::size_t at = g.linear(i, j, k);
           if (!traced[at]) continue;
-          const Vec3d c = origin + Vec3d{static_cast<double>(i) * g.spacing[0],
-                                         static_cast<double>(j) * g.spacing[1],
-                                         static_cast<double>(k) * g.spacing[2]};
+          const Vec3d c = voxel_centre(g, origin, i, j, k);
           const FieldSample skin = fields.sample_surf(c);
           const double gn = norm(skin.grad);
           if (!(gn > 1e-9) || skin.value > opt.band_mm) continue;
@@ -90,6 +103,18 @@ std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneat
         }
   });
   return widened;
+}
+
+}  // namespace
+
+std::vector<float> bone_beneath_map(const FieldSampler& fields, const BoneBeneathOptions& opt) {
+  if (!fields.has_bone()) throw UsageError("bone beneath the skin: the scene has no bone map");
+  const Grid& g = fields.grid();
+  check_allocation(g, sizeof(float), "bone-beneath map");
+  std::vector<std::uint8_t> traced(opt.pad_widen ? g.voxel_count() : 0, 0);
+  std::vector<float> out = trace_bone_beneath(fields, opt, traced);
+  if (!opt.pad_widen) return out;
+  return widen_under_pad(fields, opt, out, traced);
 }
 
 }  // namespace palp
