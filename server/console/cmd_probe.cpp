@@ -304,15 +304,15 @@ ProbeRequest probe_request(const Args& args) {
 }
 
 // The run's figures: frames/s, the delivered fraction and latency percentiles (NaN if unknown).
-struct Summary {
+struct ProbeFigures {
   double span_s = 0.0, fps = 0.0, delivered = 0.0;
   bool latency_ok = false;
   double p50 = NAN, p90 = NAN, p99 = NAN, p999 = NAN, lmax = NAN;
 };
 
 // The figures of a run asked at `rate` frames/s (0: every tick); latency only when `latency_ok`.
-Summary summarize(Report& r, double rate, bool latency_ok) {
-  Summary s;
+ProbeFigures summarize(Report& r, double rate, bool latency_ok) {
+  ProbeFigures s;
   s.span_s = static_cast<double>(r.last_rx_ns - r.first_rx_ns) * 1e-9;
   s.fps = r.frames > 1 && s.span_s > 0 ? static_cast<double>(r.frames - 1) / s.span_s : 0.0;
   double expected = 0.0;
@@ -409,7 +409,7 @@ void print_limits(const Report& r) {
 }
 
 // What arrived: frames, gaps, latency, silences and the volume's chunks.
-void print_stream(const Report& r, const Summary& s) {
+void print_stream(const Report& r, const ProbeFigures& s) {
   std::printf(
       "  frames    %llu in %.3f s: %.1f frames/s, delivered %.4f (%llu gaps, %llu frames "
       "missing, largest gap %llu), %llu with contact, %llu zeroed by faults\n",
@@ -483,7 +483,7 @@ void print_server(const v1::Stats& s) {
 }
 
 // The report for a reader: the outcome, then a line per subject.
-void print_report(const std::string& target, const Report& r, const Summary& s) {
+void print_report(const std::string& target, const Report& r, const ProbeFigures& s) {
   std::printf("probe %s: %s\n", target.c_str(), r.failure.empty() ? "ok" : r.failure.c_str());
   print_scene(r);
   print_placement(r);
@@ -493,7 +493,7 @@ void print_report(const std::string& target, const Report& r, const Summary& s) 
 }
 
 // The last line: the run as JSON.
-void print_json(const Report& r, const Summary& s) {
+void print_json(const Report& r, const ProbeFigures& s) {
   std::printf(
       "{\"ok\":%s,\"frames\":%llu,\"frames_per_s\":%s,\"delivered\":%s,\"gaps\":%llu,"
       "\"gap_frames\":%llu,\"max_gap\":%llu,\"max_interval_ms\":%s,\"intervals_over_50ms\":%llu,"
@@ -532,7 +532,7 @@ int cmd_probe(const Arguments& argv) {
   const std::unique_ptr<tls::ClientContext> tls = client_tls(args);
   Probe probe(q.host, std::to_string(q.port), q.hello, q.duration, q.stall, tls.get());
   Report r = probe.run();
-  const Summary s = summarize(r, q.rate, probe.loopback() || q.same_host);
+  const ProbeFigures s = summarize(r, q.rate, probe.loopback() || q.same_host);
   if (!q.quiet) print_report(q.target, r, s);
   print_json(r, s);
   if (!r.failure.empty()) {

@@ -124,7 +124,7 @@ dds::SubscriberOptions subscriber_options(const Args& args, const DdsRequest& q)
 }
 
 // What arrived on the rig's topics.
-struct Tally {
+struct DdsTally {
   std::uint64_t frames = 0, first_index = 0, last_index = 0, gaps = 0, poses = 0, wrenches = 0;
   std::uint64_t volume_chunks = 0, volume_bytes = 0, volume_count = 0, fault_frames = 0;
   std::int64_t first_rx = 0, last_rx = 0, max_silence = 0;
@@ -136,7 +136,7 @@ struct Tally {
 };
 
 // The subscriber's handlers, each counting into `t`.
-dds::Handlers tally_handlers(Tally& t) {
+dds::Handlers tally_handlers(DdsTally& t) {
   dds::Handlers h;
   h.frame = [&t](const palp_dds_HapticFrame& f, std::int64_t rx) {
     if (t.frames == 0)
@@ -175,7 +175,7 @@ void skip_warmup(dds::RigSubscriber& sub, const dds::Handlers& h, double warmup)
 }
 
 // Listens for q.duration seconds; the failure, or "" when frames kept coming.
-std::string listen(dds::RigSubscriber& sub, const dds::Handlers& h, const Tally& t,
+std::string listen(dds::RigSubscriber& sub, const dds::Handlers& h, const DdsTally& t,
                    const DdsRequest& q, const std::string& rig) {
   std::string failure;
   const std::int64_t start = dds::realtime_ns();
@@ -203,14 +203,14 @@ std::string listen(dds::RigSubscriber& sub, const dds::Handlers& h, const Tally&
 }
 
 // The run's figures: frames/s, the delivered fraction, latency percentiles (NaN without frames).
-struct Summary {
+struct DdsFigures {
   double fps = 0.0, delivered = 0.0;
   double p50 = NAN, p90 = NAN, p99 = NAN, p999 = NAN, lmax = NAN;
 };
 
 // The figures of what `t` counted.
-Summary summarize(const Tally& t) {
-  Summary s;
+DdsFigures summarize(const DdsTally& t) {
+  DdsFigures s;
   const double span_s = static_cast<double>(t.last_rx - t.first_rx) * 1e-9;
   s.fps = t.frames > t.first_take && span_s > 0
               ? static_cast<double>(t.frames - t.first_take) / span_s
@@ -227,7 +227,7 @@ Summary summarize(const Tally& t) {
 
 // The report for a reader: the outcome, then a line per subject.
 void print_report(const DdsRequest& q, const dds::SubscriberOptions& o,
-                  const dds::RigSubscriber& sub, const Tally& t, const Summary& s,
+                  const dds::RigSubscriber& sub, const DdsTally& t, const DdsFigures& s,
                   const std::string& failure) {
   std::printf("probe --dds %u rig %s: %s\n", q.domain, o.rig.c_str(),
               failure.empty() ? "ok" : failure.c_str());
@@ -267,7 +267,7 @@ void print_report(const DdsRequest& q, const dds::SubscriberOptions& o,
 // The last line: the run as JSON, with the keys palp probe HOST:PORT uses where they mean the
 // same (tests/bench reads both).
 void print_json(const DdsRequest& q, const dds::SubscriberOptions& o, const dds::RigSubscriber& sub,
-                const Tally& t, const Summary& s, const std::string& failure) {
+                const DdsTally& t, const DdsFigures& s, const std::string& failure) {
   std::printf(
       "{\"ok\":%s,\"domain\":%u,\"rig\":\"%s\",\"frames\":%llu,\"frames_per_s\":%s,"
       "\"delivered\":%s,\"gaps\":%llu,\"max_interval_ms\":%s,"
@@ -303,12 +303,12 @@ int cmd_probe_dds(const Arguments& argv_in) {
   const dds::SubscriberOptions o = subscriber_options(args, q);
   dds::RigSubscriber sub(o);
 
-  Tally t;
+  DdsTally t;
   t.latency_us.reserve(static_cast<std::size_t>(std::min(q.duration * 20000.0, 2e6)));
   const dds::Handlers h = tally_handlers(t);
   if (q.warmup > 0) skip_warmup(sub, h, q.warmup);
   const std::string failure = listen(sub, h, t, q, o.rig);
-  const Summary s = summarize(t);
+  const DdsFigures s = summarize(t);
   if (!q.quiet) print_report(q, o, sub, t, s, failure);
   print_json(q, o, sub, t, s, failure);
   if (!failure.empty()) {

@@ -17,17 +17,17 @@ namespace palp::segmentation {
 namespace {
 
 // Each row's span of the mask, [lo, hi) (empty: lo >= hi).
-struct RowSpans {
+struct MaskRowSpans {
   std::vector<std::int64_t> lo, hi;
 };
 
 // The mask's span in every row, slices in parallel.
-RowSpans row_spans(const Mask& mask) {
+MaskRowSpans row_spans(const Mask& mask) {
   const Grid& g = mask.grid;
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const std::int64_t rows = ny * nz;
-  RowSpans spans{std::vector<std::int64_t>(static_cast<std::size_t>(rows)),
-                 std::vector<std::int64_t>(static_cast<std::size_t>(rows))};
+  MaskRowSpans spans{std::vector<std::int64_t>(static_cast<std::size_t>(rows)),
+                     std::vector<std::int64_t>(static_cast<std::size_t>(rows))};
   parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t r = k0 * ny; r < k1 * ny; ++r) {
       const std::uint8_t* row = mask.data.data() + r * nx;
@@ -43,7 +43,7 @@ RowSpans row_spans(const Mask& mask) {
 // its four neighbouring rows and its own row's span grown by one has no face on the mask, count
 // 0 < faces: the scan leaves it out and finds the same notches in the same order.
 std::vector<std::size_t> notches_now(const Mask& room, int faces, const Mask& mask,
-                                     const RowSpans& spans) {
+                                     const MaskRowSpans& spans) {
   const Grid& g = mask.grid;
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   std::vector<std::vector<std::size_t>> found(static_cast<std::size_t>(nz));
