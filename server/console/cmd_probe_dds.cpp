@@ -217,9 +217,9 @@ DdsFigures summarize(const DdsTally& t) {
               : 0.0;
   const double expected = t.frames ? static_cast<double>(t.last_index - t.first_index + 1) : 0.0;
   s.delivered = expected > 0 ? static_cast<double>(t.frames) / expected : 0.0;
-  s.p50 = percentile_floor_rank(t.latency_us, 0.5),
+  s.p50 = percentile_floor_rank(t.latency_us, 0.5);
   s.p90 = percentile_floor_rank(t.latency_us, 0.9);
-  s.p99 = percentile_floor_rank(t.latency_us, 0.99),
+  s.p99 = percentile_floor_rank(t.latency_us, 0.99);
   s.p999 = percentile_floor_rank(t.latency_us, 0.999);
   s.lmax = t.latency_us.empty() ? NAN : *std::max_element(t.latency_us.begin(), t.latency_us.end());
   return s;
