@@ -69,10 +69,12 @@ def tests(build_dir):
     times = [float(t) for t in re.findall(r"Test time =\s+([\d.]+) sec", text)]
     pairs = sorted(zip(times, names), reverse=True)
     print("\ntests: %d, %.0f s summed over the parallel jobs" % (len(pairs), sum(times)))
+    # CTest's names: EXECUTABLE:Suite (tests/tools/gtest_suites.cmake), or one name for a
+    # program run whole (palpview_main_test, the fuzz pass)
     suites = collections.Counter()
     for t, n in pairs:
-        suites[n.split(".")[0].split("/")[-1]] += t
-    print("by suite or executable (top 10):")
+        suites[n.split(":")[0]] += t
+    print("by executable (top 10):")
     for n, t in suites.most_common(10):
         print("  %6.1f s  %s" % (t, n))
     print("slowest tests:")

@@ -2,7 +2,7 @@
 # built, like CMake's gtest_discover_tests, which registers one test per case).
 #
 #   cmake -D TEST_EXECUTABLE=... -D TEST_NAME=... -D CTEST_FILE=... -D CASE_TIMEOUT=<s>
-#         [-D LABELS=a;b] [-D EXECUTOR=wrapper] -P gtest_suites.cmake
+#         [-D LABELS=label] [-D COSTS=Suite=s,Suite=s] [-D EXECUTOR=wrapper] -P gtest_suites.cmake
 #
 # Each suite runs in one process (`--gtest_filter=Suite.*`), so a suite that builds its scene once
 # (SetUpTestSuite: the torso phantom, the shared CT) builds it once, not once per case. The test is
@@ -41,6 +41,16 @@ if(suites STREQUAL "")
   message(FATAL_ERROR "${TEST_EXECUTABLE}: no test suites listed")
 endif()
 
+# COSTS: Suite=seconds for the long suites (CTest starts the costliest first).
+string(REPLACE "," ";" costs "${COSTS}")
+foreach(entry IN LISTS costs)
+  if(entry MATCHES "^([A-Za-z0-9_/]+)=([0-9.]+)$")
+    set(cost_${CMAKE_MATCH_1} ${CMAKE_MATCH_2})
+  elseif(NOT entry STREQUAL "")
+    message(FATAL_ERROR "gtest_suites.cmake: COSTS entry '${entry}' is not Suite=seconds")
+  endif()
+endforeach()
+
 set(script "")
 foreach(suite IN LISTS suites)
   if(suite MATCHES "^DISABLED_" OR suite MATCHES "/DISABLED_")
@@ -57,6 +67,9 @@ foreach(suite IN LISTS suites)
     "set_tests_properties([==[${name}]==] PROPERTIES TIMEOUT ${timeout} SKIP_RETURN_CODE 77")
   if(LABELS)
     string(APPEND script " LABELS [==[${LABELS}]==]")
+  endif()
+  if(DEFINED cost_${suite})
+    string(APPEND script " COST ${cost_${suite}}")
   endif()
   string(APPEND script ")\n")
 endforeach()
