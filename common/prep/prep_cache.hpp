@@ -35,8 +35,11 @@ namespace palp {
 // gives the bone, the vessels and a <name>.nii.gz + d_<name>.nii.gz per organ or muscle, its
 // bytes in the key; prep.json's structures record every structure's source and voxels; 26: a
 // label map's arteries written as artery.nii.gz + d_artery.nii.gz, and a phantom drawn with
-// `structures` gives its own artery and liver truth as structures
-inline constexpr int kPrepAlgorithmVersion = 28;
+// `structures` gives its own artery and liver truth as structures; 29: the contrast phase from
+// the veins beside the aorta (two trunk tubes side by side at its contrast: portal-venous; one:
+// arterial), the aorta's level (arterial_above_soft_hu) only where no trunk is a tube; prep.json's
+// vessel records second_trunk_level_hu
+inline constexpr int kPrepAlgorithmVersion = 29;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

@@ -40,9 +40,24 @@
 //              runs on along its length, however calcified its wall
 //   closing    closed by closing_mm (a flap's shadow), then one voxel of contrast level beside
 //              them and not by cortex (the wall's partial volume)
-//   phase      from the brightest lumen's level above S (an enhancing organ never outshines
-//              the arteries): `none` without a lumen, `arterial` at arterial_above_soft_hu or
-//              more, `portal-venous` below. A delayed phase reads `portal-venous` or `none`.
+//   phase      from the veins beside the aorta, not from the aorta's level (a late arterial
+//              aorta and a portal-venous one can be as bright): `none` without a lumen; else the
+//              trunk cores (voxels trunk_core_mm deep) of the lumens, each 6-connected piece a
+//              tube when it runs along one axis three times as far as across it (standard
+//              deviations) over at least 4 trunk_core_mm, at the aorta's contrast when its mean
+//              smoothed HU is at least half way from S to the brightest lumen's level. Two such
+//              tubes side by side (sharing slices along the body axis, centres more than
+//              2 trunk_core_mm apart across it) are the aorta and a large vein (the vena cava
+//              beside it, the portal vein in front) filled as it is: `portal-venous`. One alone,
+//              the veins barely enhanced (below min_contrast_hu, or under half the aorta's
+//              height): `arterial`. None (a slab thinner than a tube is long: its trunks'
+//              cores are short): from the brightest lumen's level, `arterial` at
+//              arterial_above_soft_hu above S or more, `portal-venous` below (a late arterial
+//              aorta then reads portal-venous). A delayed phase reads `portal-venous`. In the chest
+//              an arterial phase shows tubes at the aorta's level side by side too (the ascending
+//              and descending aorta where the arch does not join their cores, the pulmonary
+//              arteries, the superior vena cava dense with the injected contrast): read there,
+//              the rule can say `portal-venous`.
 // Measured on the phantom's cases and the shared CTs in docs/anatomy.md, where it falls short:
 // an organ enhancing to a lumen's level and as uniform (the phantom's kidneys) is taken with
 // the lumens, and a dissected aorta's false lumen, fenced by its flap, is often not.
@@ -68,7 +83,7 @@ struct VesselParams {
   double clear_contrast_hu = 250.0;       // a part this far above S on average is contrast
   double min_lumen_ml = 0.3;              // smaller parts are noise, calcifications, partial volume
   double closing_mm = 2.0;                // flap and plaque shadows filled inside a lumen
-  double arterial_above_soft_hu = 170.0;  // the phase's level: aorta of an arterial phase
+  double arterial_above_soft_hu = 170.0;  // the phase's level where no trunk is a tube (a slab)
   bool find_branches = true;              // grow the lumens into branches (the header's method)
   double branch_clearance_mm = 3.0;       // no cortical voxel this near a branch's voxel
   // Cortical HU: the bone seed level + this, the bone mask's own cortex level
@@ -81,6 +96,7 @@ struct VesselResult {
   Mask lumen;                           // 0/1, CT grid
   std::string contrast_phase = "none";  // none | arterial | portal-venous | unknown
   double lumen_level_hu = 0.0;          // mean smoothed HU of the brightest lumen (0: none)
+  double second_trunk_level_hu = 0.0;   // portal-venous: the darker of the two tubes (0: none)
   int lumens = 0;                       // parts kept
   int rejected_shell = 0;               // parts dropped as enclosed by cortex
   int rejected_spread = 0;              // parts dropped as not uniform

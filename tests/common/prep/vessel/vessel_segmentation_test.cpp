@@ -1,12 +1,14 @@
 // Contrast-filled lumens (common/prep/vessel/vessel_segmentation.cpp) on tiny scenes built here:
 // soft tissue at 40 HU with +-10 HU of deterministic noise, a tube of contrast along the body axis
 // (a trunk, 9 mm in radius) beside a vertebra (a 2 mm cortex ring at 900 HU around marrow at
-// 220 HU). Expectations from the geometry: which voxel centres lie in the tube.
+// 220 HU), and for the contrast phase a second trunk (a vein, 10 x 8 mm) to the patient's right
+// of the first. Expectations from the geometry: which voxel centres lie in the tube.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 
 #include "base/errors.hpp"
 #include "prep/vessel/vessel_segmentation.hpp"
@@ -26,12 +28,16 @@ struct Scene {
 
 // The tube's centre at (30, 45) mm in-plane, radius 9 mm; the vertebra's at (30, 68) mm, radius
 // 12 mm, cortex 2 mm: 2 mm of soft tissue between them. With `branch_radius_mm`, a branch of the
-// tube's contrast leaves it along +x at z = 18 mm and runs out of the scene.
+// tube's contrast leaves it along +x at z = 18 mm and runs out of the scene. With `vein_hu`, a
+// vein (an elliptic tube, 10 mm across x, 8 mm across y) runs along the body axis at (70, 42) mm:
+// the grid's i axis points to the patient's right, so the tube is an aorta on the front of the
+// vertebra and the vein a vena cava 40 mm to its right.
 Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 900.0,
-            bool endplates = false) {
+            bool endplates = false, std::optional<double> vein_hu = std::nullopt) {
   Grid g;
-  g.dims = {60, 70, 24};
+  g.dims = {60, 70, 24};  // 90 x 105 x 36 mm
   g.spacing = {kSpacing, kSpacing, kSpacing};
+  g.world.direction = {-1, 0, 0, 0, 1, 0, 0, 0, 1};  // i toward the patient's right
   Scene s{CtVolume(g, 0, "ct"),           Mask(g, 1, "body"),  Mask(g, 0, "tube"),
           Mask(g, 0, "marrow"),             Mask(g, 0, "branch"),
           Mask(g, 0, "tube clear of the cortex")};
@@ -50,6 +56,11 @@ Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 90
           return std::clamp(0.5 + (radius - r) / kSpacing, 0.0, 1.0);
         };
         double hu = kSoftHu + static_cast<double>((i * 7 + j * 13 + k * 5) % 21) - 10.0;
+        if (vein_hu) {  // the ellipse's radius along the ray from its centre, for the edge
+          const double e = std::hypot((x - 70.0) / 10.0, (y - 42.0) / 8.0);
+          const double radius = e > 0.0 ? std::hypot(x - 70.0, y - 42.0) / e : 8.0;
+          hu += inside(radius, e * radius) * (*vein_hu - hu);
+        }
         hu += inside(9.0, r_tube) * (tube_hu - hu);
         hu += inside(branch_radius_mm, r_branch) * (tube_hu - hu);
         s.branch.at(i, j, k) = r_branch < branch_radius_mm - kSpacing && x > 45.0;
@@ -116,11 +127,45 @@ TEST(SegmentVessels, NoContrastNoVessel) {
   EXPECT_EQ(count(r.lumen), 0);
 }
 
-TEST(SegmentVessels, ATubeBarelyEnhancedReadsPortalVenous) {
-  const Scene s = scene(kSoftHu + 120.0);
+TEST(SegmentVessels, AModerateAortaBesideAnUnenhancedVeinReadsArterial) {
+  // A late arterial aorta, 120 HU above the soft tissue (below the old rule's 170 HU, which read
+  // it portal-venous), beside a vena cava barely enhanced (25 HU above): the veins have not yet
+  // filled, so the phase is arterial whatever the aorta's own level.
+  const Scene s = scene(kSoftHu + 120.0, 0.0, 900.0, false, kSoftHu + 25.0);
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_EQ(r.contrast_phase, "arterial");
+  EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
+  EXPECT_EQ(r.second_trunk_level_hu, 0.0);
+}
+
+TEST(SegmentVessels, AnAortaBesideAVeinAtItsLevelReadsPortalVenous) {
+  // The aorta 220 HU above the soft tissue (the old rule's arterial) and the vena cava beside it
+  // at 190: the contrast has come back through the veins.
+  const Scene s = scene(kSoftHu + 220.0, 0.0, 900.0, false, kSoftHu + 190.0);
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
   EXPECT_EQ(r.contrast_phase, "portal-venous");
   EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
+  EXPECT_NEAR(r.second_trunk_level_hu, kSoftHu + 190.0, 20.0);
+  // The same vein barely enhanced: arterial again (the aorta alone is at its level).
+  const Scene arterial = scene(kSoftHu + 220.0, 0.0, 900.0, false, kSoftHu + 50.0);
+  EXPECT_EQ(segment_vessels(arterial.ct, arterial.body, kSoftHu, 300.0).contrast_phase,
+            "arterial");
+}
+
+TEST(SegmentVessels, ASlabTooThinForATubeReadsThePhaseFromTheAortasLevel) {
+  // 10 slices (15 mm): the trunk's core is shorter than a tube, so nothing tells the veins; the
+  // brightest lumen's level decides (arterial_above_soft_hu, 170 HU above the soft tissue).
+  const auto slab = [](const Scene& full) {
+    Grid g = full.ct.grid;
+    g.dims[2] = 10;
+    CtVolume ct(g, 0, "slab");
+    std::copy_n(full.ct.data.begin(), ct.size(), ct.data.begin());
+    return segment_vessels(ct, Mask(g, 1, "body"), kSoftHu, 300.0);
+  };
+  const VesselResult moderate = slab(scene(kSoftHu + 120.0, 0.0, 900.0, false, kSoftHu + 25.0));
+  ASSERT_GT(moderate.voxels, 0u);
+  EXPECT_EQ(moderate.contrast_phase, "portal-venous");
+  EXPECT_EQ(slab(scene(kSoftHu + 220.0)).contrast_phase, "arterial");
 }
 
 TEST(SegmentVessels, ANarrowTubeApartFromAnyTrunkIsNotAVessel) {
