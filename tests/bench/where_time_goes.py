@@ -29,11 +29,15 @@ def area(output):
 def build(build_dir):
     path = os.path.join(build_dir, ".ninja_log")
     steps = {}
+    seen = set()  # one step with several outputs (a link and its byproducts) is logged per output
     with open(path) as f:
         for line in f:
             if line.startswith("#"):
                 continue
-            start, end, _, output, _ = line.rstrip("\n").split("\t")
+            start, end, _, output, command_hash = line.rstrip("\n").split("\t")
+            if (start, end, command_hash) in seen:
+                continue
+            seen.add((start, end, command_hash))
             steps[output] = (int(end) - int(start)) / 1000.0
     compile_s = collections.Counter()
     compile_n = collections.Counter()
