@@ -137,6 +137,7 @@ class PrepRun {
 
   void create_directory();
   bool served_from_cache();
+  void key_inputs();
   void forget_previous_run();
   void read_input();
   void read_labels();
@@ -230,16 +231,29 @@ void PrepRun::create_directory() {
   }
 }
 
-// A valid cache in the directory: its prep.json gives the result, nothing is computed.
+// A valid cache in the directory: its prep.json gives the result, nothing is computed. Without a
+// prep.json there the key (a hash of every byte of the input) waits until the input has been read
+// and checked (key_inputs): an input the readers refuse, a 1 GiB file of zeros named .dcm, is
+// refused without being read whole first.
 bool PrepRun::served_from_cache() {
+  std::error_code ec;
+  if (!params_.use_cache || !fs::exists(dir_ / kPrepJsonFile, ec)) {
+    check_prep_inputs(input_, params_);
+    return false;
+  }
   result_.cache_key = prep_cache_key(input_, params_);
   nlohmann::json cached;
-  if (!params_.use_cache || !cache_is_valid(dir_, result_.cache_key, &cached)) return false;
+  if (!cache_is_valid(dir_, result_.cache_key, &cached)) return false;
   read_cached_result(cached, result_);
   result_.total_seconds = std::chrono::duration<double>(Clock::now() - start_).count();
   result_.peak_rss_bytes = peak_rss_bytes();
   guard_.commit();
   return true;
+}
+
+// The cache key prep.json records, when served_from_cache did not need it.
+void PrepRun::key_inputs() {
+  if (result_.cache_key.empty()) result_.cache_key = prep_cache_key(input_, params_);
 }
 
 void PrepRun::forget_previous_run() {
@@ -515,6 +529,7 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
   run.forget_previous_run();      // prep.json and structures an earlier run wrote
   run.read_input();               // CT, checked in HU, axis-aligned
   run.read_labels();              // --labels; the CT's copy starts writing
+  run.key_inputs();               // input and labels, read and checked -> the cache key
   run.body_mask();                // body mask, written in the background
   run.start_surface_job();        // skin points, d_surf and its write on a thread of their own
   run.hu_levels();                // the bone levels from the soft-tissue peak

@@ -124,6 +124,9 @@ PrepResult run_prep(const std::string& input, const std::string& out_dir, const 
 // of a DICOM directory, in name order), or the phantom's name, the label map's bytes (every file
 // of a folder, in name order) and every parameter. InputError when the label map is missing.
 std::string prep_cache_key(const std::string& input, const PrepParams& params);
+// What prep_cache_key refuses (a missing input, a FIFO, a symlink loop, a missing label map),
+// refused the same way, without reading the files.
+void check_prep_inputs(const std::string& input, const PrepParams& params);
 
 // File names inside a prep directory.
 inline constexpr const char* kBodyFile = "body.nii.gz";

@@ -304,6 +304,35 @@ TEST_F(PrepTest, CacheKeyReadsOnlyRegularFiles) {
   }
 }
 
+// Bytes this process has read so far (/proc/self/io's rchar: every read and pread, all threads).
+std::uint64_t bytes_read_so_far() {
+  std::ifstream io("/proc/self/io");
+  std::string key;
+  std::uint64_t value = 0;
+  while (io >> key >> value)
+    if (key == "rchar:") return value;
+  return 0;
+}
+
+// The cache key hashes every byte of the input; with no prep.json in the directory (no cached
+// result possible) it waits until the readers have accepted the input. A 1 GiB sparse file of
+// zeros behind a DICOM preamble is refused after reading a few kilobytes, where hashing it first
+// read all of it (8 s on the 2-core VM).
+TEST_F(PrepTest, AnInputTheReadersRefuseIsNotReadWholeFirst) {
+  fs::create_directories(dir_ / "series");
+  const fs::path file = dir_ / "series" / "zeros.dcm";
+  {
+    std::ofstream out(file, std::ios::binary);
+    const std::string preamble(128, '\0');
+    out << preamble << "DICM";
+  }
+  fs::resize_file(file, std::uint64_t{1} << 30);
+  const std::uint64_t before = bytes_read_so_far();
+  ASSERT_GT(before, 0u) << "/proc/self/io unreadable";
+  EXPECT_THROW(run_prep((dir_ / "series").string(), (dir_ / "out").string(), {}), InputError);
+  EXPECT_LT(bytes_read_so_far() - before, std::uint64_t{64} << 20);
+}
+
 TEST_F(PrepTest, AcceptsPhantomInputs) {
   EXPECT_NE(prep_cache_key("phantom:cube", {}), prep_cache_key("phantom:sphere", {}));
   EXPECT_THROW(run_prep("phantom:nonexistent", (dir_ / "out").string(), {}), UsageError);
