@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Configures and builds palp (Release) into build/ with all cores. Used by run.sh and test.sh.
 #   deploy/build.sh            everything: the programs, the tests and the benchmarks
-#   deploy/build.sh TARGET...  only these and what they need (run.sh: palp palpd palpview); a
-#                              target this configuration does not have (palpview without VTK or
-#                              GLFW) is left out with a note
+#   deploy/build.sh TARGET...  only these and what they need (run.sh: palp palpd palpview
+#                              palpchart); a target this configuration does not have (palpview
+#                              without VTK or GLFW) is left out with a note
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${PALP_BUILD_DIR:-build}

@@ -12,7 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-8}
 deploy/install-deps.sh
-deploy/build.sh palp palpd palpview   # the programs only; deploy/test.sh builds the rest
+deploy/build.sh palp palpd palpview palpchart   # the programs only; deploy/test.sh builds the rest
 build=${PALP_BUILD_DIR:-build}
 bin=$build/server
 
