@@ -2,7 +2,7 @@
 # built, like CMake's gtest_discover_tests, which registers one test per case).
 #
 #   cmake -D TEST_EXECUTABLE=... -D TEST_NAME=... -D CTEST_FILE=... -D CASE_TIMEOUT=<s>
-#         [-D LABELS=label] [-D COSTS=Suite=s,Suite=s] [-D EXECUTOR=wrapper] -P gtest_suites.cmake
+#         [-D LABELS=label] [-D COSTS=Suite=s,Suite=s] -P gtest_suites.cmake
 #
 # Each suite runs in one process (`--gtest_filter=Suite.*`), so a suite that builds its scene once
 # (SetUpTestSuite: the torso phantom, the shared CT) builds it once, not once per case. The test is
@@ -16,7 +16,7 @@ foreach(required TEST_EXECUTABLE TEST_NAME CTEST_FILE CASE_TIMEOUT)
   endif()
 endforeach()
 
-execute_process(COMMAND ${EXECUTOR} "${TEST_EXECUTABLE}" --gtest_list_tests
+execute_process(COMMAND "${TEST_EXECUTABLE}" --gtest_list_tests
                 OUTPUT_VARIABLE listing RESULT_VARIABLE result TIMEOUT 60)
 if(NOT result EQUAL 0)
   message(FATAL_ERROR "${TEST_EXECUTABLE} --gtest_list_tests failed (${result}):\n${listing}")
@@ -58,12 +58,8 @@ foreach(suite IN LISTS suites)
   endif()
   math(EXPR timeout "${CASE_TIMEOUT} * ${cases_${suite}}")
   set(name "${TEST_NAME}:${suite}")
-  set(command "")
-  foreach(word IN LISTS EXECUTOR)
-    string(APPEND command " [==[${word}]==]")
-  endforeach()
   string(APPEND script
-    "add_test([==[${name}]==]${command} [==[${TEST_EXECUTABLE}]==] [==[--gtest_filter=${suite}.*]==])\n"
+    "add_test([==[${name}]==] [==[${TEST_EXECUTABLE}]==] [==[--gtest_filter=${suite}.*]==])\n"
     "set_tests_properties([==[${name}]==] PROPERTIES TIMEOUT ${timeout} SKIP_RETURN_CODE 77")
   if(LABELS)
     string(APPEND script " LABELS [==[${LABELS}]==]")
