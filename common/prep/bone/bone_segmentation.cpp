@@ -212,7 +212,10 @@ void remove_small_islands(double min_island_ml, Mask& bone) {
 // Bone islands whose surface lies mostly on a lumen: a flap, a calcified wall, the partial volume
 // of the lumen's edge or the heart's trabeculae, none of them a bone to feel. An island's surface
 // faces (on a non-bone voxel inside the grid) are counted, and those on `lumen`; the island goes
-// when at least half are. The skeleton, resting on a vessel along a strip, keeps its bone.
+// when at least half are. The skeleton, resting on a vessel along a strip, keeps its bone. Run
+// before the marrow rules as well: a calcified flap a few millimetres from a vertebra is, seen
+// from the vertebra, a second cortex, and the marrow rules would bracket the tissue between them
+// and join the flap to the skeleton (a dissection's calcified intima beside the spine).
 void remove_islands_on_lumens(const Mask& lumen, Mask& bone) {
   const Grid& g = bone.grid;
   const RunTable runs = extract_runs(bone, false);
@@ -301,6 +304,7 @@ Mask segment_bone(const CtVolume& ct, const Mask& body, const SegmentationParams
   remove_leaks(params.bone_leak_contact_fraction, bone);               // vessels resting on bone
   for_each_nonzero(bone, [&](std::size_t n) { bone.data[n] = 1; });
   remove_lumen_islands(ct, params, bone);                   // filled lumens apart from bone
+  if (not_bone) remove_islands_on_lumens(*not_bone, bone);  // flaps before marrow joins them
   fill_marrow_by_votes(axes, params, bone);                 // marrow: enclosed in 2 of 3 planes
   fill_between_cortices(axes, params, body, bone);          // marrow: bracketed along most lines
   fill_enclosed_cavities(params.bone_max_cavity_ml, bone);  // marrow enclosed in 3D

@@ -370,6 +370,50 @@ TEST(SegmentBone, LumensAreNotBoneNorAFlapInsideThem) {
   EXPECT_GT(count(segment_bone(ct, body, {})), 20 * 20 * 40 + 1000);
 }
 
+TEST(SegmentBone, ACalcifiedFlapBesideAVertebraIsNotJoinedToItByMarrow) {
+  // A dissected aorta beside a vertebra: the lumen (a tube of 400 HU, radius 10 mm, in a 1 mm
+  // wall) holds a calcified intimal ring of 1200 HU (radius 7-8.5 mm, off centre so that it meets
+  // the wall on the vertebra's side; the lumen's mask leaves it out) and lies 2 mm (fat and wall)
+  // from a vertebra (cortex ring, marrow below the growing level). Seen from the vertebra the
+  // ring is a second cortex a few millimetres away: the marrow rules bracket the fat and wall
+  // between them, the ring joins the skeleton, and the island rule run after them no longer sees
+  // it (every voxel of the ring stays bone). Islands on a lumen go before the marrow rules: none.
+  CtVolume ct = bone_scene();
+  cylinder(ct, 30, 50, 12, 10, 50, 800);  // cortex with end plates
+  cylinder(ct, 30, 50, 9, 12, 48, 80);    // marrow
+  box(ct, {43, 38, 10}, {44, 62, 50}, -100);  // fat between vertebra and aorta
+  cylinder(ct, 55, 50, 11, 10, 50, 40);       // the aortic wall
+  cylinder(ct, 55, 50, 10, 10, 50, 400);      // the lumen
+  Mask lumen(ct.grid, 0, "lumen");
+  for (std::int64_t k = 10; k < 50; ++k)
+    for (std::int64_t j = 0; j < 100; ++j)
+      for (std::int64_t i = 0; i < 100; ++i) {
+        if (std::hypot(i - 55.0, j - 50.0) > 10.0) continue;
+        const double r = std::hypot(i - 53.5, j - 50.0);
+        const bool ring = r >= 7.0 && r <= 8.5;
+        if (ring) ct.at(i, j, k) = 1200;
+        lumen.at(i, j, k) = !ring;
+      }
+  const Mask body = segment_body(ct, {});
+  const Mask bone = segment_bone(ct, body, {}, nullptr, &lumen);
+  std::int64_t ring = 0, ring_bone = 0, vertebra = 0, vertebra_bone = 0;
+  for (std::int64_t k = 12; k < 48; ++k)
+    for (std::int64_t j = 0; j < 100; ++j)
+      for (std::int64_t i = 0; i < 100; ++i) {
+        const double r = std::hypot(i - 53.5, j - 50.0);
+        if (r >= 7.0 && r <= 8.5 && std::hypot(i - 55.0, j - 50.0) <= 10.0) {
+          ++ring;
+          ring_bone += bone.at(i, j, k);
+        }
+        if (std::hypot(i - 30.0, j - 50.0) <= 12.0) {
+          ++vertebra;
+          vertebra_bone += bone.at(i, j, k);
+        }
+      }
+  EXPECT_EQ(ring_bone, 0) << "of " << ring;
+  EXPECT_EQ(vertebra_bone, vertebra);
+}
+
 TEST(SegmentBone, MarrowBehindALumenRestingOnThinCortexIsBone) {
   // A vertebra (cortex ring with end plates, marrow below the growing level) whose cortex the
   // lumen resting on it replaces along an arc (a scan's blur: the aorta on a thin anterior
