@@ -164,6 +164,7 @@ std::vector<PartStats> part_stats(const CtVolume& ct, const RunTable& runs, cons
 // one of the 13 directions through it: a shell up to three voxels thick with something darker on
 // either side (marrow inside, soft tissue outside), or a trabecula. A lumen's edge is a step, not
 // a ridge: bright on the inside, dark only outside; a pool of contrast, however bright, is flat.
+// The mask holds, for each ridge voxel, along how many of the 13 directions it is one (1-13).
 Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double drop) {
   const Grid& g = ct.grid;
   Mask cortex(g, 0, "cortex");
@@ -185,17 +186,17 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
             }
             return 0.5 * sum;
           };
-          bool ridge = false;
+          int ridge = 0;  // directions along which it is a ridge
           int bright_rays = 0;  // of the 26: rays along which it stays bright two voxels deep
           for (int d = 0; d < 13; ++d) {
             const int di = kDirections[d][0], dj = kDirections[d][1], dk = kDirections[d][2];
             const double ahead = side(di, dj, dk), behind = side(-di, -dj, -dk);
-            ridge = ridge || (ahead < below && behind < below);
+            ridge += ahead < below && behind < below;
             bright_rays += (ahead >= below) + (behind >= below);
           }
           // A corner of a thick bright body is dark on both sides along a tangent too, but
           // bright along half the rays or more, into it; a shell only along its own plane.
-          cortex.at(i, j, k) = ridge && bright_rays < kThickBodyRays;
+          cortex.at(i, j, k) = bright_rays < kThickBodyRays ? static_cast<std::uint8_t>(ridge) : 0;
         }
   });
   return cortex;
@@ -370,8 +371,8 @@ Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, d
 // Branches (see the header): `lumen` grown through voxels whose smoothed HU lies in the band of
 // the brightest lumen's contrast (`lumen_hu`), whose own HU is below `cortex_hu`, that hold no
 // voxel at or above it within branch_clearance_mm (face steps of the finest spacing), that are
-// not `ridge` (cortex) and that cortex does not wall in on kEnclosedSides sides within
-// marrow_enclosure_mm.
+// not a shell's ridge (`ridge` along branch_fence_ridge_directions of the 13 or more) and that
+// cortex does not wall in on kEnclosedSides sides within marrow_enclosure_mm.
 void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::int16_t>& hu,
                    const Mask& ridge, double soft_hu, double lumen_hu, double cortex_hu,
                    const VesselParams& params, Mask& lumen) {
@@ -391,7 +392,8 @@ void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::
   Mask band(g, 0, "branch band");
   for (std::size_t n = 0; n < band.size(); ++n)
     band.data[n] =
-        body.data[n] && hu[n] >= low && hu[n] <= high && !by_cortex.data[n] && !ridge.data[n];
+        body.data[n] && hu[n] >= low && hu[n] <= high && !by_cortex.data[n] &&
+        ridge.data[n] < params.branch_fence_ridge_directions;
   // marrow at the lumen's level: walled in by cortex on five sides of six or more
   const Mask enclosed =
       enclosed_by_cortex(ct, band, ridge, cortex_hu, soft_hu + params.min_contrast_hu,
@@ -483,6 +485,7 @@ void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
       !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
       !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0) ||
       !(p.branch_clearance_mm >= 0.0 && p.branch_clearance_mm <= 20.0) ||
+      !(p.branch_fence_ridge_directions >= 1 && p.branch_fence_ridge_directions <= 13) ||
       !(p.cortex_margin_hu > 0.0) ||
       !(p.marrow_enclosure_mm >= 0.0 && p.marrow_enclosure_mm <= 100.0))
     throw UsageError("segment_vessels: unusable parameters");

@@ -27,13 +27,17 @@
 //              from half way between S and L, and at least min_lumen_contrast_hu above S, up to
 //              L plus half its height above S), below cortical HU (the bone seed level +
 //              cortex_margin_hu, the bone mask's cortex level: only cortical bone reaches it), with
-//              no cortical voxel within branch_clearance_mm, not a ridge, and not walled in by
+//              no cortical voxel within branch_clearance_mm, not a shell's ridge (one along
+//              branch_fence_ridge_directions of the 13 or more), and not walled in by
 //              cortex (a ridge or cortical HU met within marrow_enclosure_mm through enhanced
 //              voxels) on five of the six axis rays. A branch leaving a trunk carries the trunk's
 //              contrast and lies apart from cortex where the opening cut it off and bone's levels
 //              would take it (a carotid, a subclavian, the coeliac trunk); marrow at that level
 //              lies behind its cortex (the ridge and its cortical voxels fence it) and inside it
-//              (walled in)
+//              (walled in). A branch 4-5 voxels across (a carotid, the coeliac trunk at 1.5 mm) is
+//              darker two voxels out only along the long diagonals: a ridge along a few of the
+//              13 directions, where a shell the test resolves is one along most of the 9 or more
+//              that cross its plane (a plane holds at most 4 of them)
 //   marrow     lumen voxels walled in by cortex on all six axis rays (within
 //              marrow_enclosure_mm, through enhanced voxels) are not a lumen: a vertebral body's
 //              marrow between its endplates that the scan's blurred cortex let through; a lumen
@@ -86,6 +90,9 @@ struct VesselParams {
   double arterial_above_soft_hu = 170.0;  // the phase's level where no trunk is a tube (a slab)
   bool find_branches = true;              // grow the lumens into branches (the header's method)
   double branch_clearance_mm = 3.0;       // no cortical voxel this near a branch's voxel
+  // A ridge fences the branches where it is one along at least this many of the 13 directions
+  // (a shell; a tube wider than the ridge test's two voxels is one only along a few diagonals).
+  int branch_fence_ridge_directions = 5;
   // Cortical HU: the bone seed level + this, the bone mask's own cortex level
   // (SegmentationParams::bone_lumen_cortex_margin_hu; prep passes the bone's).
   double cortex_margin_hu = 400.0;

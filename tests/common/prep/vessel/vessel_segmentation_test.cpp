@@ -193,6 +193,22 @@ TEST(SegmentVessels, ABranchLeavingTheTrunkAtItsContrastIsTheLumens) {
   EXPECT_LT(count_both(without.lumen, s.branch), count(s.branch) / 2) << "the branch is no test";
 }
 
+TEST(SegmentVessels, ABranchAsNarrowAsACarotidIsTheLumensThoughItsCentreIsARidge) {
+  // A 6 mm branch at 450 HU (a carotid, the coeliac trunk): four voxels across, so its voxels are
+  // darker two voxels out along the long diagonals, ridges as cortex is along a few directions.
+  // Only a ridge along five or more of the 13 (a shell) fences the growth: the branch is found
+  // whole; with every ridge fencing it (1), less than half of it.
+  const Scene s = scene(450.0, 3.0);
+  ASSERT_GT(count(s.branch), 20);
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_EQ(count_both(r.lumen, s.branch), count(s.branch));
+  EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
+  VesselParams every_ridge;
+  every_ridge.branch_fence_ridge_directions = 1;
+  const VesselResult fenced = segment_vessels(s.ct, s.body, kSoftHu, 300.0, every_ridge);
+  EXPECT_LT(count_both(fenced.lumen, s.branch), count(s.branch) / 2) << "the branch is no test";
+}
+
 TEST(SegmentVessels, BranchesStopAtTheCortexAroundMarrowAtTheLumensLevel) {
   // Marrow at 220 HU lies inside the band of a 350 HU lumen (195 to 505 HU), and so does a thin
   // cortex of 500 HU (an osteoporotic vertebra, or one a thick slice blurs). With no cortical
