@@ -418,6 +418,7 @@ void PrepRun::vessels() {
       const double soft = h.peak_found ? h.soft_peak_hu : kNominalSoftTissueHu + h.offset_hu;
       VesselParams vessels = params_.vessels;  // cortex at the bone mask's own level
       vessels.cortex_margin_hu = segmentation_.bone_lumen_cortex_margin_hu;
+      vessels.fat_peak_hu = h.fat_found ? h.fat_peak_hu : kNominalFatHu + h.offset_hu;
       VesselResult v =
           segment_vessels(*ct_owner_, body_, soft, segmentation_.bone_seed_hu, vessels);
       result_.contrast_phase = v.contrast_phase;

@@ -13,6 +13,7 @@
 //               walled in by cortex (marrow)
 //   close       lumens -> closed by closing_mm, then one voxel of the wall's partial volume
 //   marrow      lumens, cortex -> less the voxels walled in by cortex on all six axis rays
+//   outline     lumens, CT, cortex -> plus the tissue inside their round outlines (false lumens)
 //   phase       the lumens' trunk cores -> tubes and their levels -> two side by side at the
 //               aorta's contrast or not -> contrast_phase
 #include "prep/vessel/vessel_segmentation.hpp"
@@ -32,6 +33,7 @@
 #include "prep/segment/components.hpp"
 #include "prep/segment/notches.hpp"
 #include "prep/segment/segmentation.hpp"
+#include "prep/vessel/vessel_outline.hpp"
 
 namespace palp {
 namespace {
@@ -186,7 +188,7 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
             }
             return 0.5 * sum;
           };
-          int ridge = 0;  // directions along which it is a ridge
+          int ridge = 0;        // directions along which it is a ridge
           int bright_rays = 0;  // of the 26: rays along which it stays bright two voxels deep
           for (int d = 0; d < 13; ++d) {
             const int di = kDirections[d][0], dj = kDirections[d][1], dk = kDirections[d][2];
@@ -391,9 +393,8 @@ void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::
   const double high = lumen_hu + 0.5 * height;
   Mask band(g, 0, "branch band");
   for (std::size_t n = 0; n < band.size(); ++n)
-    band.data[n] =
-        body.data[n] && hu[n] >= low && hu[n] <= high && !by_cortex.data[n] &&
-        ridge.data[n] < params.branch_fence_ridge_directions;
+    band.data[n] = body.data[n] && hu[n] >= low && hu[n] <= high && !by_cortex.data[n] &&
+                   ridge.data[n] < params.branch_fence_ridge_directions;
   // marrow at the lumen's level: walled in by cortex on five sides of six or more
   const Mask enclosed =
       enclosed_by_cortex(ct, band, ridge, cortex_hu, soft_hu + params.min_contrast_hu,
@@ -477,7 +478,7 @@ std::pair<std::string, double> read_phase(const Grid& g, const Mask& cores, cons
   return {vein_hu > 0.0 ? "portal-venous" : "arterial", vein_hu};
 }
 
-void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
+void check(const CtVolume& ct, const Mask& body, double soft_peak_hu, const VesselParams& p) {
   if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
     throw UsageError("segment_vessels: the body mask is not on the CT's grid");
   if (!(p.min_contrast_hu > 0.0) || !(p.ridge_drop > 0.0 && p.ridge_drop < 1.0) ||
@@ -487,7 +488,10 @@ void check(const CtVolume& ct, const Mask& body, const VesselParams& p) {
       !(p.branch_clearance_mm >= 0.0 && p.branch_clearance_mm <= 20.0) ||
       !(p.branch_fence_ridge_directions >= 1 && p.branch_fence_ridge_directions <= 13) ||
       !(p.cortex_margin_hu > 0.0) ||
-      !(p.marrow_enclosure_mm >= 0.0 && p.marrow_enclosure_mm <= 100.0))
+      !(p.marrow_enclosure_mm >= 0.0 && p.marrow_enclosure_mm <= 100.0) ||
+      !(p.outline_max_radius_mm >= 0.0 && p.outline_max_radius_mm <= 100.0) ||
+      !(p.outline_min_edge_share > 0.0 && p.outline_min_edge_share <= 1.0) ||
+      !(p.outline_max_rms_mm > 0.0) || !(p.fat_peak_hu < soft_peak_hu))
     throw UsageError("segment_vessels: unusable parameters");
 }
 
@@ -551,7 +555,7 @@ void close_lumens(const CtVolume& ct, const Mask& body, const Mask& cortex, cons
 
 VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_peak_hu,
                              double bone_seed_hu, const VesselParams& params) {
-  check(ct, body, params);
+  check(ct, body, soft_peak_hu, params);
   const Grid& g = ct.grid;
   VesselResult result;
   result.lumen = Mask(g, 0, "vessel mask");
@@ -613,6 +617,9 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
                                             params.marrow_enclosure_mm, kWalledInSides);
   for (std::size_t n = 0; n < walled_in.size(); ++n)
     if (walled_in.data[n]) result.lumen.data[n] = 0;
+  // outline: the tissue inside a lumen's round, fat-bound outline (a false lumen, the wall)
+  fill_round_outlines(ct, cortex, 0.5 * (params.fat_peak_hu + soft_peak_hu), cortical_hu, params,
+                      result.lumen);
   result.voxels = segmentation::count_nonzero(result.lumen);
   return result;
 }

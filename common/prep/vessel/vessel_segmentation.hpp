@@ -44,6 +44,10 @@
 //              runs on along its length, however calcified its wall
 //   closing    closed by closing_mm (a flap's shadow), then one voxel of contrast level beside
 //              them and not by cortex (the wall's partial volume)
+//   outline    in each slice across the body axis, a lumen's piece whose surroundings end on
+//              fat or air along a circle (most of its outline, within outline_max_rms_mm of it)
+//              takes the tissue inside that circle: a dissected aorta's false lumen, at
+//              soft-tissue HU, and the vessel's wall (vessel_outline.hpp)
 //   phase      from the veins beside the aorta, not from the aorta's level (a late arterial
 //              aorta and a portal-venous one can be as bright): `none` without a lumen; else the
 //              trunk cores (voxels trunk_core_mm deep) of the lumens, each 6-connected piece a
@@ -64,7 +68,8 @@
 //              the rule can say `portal-venous`.
 // Measured on the phantom's cases and the shared CTs in docs/anatomy.md, where it falls short:
 // an organ enhancing to a lumen's level and as uniform (the phantom's kidneys) is taken with
-// the lumens, and a dissected aorta's false lumen, fenced by its flap, is often not.
+// the lumens, and a dissected aorta's false lumen is found only where the aorta's outline is
+// round and lies in fat.
 #pragma once
 
 #include <cstdint>
@@ -97,6 +102,13 @@ struct VesselParams {
   // (SegmentationParams::bone_lumen_cortex_margin_hu; prep passes the bone's).
   double cortex_margin_hu = 400.0;
   double marrow_enclosure_mm = 30.0;  // marrow: cortex within this along the axis rays
+  // The round outline (vessel_outline.hpp): a dissected aorta's false lumen. 0: off.
+  double outline_max_radius_mm = 25.0;  // an aorta up to 50 mm across (a dissection widens it)
+  double outline_min_edge_share = 0.5;  // rays ending on its edge (the rest: what it rests on)
+  double outline_max_rms_mm = 2.25;     // the edge points' RMS distance from the circle
+  // The scan's fat peak (prep passes HuLevels'): the vessel's edge is half way from it to the
+  // soft-tissue peak.
+  double fat_peak_hu = -100.0;
 };
 
 struct VesselResult {

@@ -379,8 +379,8 @@ TEST(SegmentBone, ACalcifiedFlapBesideAVertebraIsNotJoinedToItByMarrow) {
   // between them, the ring joins the skeleton, and the island rule run after them no longer sees
   // it (every voxel of the ring stays bone). Islands on a lumen go before the marrow rules: none.
   CtVolume ct = bone_scene();
-  cylinder(ct, 30, 50, 12, 10, 50, 800);  // cortex with end plates
-  cylinder(ct, 30, 50, 9, 12, 48, 80);    // marrow
+  cylinder(ct, 30, 50, 12, 10, 50, 800);      // cortex with end plates
+  cylinder(ct, 30, 50, 9, 12, 48, 80);        // marrow
   box(ct, {43, 38, 10}, {44, 62, 50}, -100);  // fat between vertebra and aorta
   cylinder(ct, 55, 50, 11, 10, 50, 40);       // the aortic wall
   cylinder(ct, 55, 50, 10, 10, 50, 400);      // the lumen

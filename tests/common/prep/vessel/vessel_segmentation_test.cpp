@@ -22,7 +22,7 @@ constexpr double kSoftHu = 40.0;
 struct Scene {
   CtVolume ct;
   Mask body, tube, marrow;
-  Mask branch;  // the branch's voxels beyond 15 mm from the trunk's axis, clear of its edge
+  Mask branch;      // the branch's voxels beyond 15 mm from the trunk's axis, clear of its edge
   Mask tube_clear;  // the tube's voxels two voxels or more from the cortex (not its partial volume)
 };
 
@@ -38,9 +38,8 @@ Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 90
   g.dims = {60, 70, 24};  // 90 x 105 x 36 mm
   g.spacing = {kSpacing, kSpacing, kSpacing};
   g.world.direction = {-1, 0, 0, 0, 1, 0, 0, 0, 1};  // i toward the patient's right
-  Scene s{CtVolume(g, 0, "ct"),           Mask(g, 1, "body"),  Mask(g, 0, "tube"),
-          Mask(g, 0, "marrow"),             Mask(g, 0, "branch"),
-          Mask(g, 0, "tube clear of the cortex")};
+  Scene s{CtVolume(g, 0, "ct"), Mask(g, 1, "body"),   Mask(g, 0, "tube"),
+          Mask(g, 0, "marrow"), Mask(g, 0, "branch"), Mask(g, 0, "tube clear of the cortex")};
   for (std::int64_t k = 0; k < g.dims[2]; ++k)
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
       for (std::int64_t i = 0; i < g.dims[0]; ++i) {
@@ -85,7 +84,9 @@ std::int64_t count_both(const Mask& a, const Mask& b) {
   return n;
 }
 
-std::int64_t count(const Mask& a) { return count_both(a, a); }
+std::int64_t count(const Mask& a) {
+  return count_both(a, a);
+}
 
 TEST(SegmentVessels, FindsAContrastTubeBesideAVertebraAndNotItsMarrow) {
   const Scene s = scene(350.0);
@@ -148,8 +149,7 @@ TEST(SegmentVessels, AnAortaBesideAVeinAtItsLevelReadsPortalVenous) {
   EXPECT_NEAR(r.second_trunk_level_hu, kSoftHu + 190.0, 20.0);
   // The same vein barely enhanced: arterial again (the aorta alone is at its level).
   const Scene arterial = scene(kSoftHu + 220.0, 0.0, 900.0, false, kSoftHu + 50.0);
-  EXPECT_EQ(segment_vessels(arterial.ct, arterial.body, kSoftHu, 300.0).contrast_phase,
-            "arterial");
+  EXPECT_EQ(segment_vessels(arterial.ct, arterial.body, kSoftHu, 300.0).contrast_phase, "arterial");
 }
 
 TEST(SegmentVessels, ASlabTooThinForATubeReadsThePhaseFromTheAortasLevel) {
