@@ -8,21 +8,20 @@
 //   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface)
 //   rejoin      lumens -> grown through candidates the opening cut, away from rejected parts
 //               and from cortex (branches)
+//   phase       the lumens' trunk cores -> tubes and their levels -> two side by side at the
+//               aorta's contrast or not -> contrast_phase (vessel_phase.hpp)
 //   branches    lumens, CT, smoothed HU, cortex -> grown through voxels at the lumens' own
-//               contrast, below cortical HU, clear of cortical voxels, not a ridge, and not
-//               walled in by cortex (marrow)
+//               contrast, below cortical HU, clear of cortical voxels, not a shell's ridge, and
+//               not walled in by cortex (marrow)
 //   close       lumens -> closed by closing_mm, then one voxel of the wall's partial volume
 //   marrow      lumens, cortex -> less the voxels walled in by cortex on all six axis rays
 //   outline     lumens, CT, cortex -> plus the tissue inside their round outlines (false lumens)
-//   phase       the lumens' trunk cores -> tubes and their levels -> two side by side at the
-//               aorta's contrast or not -> contrast_phase
 #include "prep/vessel/vessel_segmentation.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -34,6 +33,7 @@
 #include "prep/segment/notches.hpp"
 #include "prep/segment/segmentation.hpp"
 #include "prep/vessel/vessel_outline.hpp"
+#include "prep/vessel/vessel_phase.hpp"
 
 namespace palp {
 namespace {
@@ -96,15 +96,6 @@ constexpr int kWalledInSides = 6;
 
 // cores' value for a voxel trunk_core_mm deep in the candidates (1: split_mm deep).
 constexpr std::uint8_t kTrunkCore = 2;
-
-// A trunk's core is a tube (a length of aorta, vena cava, portal vein) when its voxels spread
-// along one axis at least this many times as far as across it (standard deviations, as
-// bone_islands' rods: segmentation::kBoneIslandElongation) ...
-constexpr double kTubeElongation = segmentation::kBoneIslandElongation;
-// ... and its length (a rod's: 2 sqrt(3) standard deviations) is at least this many times
-// trunk_core_mm, twice a trunk's least diameter: a shorter core is a trunk's bulge or a chamber's
-// corner, not a run of vessel (a kidney's or the heart's core is roundish: neither).
-constexpr double kTubeMinLengthCores = 4.0;
 
 struct PartStats {
   std::int64_t voxels = 0;
@@ -403,81 +394,6 @@ void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::
   grow_within(lumen, [&](std::size_t n) { return band.data[n] != 0; });
 }
 
-// The contrast phase (see the header): the trunk cores (kTrunkCore in `cores`) of the kept
-// lumens, 6-connected; of them the tubes at the aorta's contrast (mean smoothed HU at least half
-// way from the soft tissue to `lumen_hu`, the brightest lumen's level); two of them side by side
-// (sharing slices along the body axis, their centres farther apart across it than two trunk
-// radii, 2 trunk_core_mm: two lumens, not one) are the aorta and a large vein filled as it is:
-// portal-venous. One alone: the veins have not filled yet, arterial. No tube at the aorta's
-// contrast (a slab thinner than a tube is long): the brightest lumen's level decides,
-// arterial_above_soft_hu above S or more arterial. Returns the phase and, when portal-venous, the
-// darker tube's level of the brightest such pair.
-std::pair<std::string, double> read_phase(const Grid& g, const Mask& cores, const RunTable& runs,
-                                          const RunLabels& labels,
-                                          const std::vector<std::uint8_t>& keep,
-                                          const std::vector<std::int16_t>& hu, double soft_hu,
-                                          double lumen_hu, const VesselParams& params) {
-  Mask trunks(g, 0, "trunk cores");  // the kept parts, then their cores
-  segmentation::rewrite_runs(
-      g, runs, labels, [&](std::int64_t c) { return keep[c]; }, trunks);
-  for (std::size_t n = 0; n < trunks.size(); ++n)
-    trunks.data[n] = trunks.data[n] && cores.data[n] == kTrunkCore;
-  const RunTable t = extract_runs(trunks, false);
-  const RunLabels l = label_runs(g, t);
-  const std::size_t count = l.voxels.size();
-  const std::vector<segmentation::IslandShape> shapes = segmentation::island_shapes(g, t, l);
-  const std::vector<segmentation::ComponentBox> boxes = segmentation::component_boxes(g, t, l);
-  // per core: the sum of its smoothed HU and of its voxels' indices
-  std::vector<double> sum(count, 0.0);
-  std::vector<Vec3> centre(count, Vec3{0.0, 0.0, 0.0});
-  const std::int64_t ny = g.dims[1];
-  for (std::int64_t row = 0; row + 1 < static_cast<std::int64_t>(t.row_start.size()); ++row) {
-    const std::int64_t j = row % ny, k = row / ny;
-    for (std::int64_t r = t.row_start[row]; r < t.row_start[row + 1]; ++r) {
-      const auto c = static_cast<std::size_t>(l.of_run[r]);
-      for (std::int64_t i = t.runs[r].begin; i < t.runs[r].end; ++i) {
-        sum[c] += hu[g.linear(i, j, k)];
-        centre[c][0] += static_cast<double>(i);
-        centre[c][1] += static_cast<double>(j);
-        centre[c][2] += static_cast<double>(k);
-      }
-    }
-  }
-  const double half = soft_hu + 0.5 * (lumen_hu - soft_hu);
-  std::vector<std::size_t> tubes;
-  std::vector<double> level(count, 0.0);
-  for (std::size_t c = 0; c < count; ++c) {
-    const double v = static_cast<double>(l.voxels[c]);
-    level[c] = sum[c] / v;
-    for (double& x : centre[c]) x /= v;
-    const auto& sd = shapes[c].sd;
-    const bool tube = sd[0] >= kTubeElongation * sd[1] &&
-                      2.0 * std::sqrt(3.0) * sd[0] >= kTubeMinLengthCores * params.trunk_core_mm;
-    if (tube && level[c] >= half) tubes.push_back(c);
-  }
-  const int slice = patient_axes(g).slice;
-  double vein_hu = 0.0;
-  for (std::size_t a = 0; a < tubes.size(); ++a)
-    for (std::size_t b = a + 1; b < tubes.size(); ++b) {
-      const std::size_t p = tubes[a], q = tubes[b];
-      if (std::max(boxes[p].lo[slice], boxes[q].lo[slice]) >
-          std::min(boxes[p].hi[slice], boxes[q].hi[slice]))
-        continue;  // one above the other: one trunk's pieces, or two apart
-      double across = 0.0;
-      for (int axis = 0; axis < 3; ++axis)
-        if (axis != slice) {
-          const double d = (centre[p][axis] - centre[q][axis]) * g.spacing[axis];
-          across += d * d;
-        }
-      if (std::sqrt(across) <= 2.0 * params.trunk_core_mm) continue;
-      vein_hu = std::max(vein_hu, std::min(level[p], level[q]));
-    }
-  if (tubes.empty())
-    return {lumen_hu - soft_hu >= params.arterial_above_soft_hu ? "arterial" : "portal-venous",
-            0.0};
-  return {vein_hu > 0.0 ? "portal-venous" : "arterial", vein_hu};
-}
-
 void check(const CtVolume& ct, const Mask& body, double soft_peak_hu, const VesselParams& p) {
   if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
     throw UsageError("segment_vessels: the body mask is not on the CT's grid");
@@ -603,8 +519,15 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   });
   if (brightest == stats.size()) return result;  // no lumen: phase none
   result.lumen_level_hu = stats[brightest].mean();
-  std::tie(result.contrast_phase, result.second_trunk_level_hu) =
-      read_phase(g, cores, runs, labels, keep, hu, soft_peak_hu, result.lumen_level_hu, params);
+  Mask trunks(g, 0, "trunk cores");  // the kept lumens' cores
+  segmentation::rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return keep[c]; }, trunks);
+  for (std::size_t n = 0; n < trunks.size(); ++n)
+    trunks.data[n] = trunks.data[n] && cores.data[n] == kTrunkCore;
+  const ContrastPhase phase =
+      read_contrast_phase(trunks, hu, soft_peak_hu, result.lumen_level_hu, params);
+  result.contrast_phase = phase.name;
+  result.second_trunk_level_hu = phase.second_trunk_hu;
   // branches: the lumens grown through voxels at their contrast, apart from cortex
   const double cortical_hu = bone_seed_hu + params.cortex_margin_hu;  // only cortical bone
   if (params.find_branches)
