@@ -214,11 +214,11 @@ std::optional<Circle> vessel_circle(std::vector<Point> pts, const VesselParams& 
   return c;
 }
 
-// Marks in `added` what the lumen lacks inside the circle, half a voxel in from its edge (the
+// Appends to `added` what the lumen lacks inside the circle, half a voxel in from its edge (the
 // wall's partial volume): tissue at or above the edge level, and cortex (a calcified flap or
 // intima) a voxel further in.
 void fill_circle(const Plane& p, const Circle& c, const CtVolume& ct, const Mask& lumen,
-                 const Mask& cortex, const Levels& lv, Mask& added) {
+                 const Mask& cortex, const Levels& lv, std::vector<std::size_t>& added) {
   const double hu = p.g->spacing[p.u_axis], hv = p.g->spacing[p.v_axis];
   const double voxel = std::min(hu, hv);
   const double reach = c.radius - 0.5 * voxel, calcium_reach = reach - voxel;
@@ -234,7 +234,7 @@ void fill_circle(const Plane& p, const Circle& c, const CtVolume& ct, const Mask
           std::hypot(static_cast<double>(u) * hu - c.u, static_cast<double>(v) * hv - c.v);
       const std::size_t n = p.voxel(u, v);
       if (r > reach || lumen.data[n] || ct.data[n] < lv.edge_hu) continue;
-      if (!lv.bright(ct, cortex, n) || r <= calcium_reach) added.data[n] = 1;
+      if (!lv.bright(ct, cortex, n) || r <= calcium_reach) added.push_back(n);
     }
 }
 
@@ -251,7 +251,8 @@ std::uint64_t fill_round_outlines(const CtVolume& ct, const Mask& cortex, double
   base.u_axis = axes.slice == 0 ? 1 : 0;
   base.v_axis = axes.slice == 2 ? 1 : 2;
   const Levels lv{edge_hu, cortex_hu};
-  Mask added(g, 0, "round outlines");
+  // per slice, the voxels its circles add (each slice's own, so no two chunks write one)
+  std::vector<std::vector<std::size_t>> added(static_cast<std::size_t>(g.dims[base.axis]));
   parallel_for_chunks(g.dims[base.axis], 4, [&](std::int64_t w0, std::int64_t w1) {
     std::vector<std::int32_t> owner;
     for (std::int64_t w = w0; w < w1; ++w) {
@@ -263,15 +264,15 @@ std::uint64_t fill_round_outlines(const CtVolume& ct, const Mask& cortex, double
             edge_points(p, piece, ct, lumen, cortex, lv, params.outline_max_radius_mm), params);
         // the lumen fills a share of its vessel (a piece inside bone's marrow does not)
         if (c && piece.area_mm2 >= kOutlineMinLumenShare * kPi * c->radius * c->radius)
-          fill_circle(p, *c, ct, lumen, cortex, lv, added);
+          fill_circle(p, *c, ct, lumen, cortex, lv, added[static_cast<std::size_t>(w)]);
       }
     }
   });
   std::uint64_t count = 0;
-  for (std::size_t n = 0; n < added.size(); ++n)
-    if (added.data[n]) {
+  for (const std::vector<std::size_t>& slice : added)
+    for (const std::size_t n : slice) {
+      count += lumen.data[n] == 0;  // two circles of one slice may hold a voxel both
       lumen.data[n] = 1;
-      ++count;
     }
   return count;
 }
