@@ -94,12 +94,13 @@ bool parse_switch(const std::string& text, const std::string& key) {
 }
 
 void check_options(const std::string& name, const PhantomOptions& o) {
-  if (name == "trunk" && (o.arms != 1 || o.metal))
-    throw UsageError("phantom trunk has no arms or metal (torso only)");
+  if (name == "trunk" && (o.arms != 1 || o.metal || o.dissection))
+    throw UsageError("phantom trunk has no arms, metal or dissection (torso only)");
   if (name != "torso" && name != "trunk" &&
-      (o.contrast || o.aorta_hu || o.arms != 1 || o.metal || o.structures))
+      (o.contrast || o.aorta_hu || o.arms != 1 || o.metal || o.structures || o.dissection))
     throw UsageError("phantom " + name +
-                     " has no contrast, aorta-hu, arms, metal or structures (torso and trunk)");
+                     " has no contrast, aorta-hu, arms, metal, structures or dissection (torso "
+                     "and trunk)");
   if (o.arms < 0 || o.arms > 2)
     throw UsageError("phantom option arms needs 0, 1 or 2, got " + std::to_string(o.arms));
   if (o.aorta_hu && !(*o.aorta_hu >= -1000.0 && *o.aorta_hu <= 3000.0))
@@ -143,13 +144,15 @@ void set_phantom_option(PhantomOptions& options, const std::string& key, const s
     options.metal = parse_switch(value, key);
   } else if (key == "structures") {
     options.structures = parse_switch(value, key);
+  } else if (key == "dissection") {
+    options.dissection = parse_switch(value, key);
   } else if (key == "orient") {
     axis_reorder(Grid{{1, 1, 1}, {1.0, 1.0, 1.0}, {}}, value);  // UsageError for a bad code
     options.orient = value;
   } else {
     throw UsageError("unknown phantom option '" + key +
                      "' (known: dims, spacing, contrast, aorta-hu, arms, metal, structures, "
-                     "orient)");
+                     "dissection, orient)");
   }
   check_options("torso", options);
 }
@@ -167,9 +170,10 @@ PhantomSpec parse_phantom_spec(const std::string& text) {
       first = false;
     } else {
       const std::size_t eq = item.find('=');
-      if (eq == std::string::npos && item != "metal" && item != "structures")
+      if (eq == std::string::npos && item != "metal" && item != "structures" &&
+          item != "dissection")
         throw UsageError("phantom option '" + item +
-                         "' needs KEY=VALUE (or a flag: metal, structures)");
+                         "' needs KEY=VALUE (or a flag: metal, structures, dissection)");
       set_phantom_option(spec.options, item.substr(0, eq),
                          eq == std::string::npos ? "1" : item.substr(eq + 1));
     }

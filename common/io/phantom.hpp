@@ -61,6 +61,10 @@
 //                 with deterministic metal streaks in the slices through them: bright and dark
 //                 rays of 300-800 HU from each screw, decaying with distance (about halving every
 //                 40 mm), and a dark band between the screws, on the patient's voxels only.
+//   dissection    the aorta dissected, as an early arterial phase shows it: a true lumen 14 mm
+//                 across at the aorta's HU in its front, the false lumen filling the rest of
+//                 the 24 mm vessel at soft-tissue HU + 10 (slow flow, not yet filled), in 4 mm
+//                 of periaortic fat; both lumens are the truth vessel's (the aorta's lumen)
 //   structures    what a finger feels besides bone (issue 39), for the truth masks the force
 //                 model's structure layers come from (prep writes them: artery.nii.gz,
 //                 liver.nii.gz and their maps):
@@ -91,9 +95,10 @@
 //                 Everything else (and every slice above z = 20 mm) is the torso without it.
 // On the command line: palp phantom torso --contrast arterial --aorta-hu 400 --arms 2 --metal
 // --structures. In a CT input or scene (parse_phantom_spec): phantom:NAME[,KEY=VALUE...] with the
-// keys dims, spacing, contrast, aorta-hu, arms, metal, structures, orient (metal or structures
-// alone means =1), e.g. phantom:torso,contrast=arterial,arms=2, phantom:trunk,orient=RAS or
-// phantom:torso,dims=384x256x20,spacing=1.25x1.25x1.5 or phantom:torso,structures.
+// keys dims, spacing, contrast, aorta-hu, arms, metal, structures, dissection, orient (metal,
+// structures or dissection alone means =1), e.g. phantom:torso,contrast=arterial,arms=2,
+// phantom:trunk,orient=RAS or phantom:torso,dims=384x256x20,spacing=1.25x1.25x1.5 or
+// phantom:torso,structures.
 #pragma once
 
 #include <optional>
@@ -118,6 +123,7 @@ struct PhantomOptions {
   int arms = 1;                    // 0, 1 or 2
   bool metal = false;
   bool structures = false;
+  bool dissection = false;  // torso: the aorta dissected (above)
   // Any phantom: store it in this axis order (an orientation code, base/axis_order.hpp: "RAS",
   // "PIL", ...), the same patient in the same LPS world place; absent: the phantom's own order.
   std::optional<std::string> orient;

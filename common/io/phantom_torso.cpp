@@ -67,12 +67,29 @@ void add_ribs(std::vector<Layer>& layers) {
   }
 }
 
+// A dissected aorta (options.dissection) from z_lo up: periaortic fat 4 mm around it (painted
+// first, so the veins crossing it cover it), then the vessel filled by the false lumen at
+// soft-tissue HU + 10 with the true lumen, 14 mm across, in its front at the aorta's HU. Both are
+// the aorta's lumen (the truth vessel).
+void add_periaortic_fat(std::vector<Layer>& layers, double z_lo) {
+  layers.push_back(
+      {EllipticCylinder{kAortaCx, kAortaCy, kAortaR + 4.0, kAortaR + 4.0, z_lo, kInfinity}, -100.0,
+       Tissue::kPatient});
+}
+void add_dissected_aorta(std::vector<Layer>& layers, double hu, double z_lo) {
+  layers.push_back({EllipticCylinder{kAortaCx, kAortaCy, kAortaR, kAortaR, z_lo, kInfinity},
+                    kSoftTissueHu + 10.0, Tissue::kArteryContrast});
+  layers.push_back({EllipticCylinder{kAortaCx, kAortaCy - 4.0, 7.0, 7.0, z_lo, kInfinity}, hu,
+                    vessel_tissue(true, hu)});
+}
+
 // With contrast options: the aorta down to its bifurcation, the common iliac arteries, the coeliac
 // trunk and superior mesenteric artery leaving it forward, the renal arteries into the kidneys'
 // hila, and the veins (inferior vena cava right of the aorta, the renal veins, the left one
 // between the aorta and the SMA, the portal vein up into the liver). Veins first: an artery that
 // crosses one covers it.
-void add_vessel_tree(std::vector<Layer>& layers, const TorsoLevels& l) {
+void add_vessel_tree(std::vector<Layer>& layers, const TorsoLevels& l, bool dissection) {
+  if (dissection) add_periaortic_fat(layers, kAortaBifurcationZ);
   const auto vein = [&](const Shape& s, double hu) {
     layers.push_back({s, hu, vessel_tissue(false, hu)});
   };
@@ -84,7 +101,10 @@ void add_vessel_tree(std::vector<Layer>& layers, const TorsoLevels& l) {
   vein(Tube{{14.0, -26.0, 4.0}, {-22.0, -38.0, 32.0}, 6.5}, l.portal);     // into the liver
   const Tissue artery = vessel_tissue(true, l.artery);
   const auto add = [&](const Shape& s) { layers.push_back({s, l.artery, artery}); };
-  add(EllipticCylinder{kAortaCx, kAortaCy, kAortaR, kAortaR, kAortaBifurcationZ, kInfinity});
+  if (dissection)
+    add_dissected_aorta(layers, l.artery, kAortaBifurcationZ);
+  else
+    add(EllipticCylinder{kAortaCx, kAortaCy, kAortaR, kAortaR, kAortaBifurcationZ, kInfinity});
   add(common_iliac(1.0));
   add(common_iliac(-1.0));
   add(Tube{{kAortaCx, -6.0, 32.0}, {24.0, -42.0, 36.0}, 3.5});   // coeliac trunk
@@ -93,7 +113,8 @@ void add_vessel_tree(std::vector<Layer>& layers, const TorsoLevels& l) {
   add(Tube{{36.0, 3.0, -16.0}, {54.0, 9.0, -20.0}, 3.0});        // left renal
 }
 
-void add_organs(std::vector<Layer>& layers, const TorsoLevels& levels, bool structures) {
+void add_organs(std::vector<Layer>& layers, const TorsoLevels& levels, bool structures,
+                bool dissection) {
   layers.push_back({Ellipsoid{{kBodyCx - 50.0, kBodyCy - 5.0, 10.0}, {55.0, 55.0, 50.0}},
                     levels.liver, Tissue::kLiver});  // liver
   for (double side : {-1.0, 1.0}) {                  // kidneys
@@ -117,7 +138,10 @@ void add_organs(std::vector<Layer>& layers, const TorsoLevels& levels, bool stru
   }
   if (structures) add_liver_edge(layers, levels);
   if (levels.tree) {
-    add_vessel_tree(layers, levels);
+    add_vessel_tree(layers, levels, dissection);
+  } else if (dissection && !structures) {  // with structures: the aorta to its bifurcation
+    add_periaortic_fat(layers, -kInfinity);
+    add_dissected_aorta(layers, levels.artery, -kInfinity);
   } else if (structures) {
     add_aorta_to_bifurcation(layers, levels);
   } else {
@@ -185,7 +209,7 @@ std::vector<Layer> torso_layers(const PhantomOptions& options, double z_lo, doub
   add_table(layers);
   add_body_wall(layers);
   add_ribs(layers);
-  add_organs(layers, torso_levels(options), options.structures);
+  add_organs(layers, torso_levels(options), options.structures, options.dissection);
   add_spine(layers, z_lo, z_hi);
   if (options.metal)
     for (double side : {-1.0, 1.0}) layers.push_back({screw(side), kScrewHu, Tissue::kMetal});

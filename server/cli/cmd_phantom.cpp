@@ -36,6 +36,8 @@ phantom:trunk,orient=RAS; phantom:torso,contrast=arterial,arms=2,metal,structure
                         unless --contrast says otherwise)
   --arms N              0, 1 (default) or 2 arms beside the torso
   --metal               a pair of pedicle screws (3500 HU) in a vertebra, with streaks
+  --dissection          the aorta dissected: a 14 mm true lumen at its HU, the false lumen at
+                        soft-tissue HU filling the rest of it, in periaortic fat (torso only)
   --structures          what a finger feels besides bone: the femoral arteries (and veins) in
                         the groin 15 mm under the skin, joined to the aorta by the iliac
                         arteries, and the liver's inferior edge below the right costal margin;
@@ -50,7 +52,7 @@ phantom:trunk,orient=RAS; phantom:torso,contrast=arterial,arms=2,metal,structure
 }  // namespace
 
 int cmd_phantom(const Arguments& argv) {
-  const Args args(argv, {"help", "metal", "structures"},
+  const Args args(argv, {"help", "metal", "structures", "dissection"},
                   {"out", "dims", "spacing", "orientation", "contrast", "aorta-hu", "arms"});
   if (args.has("help")) {
     std::cout << kPhantomUsage;
@@ -68,6 +70,7 @@ int cmd_phantom(const Arguments& argv) {
     if (const auto value = args.get(key)) set_phantom_option(options, key, *value);
   if (args.has("metal")) options.metal = true;
   if (args.has("structures")) options.structures = true;
+  if (args.has("dissection")) options.dissection = true;
   CtVolume ct = make_phantom(args.positional()[0], options);
   if (const auto code = args.get("orientation")) ct = reorder_axes(ct, *code);
   write_nifti(*out, ct);

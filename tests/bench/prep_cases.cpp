@@ -1,6 +1,7 @@
 // prep_cases: the whole prep (run_prep, default parameters, no cache) on every case of issue 38,
 // scored against truth: the torso phantom as real scans vary it (contrast phase, aorta HU, thin
-// slabs, 5 mm slices, both arms, a metal implant; common/io/phantom.hpp) and, when
+// slabs, 5 mm slices, both arms, a metal implant, a dissected aorta; common/io/phantom.hpp) and,
+// when
 // ../shared/data has them, the real CTs with their labels. One Markdown table on stdout: case,
 // structure, Dice, ASSD mm, then the case's further figure with its goal and whether it is met;
 // progress on stderr. It measures; it is not a test (tests/bench/prep_cases.sh builds and runs it).
@@ -250,18 +251,23 @@ struct PhantomCase {
 
 std::vector<PhantomCase> phantom_cases() {
   const std::string slab = "torso,dims=384x256x20,spacing=1.25x1.25x1.5";
-  return {{"torso (default: aorta 250 alone)", "torso", "arterial"},
-          {"contrast none", "torso,contrast=none", "none"},
-          {"contrast arterial", "torso,contrast=arterial", "arterial"},
-          {"contrast portal-venous", "torso,contrast=portal-venous", "portal-venous"},
-          {"aorta 150 HU", "torso,aorta-hu=150", "arterial"},
-          {"aorta 250 HU", "torso,aorta-hu=250", "arterial"},
-          {"aorta 400 HU", "torso,aorta-hu=400", "arterial"},
-          {"slab 20 x 1.5 mm", slab, "arterial"},
-          {"slab 20 x 1.5 mm, aorta 400 HU", slab + ",aorta-hu=400", "arterial"},
-          {"5 mm slices", "torso,dims=384x256x40,spacing=1.25x1.25x5", "arterial"},
-          {"both arms", "torso,arms=2", "arterial"},
-          {"metal implant", "torso,metal", "arterial"}};
+  return {
+      {"torso (default: aorta 250 alone)", "torso", "arterial"},
+      {"contrast none", "torso,contrast=none", "none"},
+      {"contrast arterial", "torso,contrast=arterial", "arterial"},
+      {"contrast portal-venous", "torso,contrast=portal-venous", "portal-venous"},
+      {"aorta 150 HU", "torso,aorta-hu=150", "arterial"},
+      {"aorta 250 HU", "torso,aorta-hu=250", "arterial"},
+      {"aorta 400 HU", "torso,aorta-hu=400", "arterial"},
+      {"slab 20 x 1.5 mm", slab, "arterial"},
+      {"slab 20 x 1.5 mm, aorta 400 HU", slab + ",aorta-hu=400", "arterial"},
+      {"5 mm slices", "torso,dims=384x256x40,spacing=1.25x1.25x5", "arterial"},
+      {"both arms", "torso,arms=2", "arterial"},
+      {"metal implant", "torso,metal", "arterial"},
+      {"aortic dissection (arterial)", "torso,contrast=arterial,dissection", "arterial"},
+      {"aortic dissection, 5 mm slices",
+       "torso,contrast=arterial,dissection,dims=384x256x40,spacing=1.25x1.25x5", "arterial"},
+      {"aortic dissection, slab 20 x 1.5 mm", slab + ",contrast=arterial,dissection", "arterial"}};
 }
 
 void score_phantom(const PhantomCase& c, const PrepOutputs& p, std::vector<Row>& rows) {

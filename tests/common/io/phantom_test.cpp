@@ -427,6 +427,41 @@ TEST(PhantomContrast, AortaHuSetsTheArteriesAndDecidesWhatIsContrastTruth) {
               make_phantom("torso", with_contrast(PhantomContrast::arterial)).data);
 }
 
+TEST(PhantomDissection, AFalseLumenAtSoftTissueHuInPeriaorticFat) {
+  // The same arterial tree with the aorta dissected: the truth vessel keeps its size (both lumens
+  // are the aorta's), about two thirds of the aorta's section (1 - (7/12)^2) now reads at the
+  // false lumen's 50 HU instead of 400, and fat (-100 HU) lies beside the truth vessel, where the
+  // undissected aorta lies in the abdomen's soft tissue.
+  PhantomOptions dissected = with_contrast(PhantomContrast::arterial);
+  dissected.dissection = true;
+  const Drawn d = torso_with(dissected);
+  const Drawn a = torso_with(with_contrast(PhantomContrast::arterial));
+  expect_vessels_in_soft_body(d.truth);
+  const double vessel = static_cast<double>(count(d.truth.vessel));
+  EXPECT_NEAR(vessel / static_cast<double>(count(a.truth.vessel)), 1.0, 0.03);
+  const auto below = [](const Drawn& x, int hu) {
+    std::int64_t n = 0;
+    for (const int v : hu_in(x.ct, x.truth.vessel)) n += v < hu;
+    return n;
+  };
+  EXPECT_GT(static_cast<double>(below(d, 150)), 0.4 * vessel);
+  EXPECT_EQ(below(a, 150), 0);
+  const auto fat_beside = [](const Drawn& x) {
+    const Grid& g = x.ct.grid;
+    std::int64_t n = 0;
+    for (std::int64_t k = 0; k < g.dims[2]; ++k)
+      for (std::int64_t j = 0; j < g.dims[1]; ++j)
+        for (std::int64_t i = 1; i + 1 < g.dims[0]; ++i)
+          n += x.ct.at(i, j, k) < -60 && x.truth.body.at(i, j, k) &&
+               (x.truth.vessel.at(i - 1, j, k) || x.truth.vessel.at(i + 1, j, k));
+    return n;
+  };
+  EXPECT_GT(fat_beside(d), 10 * fat_beside(a) + 100);
+  // a scene string draws it too
+  EXPECT_TRUE(parse_phantom_spec("torso,contrast=arterial,dissection").options.dissection);
+  EXPECT_THROW(make_phantom("trunk", dissected), UsageError);
+}
+
 TEST(PhantomArms, TwoArmsOrNone) {
   PhantomOptions o;
   o.arms = 2;
