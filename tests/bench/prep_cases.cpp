@@ -20,7 +20,8 @@
 // Usage: prep_cases [--only TEXT] [--keep DIR] [--shared-data DIR] [--vessels auto|off]
 //   --vessels off       prep without its vessel search (default auto, as palp prep)
 //   --only TEXT         run only the cases whose name contains TEXT
-//   --keep DIR          write each case's prep into DIR/<n> and keep it (default: a temporary
+//   --keep DIR          write each case's prep (and a phantom's truth_bone.nii.gz and
+//                       truth_vessel.nii.gz) into DIR/<n> and keep it (default: a temporary
 //                       directory, removed at the end)
 //   --shared-data DIR   the real CTs (default: $PALP_SHARED_DATA_DIR, else ../shared/data)
 #include <unistd.h>
@@ -270,10 +271,17 @@ std::vector<PhantomCase> phantom_cases() {
       {"aortic dissection, slab 20 x 1.5 mm", slab + ",contrast=arterial,dissection", "arterial"}};
 }
 
-void score_phantom(const PhantomCase& c, const PrepOutputs& p, std::vector<Row>& rows) {
+// With `keep` (--keep), the truth masks are written beside the prep's (truth_bone.nii.gz,
+// truth_vessel.nii.gz) for looking at what a case misses.
+void score_phantom(const PhantomCase& c, const PrepOutputs& p, const fs::path* keep,
+                   std::vector<Row>& rows) {
   const PhantomSpec spec = parse_phantom_spec(c.spec);
   PhantomTruth truth;
   make_phantom(spec.name, spec.options, &truth);
+  if (keep) {
+    write_nifti((*keep / "truth_bone.nii.gz").string(), truth.bone);
+    write_nifti((*keep / "truth_vessel.nii.gz").string(), truth.vessel);
+  }
   if (!same_grid(p.bone, truth.bone)) throw std::runtime_error("prep's masks are off the grid");
   rows.push_back(overlap_row(c.name, "bone", p.bone, truth.bone));
   if (count(truth.vessel) > 0) {
@@ -397,9 +405,11 @@ int run(const Options& o) {
   for (const PhantomCase& c : phantom_cases()) {
     ++n;
     if (c.name.find(o.only) == std::string::npos) continue;
+    const fs::path dir = work / std::to_string(n);
     run_case(
-        c.name, "phantom:" + c.spec, work / std::to_string(n),
-        [&](const PrepOutputs& p) { score_phantom(c, p, rows); }, rows);
+        c.name, "phantom:" + c.spec, dir,
+        [&](const PrepOutputs& p) { score_phantom(c, p, o.keep.empty() ? nullptr : &dir, rows); },
+        rows);
   }
   for (const RealCase& c : real_cases()) {
     ++n;

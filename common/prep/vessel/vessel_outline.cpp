@@ -214,14 +214,15 @@ std::optional<Circle> vessel_circle(std::vector<Point> pts, const VesselParams& 
   return c;
 }
 
-// Appends to `added` what the lumen lacks inside the circle, half a voxel in from its edge (the
-// wall's partial volume): tissue at or above the edge level, and cortex (a calcified flap or
-// intima) a voxel further in.
+// Appends to `added` what the lumen lacks inside the circle: tissue at or above the edge level
+// (a voxel on the edge at least half vessel, by its HU: the wall's partial volume with the fat),
+// and cortex (a calcified flap or intima) a voxel and a half in from the edge (the wall's own
+// calcium stays out).
 void fill_circle(const Plane& p, const Circle& c, const CtVolume& ct, const Mask& lumen,
                  const Mask& cortex, const Levels& lv, std::vector<std::size_t>& added) {
   const double hu = p.g->spacing[p.u_axis], hv = p.g->spacing[p.v_axis];
   const double voxel = std::min(hu, hv);
-  const double reach = c.radius - 0.5 * voxel, calcium_reach = reach - voxel;
+  const double reach = c.radius, calcium_reach = reach - 1.5 * voxel;
   const auto first = [](double lo, double h) {
     return std::max<std::int64_t>(0, static_cast<std::int64_t>(std::floor(lo / h)));
   };

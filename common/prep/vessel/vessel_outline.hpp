@@ -23,9 +23,10 @@ struct VesselParams;
 // three times). It is the vessel's when at least params.outline_min_edge_share of the rays give a
 // point on it, at most kOutlineMaxCalcifiedShare of them behind calcium, its radius lies between
 // kOutlineMinRadiusMm and outline_max_radius_mm, the points lie within params.outline_max_rms_mm
-// of it (RMS) and the piece fills at least kOutlineMinLumenShare of it. Inside it, half a voxel
-// in from its edge (the wall's partial volume), the voxels at or above `edge_hu` are the lumen's,
-// cortex among them only a voxel further in (a calcified flap; the wall's calcium stays out).
+// of it (RMS) and the piece fills at least kOutlineMinLumenShare of it. Inside it the voxels at or
+// above `edge_hu` are the lumen's (on its edge, those at least half vessel by their HU: the
+// wall's partial volume with the fat), cortex among them only a voxel and a half in from the
+// edge (a calcified flap; the wall's own calcium stays out).
 // Nothing with outline_max_radius_mm 0.
 //
 // Why: a dissection parts the aorta into a true lumen, which fills with contrast in the arterial
