@@ -58,7 +58,8 @@ nlohmann::json vessel_json(const VesselResult& v) {
           {"rejected_enclosed_by_cortex", v.rejected_shell},
           {"rejected_not_uniform", v.rejected_spread},
           {"rejected_brighter_at_surface", v.rejected_surface},
-          {"rejected_joined_to_no_trunk", v.rejected_thin}};
+          {"rejected_joined_to_no_trunk", v.rejected_thin},
+          {"rejected_enhancing_organ", v.rejected_organ}};
 }
 
 // A cached prep directory's prep.json -> the grids and voxel counts of `result`.

@@ -6,6 +6,7 @@
 //   parts       opened -> 6-connected parts; per part: voxels, HU moments, trunk, boundary faces,
 //               faces on near, surface and inner HU
 //   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface)
+//   organs      lumens -> less those below half the brightest one's height that are no tube
 //   rejoin      lumens -> grown through candidates the opening cut, away from rejected parts
 //               and from cortex (branches)
 //   phase       the lumens' trunk cores -> tubes and their levels -> two side by side at the
@@ -193,6 +194,27 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
         }
   });
   return cortex;
+}
+
+// Drops (clears `keep` of) the kept parts whose mean smoothed HU is below `share` of the way from
+// the soft tissue to `lumen_hu` and that are not tube-shaped (see the header: enhancing organs);
+// returns how many.
+int drop_organs(const Grid& g, const RunTable& runs, const RunLabels& labels,
+                const std::vector<PartStats>& stats, double soft_hu, double lumen_hu, double share,
+                std::vector<std::uint8_t>& keep) {
+  if (!(share > 0.0)) return 0;
+  const double half = soft_hu + share * (lumen_hu - soft_hu);
+  const std::vector<segmentation::IslandShape> shapes =
+      segmentation::island_shapes(g, runs, labels);
+  int dropped = 0;
+  for (std::size_t c = 0; c < stats.size(); ++c) {
+    if (!keep[c] || stats[c].mean() >= half) continue;
+    const auto& sd = shapes[c].sd;
+    if (sd[0] >= kTubeElongation * sd[1]) continue;  // a vein filled part way
+    keep[c] = 0;
+    ++dropped;
+  }
+  return dropped;
 }
 
 // Dilation by one voxel (face neighbours) into voxels `allowed` says yes to.
@@ -402,6 +424,7 @@ void check(const CtVolume& ct, const Mask& body, double soft_peak_hu, const Vess
       !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
       !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0) ||
       !(p.branch_clearance_mm >= 0.0 && p.branch_clearance_mm <= 20.0) ||
+      !(p.organ_below_share >= 0.0 && p.organ_below_share < 1.0) ||
       !(p.branch_fence_ridge_directions >= 1 && p.branch_fence_ridge_directions <= 13) ||
       !(p.cortex_margin_hu > 0.0) ||
       !(p.marrow_enclosure_mm >= 0.0 && p.marrow_enclosure_mm <= 100.0) ||
@@ -501,6 +524,11 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
     if (v != Verdict::lumen) continue;
     keep[c] = 1;
     if (brightest == stats.size() || s.mean() > stats[brightest].mean()) brightest = c;
+  }
+  if (brightest < stats.size()) {  // organs: below half the brightest lumen's height, no tube
+    result.rejected_organ = drop_organs(g, runs, labels, stats, soft_peak_hu,
+                                        stats[brightest].mean(), params.organ_below_share, keep);
+    result.lumens -= result.rejected_organ;
   }
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return keep[c]; }, result.lumen);

@@ -21,6 +21,12 @@
 //              heart's trabeculae count as contact), spread (HU standard deviation) at most
 //              max_spread_fraction of their height above S, and are not brighter at their
 //              surface than inside (bone is, cortex over marrow; a lumen's edge is darker)
+//   organs     a lumen whose mean smoothed HU lies below half way (organ_below_share) from S to
+//              the brightest lumen's level L and which is not tube-shaped (it spreads along one
+//              axis less than kTubeElongation times as far as across it) is an enhancing organ, not
+//              a vessel: a kidney's cortex or the spleen in the arterial phase enhance to 150-250
+//              HU, as uniform as a lumen and as thick as a trunk, but far below the arteries; a
+//              vein that has filled only partly is a tube and stays
 //   rejoin     the lumens grown through the candidates the opening cut (branches), never
 //              within a voxel of a rejected part nor within two of cortex
 //   branches   the lumens grown through voxels at the brightest lumen's contrast L (smoothed HU
@@ -67,8 +73,8 @@
 //              arteries, the superior vena cava dense with the injected contrast): read there,
 //              the rule can say `portal-venous`.
 // Measured on the phantom's cases and the shared CTs in docs/anatomy.md, where it falls short:
-// an organ enhancing to a lumen's level and as uniform (the phantom's kidneys) is taken with
-// the lumens, and a dissected aorta's false lumen is found only where the aorta's outline is
+// an organ enhancing to more than half the arteries' level and as uniform is taken with the
+// lumens, and a dissected aorta's false lumen is found only where the aorta's outline is
 // round and lies in fat.
 #pragma once
 
@@ -93,8 +99,11 @@ struct VesselParams {
   double min_lumen_ml = 0.3;              // smaller parts are noise, calcifications, partial volume
   double closing_mm = 2.0;                // flap and plaque shadows filled inside a lumen
   double arterial_above_soft_hu = 170.0;  // the phase's level where no trunk is a tube (a slab)
-  bool find_branches = true;              // grow the lumens into branches (the header's method)
-  double branch_clearance_mm = 3.0;       // no cortical voxel this near a branch's voxel
+  // A lumen below this share of the way from S to the brightest lumen's level that is no tube is
+  // an enhancing organ (the header's `organs`); 0: off.
+  double organ_below_share = 0.5;
+  bool find_branches = true;         // grow the lumens into branches (the header's method)
+  double branch_clearance_mm = 3.0;  // no cortical voxel this near a branch's voxel
   // A ridge fences the branches where it is one along at least this many of the 13 directions
   // (a shell; a tube wider than the ridge test's two voxels is one only along a few diagonals).
   int branch_fence_ridge_directions = 5;
@@ -121,6 +130,7 @@ struct VesselResult {
   int rejected_spread = 0;              // parts dropped as not uniform
   int rejected_surface = 0;             // parts dropped as brighter at their surface (bone)
   int rejected_thin = 0;                // parts dropped as joined to no trunk
+  int rejected_organ = 0;               // parts dropped as an enhancing organ (below, not a tube)
   std::uint64_t voxels = 0;
 };
 

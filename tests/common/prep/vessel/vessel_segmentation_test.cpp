@@ -239,6 +239,37 @@ TEST(SegmentVessels, MarrowWalledInOnEverySideIsNotALumen) {
       << "the marrow is no test";
 }
 
+TEST(SegmentVessels, AnEnhancingOrganFarBelowTheArteriesIsNoLumen) {
+  // Beside the 400 HU trunk, an organ (a ball 20 mm across, a kidney's or the spleen's enhancing
+  // tissue) and a vein (a tube 13 mm across running 80 mm across the scene), both at 160 HU:
+  // below half way from the soft tissue (40) to the trunk (220 HU), both uniform and thick enough
+  // for a trunk's core. The organ is no tube and goes; the vein stays. With the rule off the
+  // organ is a lumen.
+  Scene s = scene(400.0);
+  Mask organ(s.ct.grid, 0, "organ"), vein(s.ct.grid, 0, "vein");
+  for (std::int64_t k = 0; k < s.ct.grid.dims[2]; ++k)
+    for (std::int64_t j = 0; j < s.ct.grid.dims[1]; ++j)
+      for (std::int64_t i = 0; i < s.ct.grid.dims[0]; ++i) {
+        const double x = (static_cast<double>(i) + 0.5) * kSpacing;
+        const double y = (static_cast<double>(j) + 0.5) * kSpacing;
+        const double z = (static_cast<double>(k) + 0.5) * kSpacing;
+        const double r_organ = std::hypot(x - 72.0, y - 68.0, z - 18.0);
+        const double r_vein = x > 5.0 && x < 85.0 ? std::hypot(y - 92.0, z - 18.0) : 1e9;
+        if (r_organ > 10.0 && r_vein > 6.5) continue;
+        s.ct.at(i, j, k) = static_cast<std::int16_t>(160 + (i * 7 + j * 13 + k * 5) % 21 - 10);
+        organ.at(i, j, k) = r_organ <= 10.0 - kSpacing;
+        vein.at(i, j, k) = r_vein <= 6.5 - kSpacing;
+      }
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_EQ(count_both(r.lumen, organ), 0);
+  EXPECT_EQ(r.rejected_organ, 1);
+  EXPECT_GT(count_both(r.lumen, vein) * 2, count(vein)) << "the vein, a tube, stays";
+  VesselParams off;
+  off.organ_below_share = 0.0;
+  const VesselResult without = segment_vessels(s.ct, s.body, kSoftHu, 300.0, off);
+  EXPECT_GT(count_both(without.lumen, organ) * 2, count(organ)) << "the organ is no test";
+}
+
 TEST(SegmentVessels, RefusesAMaskOnAnotherGrid) {
   const Scene s = scene(350.0);
   Grid other = s.ct.grid;
