@@ -25,6 +25,11 @@ using segmentation::RunTable;
 static_assert(kTubeElongation == segmentation::kBoneIslandElongation,
               "a trunk's tube is a rod as bone_islands measures one");
 
+bool is_tube(const std::array<double, 3>& sd, double trunk_core_mm) {
+  return sd[0] >= kTubeElongation * sd[1] &&
+         2.0 * std::sqrt(3.0) * sd[0] >= kTubeMinLengthCores * trunk_core_mm;
+}
+
 ContrastPhase read_contrast_phase(const Mask& trunk_cores, const std::vector<std::int16_t>& hu,
                                   double soft_hu, double lumen_hu, const VesselParams& params) {
   const Grid& g = trunk_cores.grid;
@@ -56,10 +61,7 @@ ContrastPhase read_contrast_phase(const Mask& trunk_cores, const std::vector<std
     const double v = static_cast<double>(l.voxels[c]);
     level[c] = sum[c] / v;
     for (double& x : centre[c]) x /= v;
-    const auto& sd = shapes[c].sd;
-    const bool tube = sd[0] >= kTubeElongation * sd[1] &&
-                      2.0 * std::sqrt(3.0) * sd[0] >= kTubeMinLengthCores * params.trunk_core_mm;
-    if (tube && level[c] >= half) tubes.push_back(c);
+    if (is_tube(shapes[c].sd, params.trunk_core_mm) && level[c] >= half) tubes.push_back(c);
   }
   const int slice = patient_axes(g).slice;
   double vein_hu = 0.0;

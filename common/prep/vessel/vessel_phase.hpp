@@ -1,6 +1,7 @@
 // The contrast phase a scan was taken in, read from its lumens' trunk cores (vessel_phase.cpp).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,5 +42,9 @@ inline constexpr double kTubeElongation = 3.0;
 // trunk_core_mm, twice a trunk's least diameter: a shorter core is a trunk's bulge or a chamber's
 // corner, not a run of vessel (a kidney's or the heart's core is roundish: neither).
 inline constexpr double kTubeMinLengthCores = 4.0;
+
+// Whether a core of these principal spreads (standard deviations, mm, largest first) is a tube
+// by the two measures above.
+bool is_tube(const std::array<double, 3>& sd, double trunk_core_mm);
 
 }  // namespace palp

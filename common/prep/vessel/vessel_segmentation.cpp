@@ -196,21 +196,51 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
   return cortex;
 }
 
+// The part (of `labels` over `runs`) holding voxel (i, j, k), which must be one of them.
+std::size_t part_at(const Grid& g, const RunTable& runs, const RunLabels& labels, std::int64_t i,
+                    std::int64_t j, std::int64_t k) {
+  const std::int64_t row = j + g.dims[1] * k;
+  for (std::int64_t r = runs.row_start[row]; r < runs.row_start[row + 1]; ++r)
+    if (runs.runs[r].begin <= i && i < runs.runs[r].end)
+      return static_cast<std::size_t>(labels.of_run[r]);
+  return labels.voxels.size();
+}
+
 // Drops (clears `keep` of) the kept parts whose mean smoothed HU is below `share` of the way from
-// the soft tissue to `lumen_hu` and that are not tube-shaped (see the header: enhancing organs);
-// returns how many.
+// the soft tissue to `lumen_hu` (the brightest lumen's) and which hold no tube: neither the part
+// nor any piece of its trunk core (`cores` == kTrunkCore) is tube-shaped (see the header:
+// enhancing organs). The heart joined to the aorta holds the aorta's tube whatever lumen is
+// brighter. Returns how many.
 int drop_organs(const Grid& g, const RunTable& runs, const RunLabels& labels,
-                const std::vector<PartStats>& stats, double soft_hu, double lumen_hu, double share,
-                std::vector<std::uint8_t>& keep) {
-  if (!(share > 0.0)) return 0;
-  const double half = soft_hu + share * (lumen_hu - soft_hu);
-  const std::vector<segmentation::IslandShape> shapes =
+                const std::vector<PartStats>& stats, const Mask& cores, double soft_hu,
+                double lumen_hu, const VesselParams& params, std::vector<std::uint8_t>& keep) {
+  if (!(params.organ_below_share > 0.0)) return 0;
+  const double below = soft_hu + params.organ_below_share * (lumen_hu - soft_hu);
+  std::vector<std::uint8_t> tube(stats.size(), 0);
+  const std::vector<segmentation::IslandShape> part_shapes =
       segmentation::island_shapes(g, runs, labels);
+  for (std::size_t c = 0; c < stats.size(); ++c)
+    tube[c] = part_shapes[c].sd[0] >= kTubeElongation * part_shapes[c].sd[1];
+  Mask trunk(g, 0, "trunk cores of dim parts");
+  segmentation::rewrite_runs(
+      g, runs, labels,
+      [&](std::int64_t c) { return keep[c] && !tube[c] && stats[c].mean() < below; }, trunk);
+  for (std::size_t n = 0; n < trunk.size(); ++n)
+    trunk.data[n] = trunk.data[n] && cores.data[n] == kTrunkCore;
+  const RunTable t = extract_runs(trunk, false);
+  const RunLabels l = label_runs(g, t);
+  const std::vector<segmentation::IslandShape> core_shapes = segmentation::island_shapes(g, t, l);
+  const std::int64_t ny = g.dims[1];
+  for (std::int64_t row = 0; row + 1 < static_cast<std::int64_t>(t.row_start.size()); ++row)
+    for (std::int64_t r = t.row_start[row]; r < t.row_start[row + 1]; ++r) {
+      const auto piece = static_cast<std::size_t>(l.of_run[r]);
+      if (!is_tube(core_shapes[piece].sd, params.trunk_core_mm)) continue;
+      const std::size_t c = part_at(g, runs, labels, t.runs[r].begin, row % ny, row / ny);
+      if (c < tube.size()) tube[c] = 1;
+    }
   int dropped = 0;
   for (std::size_t c = 0; c < stats.size(); ++c) {
-    if (!keep[c] || stats[c].mean() >= half) continue;
-    const auto& sd = shapes[c].sd;
-    if (sd[0] >= kTubeElongation * sd[1]) continue;  // a vein filled part way
+    if (!keep[c] || tube[c] || stats[c].mean() >= below) continue;
     keep[c] = 0;
     ++dropped;
   }
@@ -526,8 +556,8 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
     if (brightest == stats.size() || s.mean() > stats[brightest].mean()) brightest = c;
   }
   if (brightest < stats.size()) {  // organs: below half the brightest lumen's height, no tube
-    result.rejected_organ = drop_organs(g, runs, labels, stats, soft_peak_hu,
-                                        stats[brightest].mean(), params.organ_below_share, keep);
+    result.rejected_organ = drop_organs(g, runs, labels, stats, cores, soft_peak_hu,
+                                        stats[brightest].mean(), params, keep);
     result.lumens -= result.rejected_organ;
   }
   segmentation::rewrite_runs(

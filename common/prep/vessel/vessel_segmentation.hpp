@@ -22,11 +22,12 @@
 //              max_spread_fraction of their height above S, and are not brighter at their
 //              surface than inside (bone is, cortex over marrow; a lumen's edge is darker)
 //   organs     a lumen whose mean smoothed HU lies below half way (organ_below_share) from S to
-//              the brightest lumen's level L and which is not tube-shaped (it spreads along one
-//              axis less than kTubeElongation times as far as across it) is an enhancing organ, not
-//              a vessel: a kidney's cortex or the spleen in the arterial phase enhance to 150-250
-//              HU, as uniform as a lumen and as thick as a trunk, but far below the arteries; a
-//              vein that has filled only partly is a tube and stays
+//              the brightest lumen's level L and which holds no tube (neither it nor a piece of
+//              its trunk core is tube-shaped, the contrast phase's measure: so the heart joined
+//              to the aorta stays whatever vein of denser contrast is brighter) is an enhancing
+//              organ, not a vessel: a kidney's cortex or the spleen in the arterial phase enhance
+//              to 150-250 HU, as uniform as a lumen and as thick as a trunk, but far below the
+//              arteries; a vein that has filled only partly is a tube and stays
 //   rejoin     the lumens grown through the candidates the opening cut (branches), never
 //              within a voxel of a rejected part nor within two of cortex
 //   branches   the lumens grown through voxels at the brightest lumen's contrast L (smoothed HU
@@ -99,8 +100,8 @@ struct VesselParams {
   double min_lumen_ml = 0.3;              // smaller parts are noise, calcifications, partial volume
   double closing_mm = 2.0;                // flap and plaque shadows filled inside a lumen
   double arterial_above_soft_hu = 170.0;  // the phase's level where no trunk is a tube (a slab)
-  // A lumen below this share of the way from S to the brightest lumen's level that is no tube is
-  // an enhancing organ (the header's `organs`); 0: off.
+  // A lumen below this share of the way from S to the brightest lumen's level that holds no
+  // tube is an enhancing organ (the header's `organs`); 0: off.
   double organ_below_share = 0.5;
   bool find_branches = true;         // grow the lumens into branches (the header's method)
   double branch_clearance_mm = 3.0;  // no cortical voxel this near a branch's voxel

@@ -270,6 +270,30 @@ TEST(SegmentVessels, AnEnhancingOrganFarBelowTheArteriesIsNoLumen) {
   EXPECT_GT(count_both(without.lumen, organ) * 2, count(organ)) << "the organ is no test";
 }
 
+TEST(SegmentVessels, ATrunkBelowADenserVeinIsNoOrgan) {
+  // A vein the injection runs up, dense with contrast (a ball 24 mm across at 900 HU), is the
+  // brightest lumen; the 400 HU trunk lies below half way to it (470 HU) and its part is not
+  // elongated enough to be a tube (36 mm long, 18 mm across), but its trunk core is: it stays.
+  Scene s = scene(400.0);
+  for (std::int64_t k = 0; k < s.ct.grid.dims[2]; ++k)
+    for (std::int64_t j = 0; j < s.ct.grid.dims[1]; ++j)
+      for (std::int64_t i = 0; i < s.ct.grid.dims[0]; ++i) {
+        const double x = (static_cast<double>(i) + 0.5) * kSpacing;
+        const double y = (static_cast<double>(j) + 0.5) * kSpacing;
+        const double z = (static_cast<double>(k) + 0.5) * kSpacing;
+        // partial volume at its edge, as scene() draws
+        const double share = std::clamp(
+            0.5 + (12.0 - std::hypot(x - 72.0, y - 85.0, z - 18.0)) / kSpacing, 0.0, 1.0);
+        if (share > 0.0)
+          s.ct.at(i, j, k) =
+              static_cast<std::int16_t>(s.ct.at(i, j, k) + share * (900.0 - s.ct.at(i, j, k)));
+      }
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_GT(r.lumen_level_hu, 800.0) << "the dense vein is the brightest lumen";
+  EXPECT_EQ(r.rejected_organ, 0);
+  EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
+}
+
 TEST(SegmentVessels, RefusesAMaskOnAnotherGrid) {
   const Scene s = scene(350.0);
   Grid other = s.ct.grid;
