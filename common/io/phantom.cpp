@@ -107,6 +107,15 @@ void check_options(const std::string& name, const PhantomOptions& o) {
     throw UsageError("phantom option aorta-hu needs a value in [-1000, 3000] HU");
 }
 
+// What only the whole set of options can say (set_phantom_option checks each as it comes, so
+// the order of a scene string's keys cannot matter here).
+void check_combination(const PhantomOptions& o) {
+  if (o.dissection && o.structures && !o.contrast && !o.aorta_hu)
+    throw UsageError(
+        "phantom option dissection with structures needs contrast or aorta-hu (the "
+        "vessel tree, whose aorta it dissects)");
+}
+
 Grid own_grid(const std::string& name, const PhantomOptions& options);
 CtVolume draw_phantom(const std::string& name, const PhantomOptions& options, PhantomTruth* truth);
 
@@ -181,6 +190,7 @@ PhantomSpec parse_phantom_spec(const std::string& text) {
     start = comma + 1;
   }
   check_options(spec.name, spec.options);
+  check_combination(spec.options);
   return spec;
 }
 
@@ -239,6 +249,7 @@ BoxGeometry cube_geometry(const Grid& grid) {
 
 CtVolume make_phantom(const std::string& name, const PhantomOptions& options, PhantomTruth* truth) {
   check_options(name, options);
+  check_combination(options);
   if (!options.orient) return draw_phantom(name, options, truth);
   PhantomOptions own = options;
   own.orient.reset();

@@ -64,7 +64,8 @@
 //   dissection    the aorta dissected, as an early arterial phase shows it: a true lumen 14 mm
 //                 across at the aorta's HU in its front, the false lumen filling the rest of
 //                 the 24 mm vessel at soft-tissue HU + 10 (slow flow, not yet filled), in 4 mm
-//                 of periaortic fat; both lumens are the truth vessel's (the aorta's lumen)
+//                 of periaortic fat; both lumens are the truth vessel's (the aorta's lumen).
+//                 With structures it needs contrast or aorta_hu (the tree's aorta)
 //   structures    what a finger feels besides bone (issue 39), for the truth masks the force
 //                 model's structure layers come from (prep writes them: artery.nii.gz,
 //                 liver.nii.gz and their maps):

@@ -139,7 +139,7 @@ void add_organs(std::vector<Layer>& layers, const TorsoLevels& levels, bool stru
   if (structures) add_liver_edge(layers, levels);
   if (levels.tree) {
     add_vessel_tree(layers, levels, dissection);
-  } else if (dissection && !structures) {  // with structures: the aorta to its bifurcation
+  } else if (dissection) {  // (with structures it needs the tree: check_options)
     add_periaortic_fat(layers, -kInfinity);
     add_dissected_aorta(layers, levels.artery, -kInfinity);
   } else if (structures) {

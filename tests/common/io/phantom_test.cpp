@@ -460,6 +460,9 @@ TEST(PhantomDissection, AFalseLumenAtSoftTissueHuInPeriaorticFat) {
   // a scene string draws it too
   EXPECT_TRUE(parse_phantom_spec("torso,contrast=arterial,dissection").options.dissection);
   EXPECT_THROW(make_phantom("trunk", dissected), UsageError);
+  // with structures but no vessel tree there is no aorta of the tree to dissect: refused
+  EXPECT_THROW(parse_phantom_spec("torso,structures,dissection"), UsageError);
+  EXPECT_NO_THROW(parse_phantom_spec("torso,structures,dissection,contrast=arterial"));
 }
 
 TEST(PhantomArms, TwoArmsOrNone) {
