@@ -81,7 +81,11 @@ Plane sagittal_plane(const Grid& g, const PatientAxes& axes, std::int64_t s) {
 }
 
 void label_plane_background(const Plane& p, const std::uint8_t* mask, PlaneScratch& s) {
-  scan_plane(p, mask, true, s.runs);
+  label_plane(p, mask, true, s);
+}
+
+void label_plane(const Plane& p, const std::uint8_t* mask, bool zeros, PlaneScratch& s) {
+  scan_plane(p, mask, zeros, s.runs);
   const auto& runs = s.runs.runs;
   const auto& start = s.runs.row_start;
   s.sets.reset(runs.size());

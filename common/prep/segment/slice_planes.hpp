@@ -48,8 +48,12 @@ struct PlaneScratch {
   std::vector<std::int64_t> counts;
 };
 
-// Labels the zeros of `mask` in one plane (4-connected) and flags (s.flags[root] = 1) the regions
-// that reach the plane's edge; s.area[root] gets each region's size.
+// Labels the nonzero voxels of `mask` in one plane (with `zeros`, the zero ones), 4-connected:
+// s.runs holds their runs, s.sets unites them into regions, s.flags[root] = 1 for the regions
+// that reach the plane's edge and s.area[root] gets each region's size (voxels).
+void label_plane(const Plane& p, const std::uint8_t* mask, bool zeros, PlaneScratch& s);
+
+// label_plane of the zeros: the background's regions.
 void label_plane_background(const Plane& p, const std::uint8_t* mask, PlaneScratch& s);
 
 // Fills the holes of `mask` in one plane — 4-connected regions of zeros that do not reach the

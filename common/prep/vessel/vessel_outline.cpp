@@ -13,6 +13,7 @@
 
 #include "base/parallel.hpp"
 #include "prep/segment/segmentation.hpp"
+#include "prep/segment/slice_planes.hpp"
 #include "prep/vessel/vessel_segmentation.hpp"
 
 namespace palp {
@@ -20,21 +21,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// A slice across the body axis: the index of the slice axis fixed, (u, v) the in-plane indices.
-struct Plane {
-  const Grid* g = nullptr;
-  int axis = 2, u_axis = 0, v_axis = 1;
-  std::int64_t w = 0;
-  std::int64_t nu() const { return g->dims[u_axis]; }
-  std::int64_t nv() const { return g->dims[v_axis]; }
-  std::size_t voxel(std::int64_t u, std::int64_t v) const {
-    std::int64_t at[3];
-    at[axis] = w;
-    at[u_axis] = u;
-    at[v_axis] = v;
-    return g->linear(at[0], at[1], at[2]);
-  }
-};
+using segmentation::Plane;  // an axial slice: voxel (u, v) at p.at(u, v), u_mm x v_mm
+using segmentation::Run;
 
 struct Piece {
   double u_mm = 0.0, v_mm = 0.0;  // centre
@@ -50,38 +38,43 @@ struct Circle {
   double u, v, radius, rms;
 };
 
-// 4-connected pieces of `lumen` in the plane; `owner` receives each in-plane voxel's piece (-1:
-// none).
-std::vector<Piece> pieces_in(const Plane& p, const Mask& lumen, std::vector<std::int32_t>& owner) {
-  const std::int64_t nu = p.nu(), nv = p.nv();
-  const double hu = p.g->spacing[p.u_axis], hv = p.g->spacing[p.v_axis];
-  owner.assign(static_cast<std::size_t>(nu * nv), -1);
-  std::vector<Piece> pieces;
-  std::vector<std::int64_t> stack;
-  for (std::int64_t start = 0; start < nu * nv; ++start) {
-    if (owner[start] >= 0 || !lumen.data[p.voxel(start % nu, start / nu)]) continue;
-    const auto id = static_cast<std::int32_t>(pieces.size());
-    double su = 0.0, sv = 0.0, n = 0.0;
-    owner[start] = id;
-    stack.assign(1, start);
-    while (!stack.empty()) {
-      const std::int64_t at = stack.back();
-      stack.pop_back();
-      const std::int64_t u = at % nu, v = at / nu;
-      su += static_cast<double>(u);
-      sv += static_cast<double>(v);
-      n += 1.0;
-      const std::int64_t next[4][2] = {{u - 1, v}, {u + 1, v}, {u, v - 1}, {u, v + 1}};
-      for (const auto& q : next) {
-        if (q[0] < 0 || q[0] >= nu || q[1] < 0 || q[1] >= nv) continue;
-        const std::int64_t m = q[0] + q[1] * nu;
-        if (owner[m] >= 0 || !lumen.data[p.voxel(q[0], q[1])]) continue;
-        owner[m] = id;
-        stack.push_back(m);
-      }
-    }
-    pieces.push_back({su / n * hu, sv / n * hv, n * hu * hv});
+// The plane with v in the grid's index order: axial_plane runs v from the patient's back, but the
+// rays' sampling (rounding to voxels) was measured with v growing with the index, and mirrored it
+// rounds a few ties the other way (58 of the shared contrast case's 304,679 vessel voxels).
+Plane index_ordered(Plane p) {
+  if (p.sv < 0) {
+    p.base += (p.nv - 1) * p.sv;
+    p.sv = -p.sv;
   }
+  return p;
+}
+
+// The 4-connected pieces of `lumen` in the plane (segmentation::label_plane), each's centre
+// (mm, from the plane's first voxel) and area.
+std::vector<Piece> pieces_in(const Plane& p, const Mask& lumen, segmentation::PlaneScratch& s) {
+  segmentation::label_plane(p, lumen.data.data(), false, s);
+  const std::vector<Run>& runs = s.runs.runs;
+  std::vector<std::int64_t> piece_of(runs.size(), -1);
+  std::vector<double> sum_u, sum_v, count;
+  for (std::int64_t v = 0; v < p.nv; ++v)
+    for (std::int64_t r = s.runs.row_start[v]; r < s.runs.row_start[v + 1]; ++r) {
+      std::int64_t& piece = piece_of[static_cast<std::size_t>(s.sets.find(r))];
+      if (piece < 0) {
+        piece = static_cast<std::int64_t>(count.size());
+        sum_u.push_back(0.0);
+        sum_v.push_back(0.0);
+        count.push_back(0.0);
+      }
+      const auto n = static_cast<double>(runs[r].end - runs[r].begin);
+      const auto c = static_cast<std::size_t>(piece);
+      sum_u[c] += n * 0.5 * static_cast<double>(runs[r].begin + runs[r].end - 1);
+      sum_v[c] += n * static_cast<double>(v);
+      count[c] += n;
+    }
+  std::vector<Piece> pieces;
+  for (std::size_t c = 0; c < count.size(); ++c)
+    pieces.push_back(
+        {sum_u[c] / count[c] * p.u_mm, sum_v[c] / count[c] * p.v_mm, count[c] * p.u_mm * p.v_mm});
   return pieces;
 }
 
@@ -92,11 +85,10 @@ struct Ray {
   double du, dv, step;
   // The in-plane voxel t mm out along the ray, or none outside the scan.
   std::optional<std::size_t> at(double t) const {
-    const double hu = p->g->spacing[p->u_axis], hv = p->g->spacing[p->v_axis];
-    const auto u = static_cast<std::int64_t>(std::lround((piece->u_mm + t * du) / hu));
-    const auto v = static_cast<std::int64_t>(std::lround((piece->v_mm + t * dv) / hv));
-    if (u < 0 || u >= p->nu() || v < 0 || v >= p->nv()) return std::nullopt;
-    return p->voxel(u, v);
+    const auto u = static_cast<std::int64_t>(std::lround((piece->u_mm + t * du) / p->u_mm));
+    const auto v = static_cast<std::int64_t>(std::lround((piece->v_mm + t * dv) / p->v_mm));
+    if (u < 0 || u >= p->nu || v < 0 || v >= p->nv) return std::nullopt;
+    return p->at(u, v);
   }
   Point point(double t, bool via_calcium) const {
     return {piece->u_mm + t * du, piece->v_mm + t * dv, via_calcium};
@@ -142,7 +134,7 @@ std::optional<Point> edge_point(const Ray& ray, const CtVolume& ct, const Mask& 
 std::vector<Point> edge_points(const Plane& p, const Piece& piece, const CtVolume& ct,
                                const Mask& lumen, const Mask& cortex, const Levels& lv,
                                double max_radius_mm) {
-  const double step = 0.5 * std::min(p.g->spacing[p.u_axis], p.g->spacing[p.v_axis]);
+  const double step = 0.5 * std::min(p.u_mm, p.v_mm);
   std::vector<Point> points;
   for (int r = 0; r < kOutlineRays; ++r) {
     const double angle = 2.0 * kPi * r / kOutlineRays;
@@ -220,7 +212,7 @@ std::optional<Circle> vessel_circle(std::vector<Point> pts, const VesselParams& 
 // calcium stays out).
 void fill_circle(const Plane& p, const Circle& c, const CtVolume& ct, const Mask& lumen,
                  const Mask& cortex, const Levels& lv, std::vector<std::size_t>& added) {
-  const double hu = p.g->spacing[p.u_axis], hv = p.g->spacing[p.v_axis];
+  const double hu = p.u_mm, hv = p.v_mm;
   const double voxel = std::min(hu, hv);
   const double reach = c.radius, calcium_reach = reach - 1.5 * voxel;
   const auto first = [](double lo, double h) {
@@ -229,11 +221,11 @@ void fill_circle(const Plane& p, const Circle& c, const CtVolume& ct, const Mask
   const auto last = [](double hi, double h, std::int64_t n) {
     return std::min<std::int64_t>(n - 1, static_cast<std::int64_t>(std::ceil(hi / h)));
   };
-  for (std::int64_t v = first(c.v - reach, hv); v <= last(c.v + reach, hv, p.nv()); ++v)
-    for (std::int64_t u = first(c.u - reach, hu); u <= last(c.u + reach, hu, p.nu()); ++u) {
+  for (std::int64_t v = first(c.v - reach, hv); v <= last(c.v + reach, hv, p.nv); ++v)
+    for (std::int64_t u = first(c.u - reach, hu); u <= last(c.u + reach, hu, p.nu); ++u) {
       const double r =
           std::hypot(static_cast<double>(u) * hu - c.u, static_cast<double>(v) * hv - c.v);
-      const std::size_t n = p.voxel(u, v);
+      const std::size_t n = p.at(u, v);
       if (r > reach || lumen.data[n] || ct.data[n] < lv.edge_hu) continue;
       if (!lv.bright(ct, cortex, n) || r <= calcium_reach) added.push_back(n);
     }
@@ -246,20 +238,14 @@ std::uint64_t fill_round_outlines(const CtVolume& ct, const Mask& cortex, double
   if (!(params.outline_max_radius_mm > 0.0)) return 0;
   const Grid& g = ct.grid;
   const PatientAxes axes = patient_axes(g);
-  Plane base;
-  base.g = &g;
-  base.axis = axes.slice;
-  base.u_axis = axes.slice == 0 ? 1 : 0;
-  base.v_axis = axes.slice == 2 ? 1 : 2;
   const Levels lv{edge_hu, cortex_hu};
   // per slice, the voxels its circles add (each slice's own, so no two chunks write one)
-  std::vector<std::vector<std::size_t>> added(static_cast<std::size_t>(g.dims[base.axis]));
-  parallel_for_chunks(g.dims[base.axis], 4, [&](std::int64_t w0, std::int64_t w1) {
-    std::vector<std::int32_t> owner;
+  std::vector<std::vector<std::size_t>> added(static_cast<std::size_t>(g.dims[axes.slice]));
+  parallel_for_chunks(g.dims[axes.slice], 4, [&](std::int64_t w0, std::int64_t w1) {
+    segmentation::PlaneScratch scratch;
     for (std::int64_t w = w0; w < w1; ++w) {
-      Plane p = base;
-      p.w = w;
-      for (const Piece& piece : pieces_in(p, lumen, owner)) {
+      const Plane p = index_ordered(segmentation::axial_plane(g, axes, w));
+      for (const Piece& piece : pieces_in(p, lumen, scratch)) {
         if (piece.area_mm2 < kOutlineMinSectionMm2) continue;
         const std::optional<Circle> c = vessel_circle(
             edge_points(p, piece, ct, lumen, cortex, lv, params.outline_max_radius_mm), params);
