@@ -1,8 +1,7 @@
 // prep_cases: the whole prep (run_prep, default parameters, no cache) on every case of issue 38,
 // scored against truth: the torso phantom as real scans vary it (contrast phase, aorta HU, thin
 // slabs, 5 mm slices, both arms, a metal implant, a dissected aorta; common/io/phantom.hpp) and,
-// when
-// ../shared/data has them, the real CTs with their labels. One Markdown table on stdout: case,
+// when ../shared/data has them, the real CTs with their labels. One Markdown table on stdout: case,
 // structure, Dice, ASSD mm, then the case's further figure with its goal and whether it is met;
 // progress on stderr. It measures; it is not a test (tests/bench/prep_cases.sh builds and runs it).
 //
