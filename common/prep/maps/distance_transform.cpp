@@ -107,22 +107,27 @@ Box inside_bounds(const Mask& mask, unsigned threads) {
   return box;
 }
 
-// Pass i over one row: offset along i to the nearest voxel of the opposite class.
-void pass_rows(const std::uint8_t* mask_row, PackedView out, std::size_t first, std::int64_t n) {
+// Pass i over one row: offset along i to the nearest voxel of the opposite class, for the
+// classes in `wanted` (bit 0 outside, bit 1 inside); the others get 0, the bits of 0.0f, which
+// they keep through the passes.
+void pass_rows(const std::uint8_t* mask_row, PackedView out, std::size_t first, std::int64_t n,
+               unsigned wanted) {
   std::int64_t last[2] = {-1, -1};  // last index seen of class 0 / 1
   for (std::int64_t i = 0; i < n; ++i) {
     const int cls = mask_row[i] != 0;
     last[cls] = i;
     const std::int64_t opposite = last[1 - cls];
-    out[first + static_cast<std::size_t>(i)] =
-        opposite < 0 ? std::uint32_t{kNoOffset} : static_cast<std::uint32_t>(i - opposite);
+    out[first + static_cast<std::size_t>(i)] = (wanted >> cls & 1u) == 0 ? 0u
+                                               : opposite < 0
+                                                   ? std::uint32_t{kNoOffset}
+                                                   : static_cast<std::uint32_t>(i - opposite);
   }
   last[0] = last[1] = -1;
   for (std::int64_t i = n - 1; i >= 0; --i) {
     const int cls = mask_row[i] != 0;
     last[cls] = i;
     const std::int64_t opposite = last[1 - cls];
-    if (opposite < 0) continue;
+    if (opposite < 0 || (wanted >> cls & 1u) == 0) continue;
     const std::uint32_t backward = static_cast<std::uint32_t>(opposite - i);
     auto slot = out[first + static_cast<std::size_t>(i)];
     if (backward < static_cast<std::uint32_t>(slot)) slot = backward;
@@ -164,29 +169,46 @@ struct LineBlock {
   // For target class t, the sources along a line are the voxels of class 1-t (height 0) and the
   // voxels of class t, whose height is the squared distance `height(value)` they already reach
   // to class 1-t in the lower dimensions. Sites beyond `reach2` only yield clamped values and
-  // are dropped. Calls emit(position, site) for each voxel of class t.
+  // are dropped, and so are those farther along the line than reach2 from every voxel of class
+  // t (a sparse class's lines need only their stretch). Calls emit(position, site) for each
+  // voxel of class t.
   template <class Height, class Emit>
   void solve(std::int64_t line, int target, double w2, double reach2, Height height, Emit emit) {
-    for (std::int64_t q = 0; q < length; ++q) {
+    std::int64_t t0 = length, t1 = -1;  // first and last voxel of class t
+    for (std::int64_t x = 0; x < length; ++x)
+      if (cls[at(x, line)] == target) t0 = std::min(t0, x), t1 = x;
+    if (t1 < 0) return;
+    const double reach_steps = std::ceil(std::sqrt(reach2 / w2)) + 1.0;
+    const std::int64_t r =
+        reach_steps < static_cast<double>(length) ? static_cast<std::int64_t>(reach_steps) : length;
+    const std::int64_t lo = std::max<std::int64_t>(0, t0 - r);
+    const std::int64_t hi = std::min(length, t1 + r + 1);
+    for (std::int64_t q = lo; q < hi; ++q) {
       const std::size_t i = at(q, line);
       const double fq = cls[i] != target ? 0.0 : height(value[i]);
       f[static_cast<std::size_t>(q)] = fq > reach2 ? -1.0 : fq;
     }
     // f[q] < 0 marks "no site at q"; argmin[x] receives the winning site, or -1 without one.
-    if (envelope.build(length, w2, [this](std::int64_t q, double& fq) {
+    if (envelope.build(lo, hi, w2, [this](std::int64_t q, double& fq) {
           fq = f[static_cast<std::size_t>(q)];
           return !(fq < 0.0);
         }) == 0) {
-      std::fill(argmin.begin(), argmin.end(), -1);
+      std::fill(argmin.begin() + lo, argmin.begin() + hi, -1);
     } else {
       envelope.for_each_span(
-          length, [this](std::int64_t x0, std::int64_t x1, std::int64_t q, double) {
+          lo, hi, [this](std::int64_t x0, std::int64_t x1, std::int64_t q, double) {
             std::fill(argmin.begin() + x0, argmin.begin() + x1, static_cast<std::int32_t>(q));
           });
     }
-    for (std::int64_t x = 0; x < length; ++x) {
+    for (std::int64_t x = t0; x <= t1; ++x) {
       if (cls[at(x, line)] == target) emit(x, argmin[static_cast<std::size_t>(x)]);
     }
+  }
+
+  // Stages the line's values as they are: the result for the classes not solved.
+  void stage_values(std::int64_t line) {
+    for (std::int64_t x = 0; x < length; ++x)
+      staged[static_cast<std::size_t>(x)] = value[at(x, line)];
   }
 
   void commit_staged(std::int64_t line) {
@@ -203,16 +225,25 @@ struct LineBlock {
 };
 
 // Runs `body(block, width)` over blocks of adjacent lines along `stride`, first voxel `first`:
-// gathers mask classes and values, then scatters block.value back.
+// gathers mask classes and values, then scatters block.value back. A block without a voxel of
+// the `wanted` classes is left as it is.
 template <class Body>
 void with_line_block(LineBlock& block, const Mask& mask, PackedView values, std::size_t first,
-                     std::size_t stride, std::int64_t width, Body body) {
+                     std::size_t stride, std::int64_t width, unsigned wanted, Body body) {
+  unsigned seen = 0;
   for (std::int64_t p = 0; p < block.length; ++p) {
     const std::size_t at = first + static_cast<std::size_t>(p) * stride;
     for (std::int64_t w = 0; w < width; ++w) {
-      block.cls[block.at(p, w)] = mask.data[at + static_cast<std::size_t>(w)] != 0;
-      block.value[block.at(p, w)] = values[at + static_cast<std::size_t>(w)];
+      const std::uint8_t cls = mask.data[at + static_cast<std::size_t>(w)] != 0;
+      block.cls[block.at(p, w)] = cls;
+      seen |= 1u << cls;
     }
+  }
+  if ((seen & wanted) == 0) return;
+  for (std::int64_t p = 0; p < block.length; ++p) {
+    const std::size_t at = first + static_cast<std::size_t>(p) * stride;
+    for (std::int64_t w = 0; w < width; ++w)
+      block.value[block.at(p, w)] = values[at + static_cast<std::size_t>(w)];
   }
   body(block, width);
   for (std::int64_t p = 0; p < block.length; ++p) {
@@ -225,12 +256,17 @@ void with_line_block(LineBlock& block, const Mask& mask, PackedView values, std:
 
 // Pass j on a block: packed (a, 0) -> packed (a, b), the nearest opposite voxel in the slice.
 // A winning site of class t carries its own row offset a; one of class 1-t is the voxel itself.
-void pass_j(LineBlock& block, std::int64_t width, double sx2, double sy2, double reach2) {
+// Only the classes in `wanted` (bit 0 outside, bit 1 inside) are solved; the others keep the 0
+// pass i gave them.
+void pass_j(LineBlock& block, std::int64_t width, double sx2, double sy2, double reach2,
+            unsigned wanted) {
   auto row_height = [sx2](std::uint32_t a) {
     return a == kNoOffset ? -1.0 : static_cast<double>(a) * static_cast<double>(a) * sx2;
   };
   for (std::int64_t w = 0; w < width; ++w) {
-    const unsigned present = block.classes(w);
+    const unsigned present = block.classes(w) & wanted;
+    if (present == 0) continue;
+    if (wanted != 3u) block.stage_values(w);
     for (int target = 0; target < 2; ++target) {
       if ((present & (1u << target)) == 0) continue;
       block.solve(w, target, sy2, reach2, row_height, [&](std::int64_t x, std::int32_t q) {
@@ -249,11 +285,14 @@ void pass_j(LineBlock& block, std::int64_t width, double sx2, double sy2, double
 }
 
 // Pass k on a block: packed (a, b) -> float D, signed, offset by h/2 and clamped to the band.
+// The classes not in `wanted` keep the 0 pass i gave them.
 void pass_k(LineBlock& block, std::int64_t width, double sx2, double sy2, double sz2, double reach2,
-            double h, float band) {
+            double h, float band, unsigned wanted) {
   auto plane_height = [sx2, sy2](std::uint32_t v) { return squared_distance(v, sx2, sy2); };
   for (std::int64_t w = 0; w < width; ++w) {
-    const unsigned present = block.classes(w);
+    const unsigned present = block.classes(w) & wanted;
+    if (present == 0) continue;  // its voxels hold 0 since pass i
+    if (wanted != 3u) block.stage_values(w);
     for (int target = 0; target < 2; ++target) {
       if ((present & (1u << target)) == 0) continue;
       block.solve(w, target, sz2, reach2, plane_height, [&](std::int64_t x, std::int32_t q) {
@@ -341,6 +380,9 @@ void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap
   // Squared centre-to-centre distance beyond which D is clamped (sqrt(d2) - h/2 > band): sites
   // whose partial distance already exceeds it are dropped from the envelopes.
   const double reach2 = (params.band_mm + h) * (params.band_mm + h);
+  const unsigned wanted = params.side == DistanceSide::inside    ? 2u
+                          : params.side == DistanceSide::outside ? 1u
+                                                                 : 3u;
 
   constexpr std::int64_t kWidth = LineBlock::kWidth;
   const std::int64_t blocks_per_row = (bx + kWidth - 1) / kWidth;
@@ -355,14 +397,14 @@ void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap
         for (std::int64_t k = box.lo[2] + z0; k < box.lo[2] + z1; ++k) {
           for (std::int64_t j = box.lo[1]; j < box.hi[1]; ++j) {
             const std::size_t at = grid.linear(box.lo[0], j, k);
-            pass_rows(&mask.data[at], packed, at, bx);
+            pass_rows(&mask.data[at], packed, at, bx, wanted);
           }
           for (std::int64_t b = 0; b < blocks_per_row; ++b) {
             const std::int64_t i0 = box.lo[0] + b * kWidth;
             with_line_block(block, mask, packed, grid.linear(i0, box.lo[1], k), row_stride,
-                            std::min(kWidth, box.hi[0] - i0),
+                            std::min(kWidth, box.hi[0] - i0), wanted,
                             [&](LineBlock& lines, std::int64_t width) {
-                              pass_j(lines, width, sx2, sy2, reach2);
+                              pass_j(lines, width, sx2, sy2, reach2, wanted);
                             });
           }
         }
@@ -378,9 +420,9 @@ void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap
           const std::int64_t j = box.lo[1] + b / blocks_per_row;
           const std::int64_t i0 = box.lo[0] + (b % blocks_per_row) * kWidth;
           with_line_block(block, mask, packed, grid.linear(i0, j, box.lo[2]), slice_stride,
-                          std::min(kWidth, box.hi[0] - i0),
+                          std::min(kWidth, box.hi[0] - i0), wanted,
                           [&](LineBlock& lines, std::int64_t width) {
-                            pass_k(lines, width, sx2, sy2, sz2, reach2, h, band);
+                            pass_k(lines, width, sx2, sy2, sz2, reach2, h, band, wanted);
                           });
         }
       },

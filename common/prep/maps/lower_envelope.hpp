@@ -34,8 +34,14 @@ class LowerEnvelope {
   // number of parabolas left in the envelope (0: the line has no site).
   template <class Site>
   std::size_t build(std::int64_t n, double w2, Site site) {
+    return build(0, n, w2, site);
+  }
+
+  // The same over the sites q in [first, end) only, at their own positions on the line.
+  template <class Site>
+  std::size_t build(std::int64_t first, std::int64_t end, double w2, Site site) {
     std::size_t count = 0;
-    for (std::int64_t q = 0; q < n; ++q) {
+    for (std::int64_t q = first; q < end; ++q) {
       double f = 0.0;
       if (!site(q, f)) continue;
       const double dq = static_cast<double>(q);
@@ -65,12 +71,19 @@ class LowerEnvelope {
   // the x with bounds[s] < x <= bounds[s + 1] (the bounds rise), so a tie goes to the left site.
   template <class Visit>
   void for_each_span(std::int64_t n, Visit visit) const {
-    std::int64_t x = 0;
+    for_each_span(0, n, visit);
+  }
+
+  // The same over [first, n) (first >= 0).
+  template <class Visit>
+  void for_each_span(std::int64_t first, std::int64_t n, Visit visit) const {
+    std::int64_t x = first;
     for (std::size_t segment = 0; segment < count_ && x < n; ++segment) {
       const double bound = bounds_[segment + 1];
       const std::int64_t end = bound >= static_cast<double>(n - 1) ? n
-                               : bound < 0.0                       ? 0
-                                             : static_cast<std::int64_t>(bound) + 1;  // floor
+                               : bound < static_cast<double>(first)
+                                   ? first
+                                   : static_cast<std::int64_t>(bound) + 1;  // floor
       if (end <= x) continue;
       visit(x, end, static_cast<std::int64_t>(sites_[segment]), heights_[segment]);
       x = end;

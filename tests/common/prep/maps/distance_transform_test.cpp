@@ -74,6 +74,40 @@ TEST(SignedDistance, EqualsBruteForceOnRandomAnisotropicMasks) {
   }
 }
 
+// One side: its voxels exactly as the definition gives them (with the band's clamp and the
+// crop), the other side's only signed right (<= 0 outside, >= 0 inside).
+TEST(SignedDistance, OneSideEqualsBruteForceOnItsVoxels) {
+  std::mt19937 rng(2026);
+  const Vec3 spacings[] = {{1.0, 1.0, 1.0}, {0.8, 0.8, 1.5}, {0.7, 1.3, 2.9}};
+  int case_index = 0;
+  for (const Vec3& spacing : spacings) {
+    for (double fill : {0.03, 0.3, 0.9}) {
+      for (double band : {1e6, 2.5}) {
+        std::uniform_int_distribution<int> dim(1, 17);
+        Mask mask = make_mask({dim(rng), dim(rng), dim(rng)}, spacing);
+        std::bernoulli_distribution inside(fill);
+        for (auto& v : mask.data) v = inside(rng) ? 1 : 0;
+        const DistanceMap expected = brute_force(mask, band);
+        for (DistanceSide side : {DistanceSide::inside, DistanceSide::outside}) {
+          for (unsigned threads : {1u, 2u}) {
+            const DistanceMap got = signed_distance(mask, {band, threads, side});
+            for (std::size_t v = 0; v < got.size(); ++v) {
+              const bool in = mask.data[v] != 0;
+              if (in == (side == DistanceSide::inside))
+                ASSERT_EQ(got.data[v], expected.data[v]) << "case " << case_index << " " << v;
+              else if (in)
+                ASSERT_GE(got.data[v], 0.0f) << "case " << case_index << " " << v;
+              else
+                ASSERT_LE(got.data[v], 0.0f) << "case " << case_index << " " << v;
+            }
+          }
+        }
+        ++case_index;
+      }
+    }
+  }
+}
+
 TEST(SignedDistance, EqualsBruteForceWithBandClampAndCrop) {
   // A small object in a larger grid: the crop and the clamp both act.
   Mask mask = make_mask({40, 9, 7}, {0.5, 1.0, 2.0});
