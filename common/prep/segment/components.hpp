@@ -185,6 +185,31 @@ bool any_face_neighbour(const Grid& g, std::size_t n, Pred pred) {
          (k + 1 < g.dims[2] && pred(m + sz));
 }
 
+// Grows `mask` through face neighbours `allowed(linear index)` says yes to, until nothing more
+// joins (a flood fill from all its voxels at once; allowed is asked once per voxel reached).
+template <class Allowed>
+void grow_within(Mask& mask, Allowed allowed) {
+  const Grid& g = mask.grid;
+  std::vector<std::size_t> front;
+  for (std::size_t n = 0; n < mask.size(); ++n)
+    if (mask.data[n]) front.push_back(n);
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::int64_t step[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
+  while (!front.empty()) {
+    const auto m = static_cast<std::int64_t>(front.back());
+    front.pop_back();
+    const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
+    const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
+    for (int d = 0; d < 6; ++d) {
+      if (!inside[d]) continue;
+      const auto o = static_cast<std::size_t>(m + step[d]);
+      if (mask.data[o] || !allowed(o)) continue;
+      mask.data[o] = 1;
+      front.push_back(o);
+    }
+  }
+}
+
 // Writes `value(label)` over every run of the table.
 template <class Value>
 void rewrite_runs(const Grid& g, const RunTable& t, const RunLabels& l, Value value, Mask& mask) {

@@ -33,6 +33,7 @@
 #include "prep/segment/components.hpp"
 #include "prep/segment/notches.hpp"
 #include "prep/segment/segmentation.hpp"
+#include "prep/vessel/vessel_branches.hpp"
 #include "prep/vessel/vessel_outline.hpp"
 #include "prep/vessel/vessel_phase.hpp"
 
@@ -41,27 +42,40 @@ namespace {
 
 using segmentation::any_face_neighbour;
 using segmentation::extract_runs;
+using segmentation::grow_within;
 using segmentation::label_runs;
 using segmentation::RunLabels;
 using segmentation::RunTable;
 
-// One pass of a 3-voxel box mean along `axis` (the border voxel repeated), rounded.
+// The mean of three HU, rounded half away from zero.
+inline std::int16_t mean_of_three(int a, int b, int c) {
+  const int sum = a + b + c;
+  return static_cast<std::int16_t>(sum >= 0 ? (sum + 1) / 3 : -((-sum + 1) / 3));
+}
+
+// One pass of a 3-voxel box mean along `axis` (the border voxel repeated), rounded; row by row,
+// the neighbours along j and k being whole rows one row or slice away.
 void box_pass(const Grid& g, int axis, const std::vector<std::int16_t>& in,
               std::vector<std::int16_t>& out) {
-  const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? g.dims[0] : g.dims[0] * g.dims[1];
-  const std::int64_t n_axis = g.dims[axis];
   const std::int64_t nx = g.dims[0], ny = g.dims[1];
+  const std::int64_t n_axis = g.dims[axis];
+  const std::int64_t stride = axis == 1 ? nx : nx * ny;
   parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < ny; ++j)
-        for (std::int64_t i = 0; i < nx; ++i) {
-          const std::int64_t at[3] = {i, j, k};
-          const auto n = static_cast<std::int64_t>(g.linear(i, j, k));
-          const std::int64_t lo = at[axis] > 0 ? n - stride : n;
-          const std::int64_t hi = at[axis] + 1 < n_axis ? n + stride : n;
-          const int sum = in[lo] + in[n] + in[hi];
-          out[n] = static_cast<std::int16_t>(sum >= 0 ? (sum + 1) / 3 : -((-sum + 1) / 3));
+      for (std::int64_t j = 0; j < ny; ++j) {
+        const auto n = static_cast<std::int64_t>(g.linear(0, j, k));
+        const std::int16_t* row = in.data() + n;
+        std::int16_t* to = out.data() + n;
+        if (axis == 0) {
+          for (std::int64_t i = 0; i < nx; ++i)
+            to[i] = mean_of_three(row[i > 0 ? i - 1 : i], row[i], row[i + 1 < nx ? i + 1 : i]);
+          continue;
         }
+        const std::int64_t at = axis == 1 ? j : k;
+        const std::int16_t* lo = at > 0 ? row - stride : row;
+        const std::int16_t* hi = at + 1 < n_axis ? row + stride : row;
+        for (std::int64_t i = 0; i < nx; ++i) to[i] = mean_of_three(lo[i], row[i], hi[i]);
+      }
   });
 }
 
@@ -86,11 +100,6 @@ constexpr int kThickBodyRays = 13;
 // Faces on the lumen (of six) that make a voxel the lumen's notch.
 constexpr int kLumenNotchFaces = 4;
 
-// Sides (of the six axis directions) on which cortex walls a voxel in for it to be marrow: a
-// vertebral body's or a long bone's marrow is walled in on all six (endplates above and below)
-// but where a blurred cortex leaves a gap; a lumen runs on along its length (two sides open,
-// however calcified its wall) and a lumen resting on bone is walled in on one.
-constexpr int kEnclosedSides = 5;
 // A lumen found by its own tests loses only the voxels walled in on all six: marrow the scan's
 // blurred cortex let through (a vertebra's, between its endplates).
 constexpr int kWalledInSides = 6;
@@ -325,30 +334,6 @@ void count_verdict(Verdict v, VesselResult& r) {
   }
 }
 
-// Grows `mask` through face neighbours `allowed` says yes to, until nothing more joins.
-template <class Allowed>
-void grow_within(Mask& mask, Allowed allowed) {
-  const Grid& g = mask.grid;
-  std::vector<std::size_t> front;
-  for (std::size_t n = 0; n < mask.size(); ++n)
-    if (mask.data[n]) front.push_back(n);
-  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  const std::int64_t step[6] = {-1, 1, -nx, nx, -nx * ny, nx * ny};
-  while (!front.empty()) {
-    const auto m = static_cast<std::int64_t>(front.back());
-    front.pop_back();
-    const std::int64_t i = m % nx, j = (m / nx) % ny, k = m / (nx * ny);
-    const bool inside[6] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny, k > 0, k + 1 < nz};
-    for (int d = 0; d < 6; ++d) {
-      if (!inside[d]) continue;
-      const auto o = static_cast<std::size_t>(m + step[d]);
-      if (mask.data[o] || !allowed(o)) continue;
-      mask.data[o] = 1;
-      front.push_back(o);
-    }
-  }
-}
-
 // A lumen resting on bone whose cortex the scan blurs takes the bone's nearest marrow with it
 // (the opening cannot part them along a broad contact). Its voxels below the half level from the
 // soft tissue to the lumen's own level (the lumen's edge: partial volume) within two voxels of
@@ -371,79 +356,6 @@ void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
       }
     }
   }
-}
-
-// Enclosed by cortex: voxels of `of` from which at least `min_sides` of the six axis rays meet
-// cortex (`ridge`, or HU at or above `cortex_hu`, outside `of`) within `reach_mm`, passing only
-// through voxels of `of` or at or above `through_hu` (enhanced: blood, marrow); a ray that meets
-// anything darker (soft tissue, fat) or runs out of reach or out of the scan does not count.
-Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, double cortex_hu,
-                        double through_hu, double reach_mm, int min_sides) {
-  const Grid& g = ct.grid;
-  Mask enclosed(g, 0, "enclosed by cortex");
-  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  const std::int64_t stride[3] = {1, nx, nx * ny};
-  std::int64_t reach[3];
-  for (int a = 0; a < 3; ++a)
-    reach[a] = static_cast<std::int64_t>(std::lround(reach_mm / g.spacing[a]));
-  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < ny; ++j)
-        for (std::int64_t i = 0; i < nx; ++i) {
-          const auto n = static_cast<std::int64_t>(g.linear(i, j, k));
-          if (!of.data[n]) continue;
-          const std::int64_t at[3] = {i, j, k};
-          int sides = 0;
-          for (int a = 0; a < 3; ++a)
-            for (int d = -1; d <= 1; d += 2)
-              for (std::int64_t s = 1; s <= reach[a]; ++s) {
-                const std::int64_t q = at[a] + d * s;
-                if (q < 0 || q >= g.dims[a]) break;
-                const std::int64_t m = n + d * s * stride[a];
-                if (of.data[m]) continue;  // through the voxels judged, however bright
-                if (ridge.data[m] || ct.data[m] >= cortex_hu) {
-                  ++sides;
-                  break;
-                }
-                if (ct.data[m] < through_hu) break;
-              }
-          enclosed.data[n] = sides >= min_sides;
-        }
-  });
-  return enclosed;
-}
-
-// Branches (see the header): `lumen` grown through voxels whose smoothed HU lies in the band of
-// the brightest lumen's contrast (`lumen_hu`), whose own HU is below `cortex_hu`, that hold no
-// voxel at or above it within branch_clearance_mm (face steps of the finest spacing), that are
-// not a shell's ridge (`ridge` along branch_fence_ridge_directions of the 13 or more) and that
-// cortex does not wall in on kEnclosedSides sides within marrow_enclosure_mm.
-void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::int16_t>& hu,
-                   const Mask& ridge, double soft_hu, double lumen_hu, double cortex_hu,
-                   const VesselParams& params, Mask& lumen) {
-  const Grid& g = ct.grid;
-  Mask by_cortex(g, 0, "cortical HU and its clearance");
-  for (std::size_t n = 0; n < ct.size(); ++n) by_cortex.data[n] = ct.data[n] >= cortex_hu;
-  const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
-  const int steps = static_cast<int>(std::lround(params.branch_clearance_mm / h_min));
-  for (int s = 0; s < steps; ++s)
-    by_cortex = dilate_once(by_cortex, [](std::size_t) { return true; });
-  // The lumen's edge (half way from the soft tissue to its level), never below a lumen's least
-  // contrast (an enhancing organ of a portal-venous phase stays out), up to half its height
-  // above it (noise in a lumen; denser is something else).
-  const double height = lumen_hu - soft_hu;
-  const double low = std::max(soft_hu + 0.5 * height, soft_hu + params.min_lumen_contrast_hu);
-  const double high = lumen_hu + 0.5 * height;
-  Mask band(g, 0, "branch band");
-  for (std::size_t n = 0; n < band.size(); ++n)
-    band.data[n] = body.data[n] && hu[n] >= low && hu[n] <= high && !by_cortex.data[n] &&
-                   ridge.data[n] < params.branch_fence_ridge_directions;
-  // marrow at the lumen's level: walled in by cortex on five sides of six or more
-  const Mask enclosed =
-      enclosed_by_cortex(ct, band, ridge, cortex_hu, soft_hu + params.min_contrast_hu,
-                         params.marrow_enclosure_mm, kEnclosedSides);
-  for (std::size_t n = 0; n < band.size(); ++n) band.data[n] &= !enclosed.data[n];
-  grow_within(lumen, [&](std::size_t n) { return band.data[n] != 0; });
 }
 
 void check(const CtVolume& ct, const Mask& body, double soft_peak_hu, const VesselParams& p) {
@@ -473,8 +385,8 @@ Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& c
   const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double split = std::max(params.split_mm, h_min);
-  DistanceMap depth =
-      signed_distance(candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0});
+  DistanceMap depth = signed_distance(
+      candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0, DistanceSide::inside});
   cores = Mask(g, 0, "vessel cores");
   for (std::size_t n = 0; n < cores.size(); ++n) {
     const double d = depth.data[n] + 0.5 * h_min;
@@ -483,7 +395,7 @@ Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& c
                     : d >= split                ? 1
                                                 : 0;
   }
-  signed_distance(cores, {split + 3.0 * h_max, 0}, depth);
+  signed_distance(cores, {split + 3.0 * h_max, 0, DistanceSide::outside}, depth);
   Mask opened(g, 0, "vessel parts");
   for (std::size_t n = 0; n < opened.size(); ++n)
     opened.data[n] = candidates.data[n] && 0.5 * h_min - depth.data[n] <= split + h_min;
