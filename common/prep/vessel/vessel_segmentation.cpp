@@ -31,6 +31,7 @@
 #include "prep/bone/bone_islands.hpp"
 #include "prep/maps/distance_transform.hpp"
 #include "prep/segment/components.hpp"
+#include "prep/segment/morphology.hpp"
 #include "prep/segment/notches.hpp"
 #include "prep/segment/segmentation.hpp"
 #include "prep/vessel/vessel_branches.hpp"
@@ -41,11 +42,16 @@ namespace palp {
 namespace {
 
 using segmentation::any_face_neighbour;
+using segmentation::dilate_into;
+using segmentation::dilate_once;
+using segmentation::erode_into;
 using segmentation::extract_runs;
 using segmentation::grow_within;
 using segmentation::label_runs;
+using segmentation::remove;
 using segmentation::RunLabels;
 using segmentation::RunTable;
+using segmentation::unite;
 
 // The mean of three HU, rounded half away from zero.
 inline std::int16_t mean_of_three(int a, int b, int c) {
@@ -53,38 +59,48 @@ inline std::int16_t mean_of_three(int a, int b, int c) {
   return static_cast<std::int16_t>(sum >= 0 ? (sum + 1) / 3 : -((-sum + 1) / 3));
 }
 
-// One pass of a 3-voxel box mean along `axis` (the border voxel repeated), rounded; row by row,
-// the neighbours along j and k being whole rows one row or slice away.
-void box_pass(const Grid& g, int axis, const std::vector<std::int16_t>& in,
-              std::vector<std::int16_t>& out) {
-  const std::int64_t nx = g.dims[0], ny = g.dims[1];
-  const std::int64_t n_axis = g.dims[axis];
-  const std::int64_t stride = axis == 1 ? nx : nx * ny;
-  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < ny; ++j) {
-        const auto n = static_cast<std::int64_t>(g.linear(0, j, k));
-        const std::int16_t* row = in.data() + n;
-        std::int16_t* to = out.data() + n;
-        if (axis == 0) {
-          for (std::int64_t i = 0; i < nx; ++i)
-            to[i] = mean_of_three(row[i > 0 ? i - 1 : i], row[i], row[i + 1 < nx ? i + 1 : i]);
-          continue;
-        }
-        const std::int64_t at = axis == 1 ? j : k;
-        const std::int16_t* lo = at > 0 ? row - stride : row;
-        const std::int16_t* hi = at + 1 < n_axis ? row + stride : row;
-        for (std::int64_t i = 0; i < nx; ++i) to[i] = mean_of_three(lo[i], row[i], hi[i]);
-      }
-  });
+// One row's means of three along it (the end voxels repeated).
+void mean_along_row(const std::int16_t* in, std::int16_t* out, std::int64_t n) {
+  for (std::int64_t i = 0; i < n; ++i)
+    out[i] = mean_of_three(in[i > 0 ? i - 1 : i], in[i], in[i + 1 < n ? i + 1 : i]);
 }
 
+// The means of three rows, voxel by voxel.
+void mean_of_rows(const std::int16_t* lo, const std::int16_t* mid, const std::int16_t* hi,
+                  std::int16_t* out, std::int64_t n) {
+  for (std::int64_t i = 0; i < n; ++i) out[i] = mean_of_three(lo[i], mid[i], hi[i]);
+}
+
+// The 3x3x3 mean in one volume: each slice's means along i and j (through a slice buffer per
+// thread) in place, then the means along k slice by slice with the slice below kept aside.
 std::vector<std::int16_t> smoothed_hu(const CtVolume& ct) {
-  std::vector<std::int16_t> a(ct.size()), b(ct.size());
-  box_pass(ct.grid, 0, ct.data, a);
-  box_pass(ct.grid, 1, a, b);
-  box_pass(ct.grid, 2, b, a);
-  return a;
+  const Grid& g = ct.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const auto plane = static_cast<std::size_t>(nx * ny);
+  std::vector<std::int16_t> out(ct.size());
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    std::vector<std::int16_t> along_i(plane);
+    for (std::int64_t k = k0; k < k1; ++k) {
+      const std::int16_t* in = ct.data.data() + static_cast<std::size_t>(k) * plane;
+      std::int16_t* to = out.data() + static_cast<std::size_t>(k) * plane;
+      for (std::int64_t j = 0; j < ny; ++j)
+        mean_along_row(in + j * nx, along_i.data() + j * nx, nx);
+      for (std::int64_t j = 0; j < ny; ++j) {
+        const std::int16_t* row = along_i.data() + j * nx;
+        mean_of_rows(j > 0 ? row - nx : row, row, j + 1 < ny ? row + nx : row, to + j * nx, nx);
+      }
+    }
+  });
+  std::vector<std::int16_t> below(plane), here(plane);
+  for (std::int64_t k = 0; k < nz; ++k) {
+    std::int16_t* slice = out.data() + static_cast<std::size_t>(k) * plane;
+    std::copy(slice, slice + plane, here.begin());
+    const std::int16_t* lo = k > 0 ? below.data() : here.data();
+    const std::int16_t* hi = k + 1 < nz ? slice + plane : here.data();
+    mean_of_rows(lo, here.data(), hi, slice, static_cast<std::int64_t>(plane));
+    std::swap(below, here);
+  }
+  return out;
 }
 
 // One of each pair of opposite directions to the 26 neighbours.
@@ -106,6 +122,14 @@ constexpr int kWalledInSides = 6;
 
 // cores' value for a voxel trunk_core_mm deep in the candidates (1: split_mm deep).
 constexpr std::uint8_t kTrunkCore = 2;
+
+// mask &= (cores == kTrunkCore), through raw pointers (segmentation/morphology.hpp says why)
+void keep_trunk_cores(const Mask& cores, Mask& mask) {
+  const std::uint8_t* core = cores.data.data();
+  std::uint8_t* m = mask.data.data();
+  const std::size_t count = mask.size();
+  for (std::size_t n = 0; n < count; ++n) m[n] = (m[n] != 0) & (core[n] == kTrunkCore);
+}
 
 struct PartStats {
   std::int64_t voxels = 0;
@@ -234,8 +258,7 @@ int drop_organs(const Grid& g, const RunTable& runs, const RunLabels& labels,
   segmentation::rewrite_runs(
       g, runs, labels,
       [&](std::int64_t c) { return keep[c] && !tube[c] && stats[c].mean() < below; }, trunk);
-  for (std::size_t n = 0; n < trunk.size(); ++n)
-    trunk.data[n] = trunk.data[n] && cores.data[n] == kTrunkCore;
+  keep_trunk_cores(cores, trunk);
   const RunTable t = extract_runs(trunk, false);
   const RunLabels l = label_runs(g, t);
   const std::vector<segmentation::IslandShape> core_shapes = segmentation::island_shapes(g, t, l);
@@ -254,33 +277,6 @@ int drop_organs(const Grid& g, const RunTable& runs, const RunLabels& labels,
     ++dropped;
   }
   return dropped;
-}
-
-// Dilation by one voxel (face neighbours) into voxels `allowed` says yes to.
-template <class Allowed>
-Mask dilate_once(const Mask& in, Allowed allowed) {
-  Mask out = in;
-  const Grid& g = in.grid;
-  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
-    const std::size_t begin = g.linear(0, 0, k0), end = g.linear(0, 0, k1);
-    for (std::size_t n = begin; n < end; ++n)
-      if (!in.data[n] && allowed(n))
-        out.data[n] = any_face_neighbour(g, n, [&](std::int64_t m) { return in.data[m]; });
-  });
-  return out;
-}
-
-// Erosion by one voxel (face neighbours; the scan's border keeps its voxels).
-Mask erode_once(const Mask& in) {
-  Mask out = in;
-  const Grid& g = in.grid;
-  parallel_for_chunks(g.dims[2], 2, [&](std::int64_t k0, std::int64_t k1) {
-    const std::size_t begin = g.linear(0, 0, k0), end = g.linear(0, 0, k1);
-    for (std::size_t n = begin; n < end; ++n)
-      if (in.data[n])
-        out.data[n] = !any_face_neighbour(g, n, [&](std::int64_t m) { return !in.data[m]; });
-  });
-  return out;
 }
 
 enum class Verdict { lumen, small, thin, dim, shell, spread, surface };
@@ -388,17 +384,21 @@ Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& c
   DistanceMap depth = signed_distance(
       candidates, {std::max(split, params.trunk_core_mm) + 2.0 * h_max, 0, DistanceSide::inside});
   cores = Mask(g, 0, "vessel cores");
-  for (std::size_t n = 0; n < cores.size(); ++n) {
-    const double d = depth.data[n] + 0.5 * h_min;
-    cores.data[n] = !candidates.data[n]         ? 0
-                    : d >= params.trunk_core_mm ? kTrunkCore
-                    : d >= split                ? 1
-                                                : 0;
+  const std::uint8_t* in = candidates.data.data();
+  const float* deep = depth.data.data();
+  std::uint8_t* core = cores.data.data();
+  const double trunk_core = params.trunk_core_mm;
+  const std::size_t count = cores.size();
+  for (std::size_t n = 0; n < count; ++n) {
+    const double d = deep[n] + 0.5 * h_min;
+    core[n] = !in[n] ? 0 : d >= trunk_core ? kTrunkCore : d >= split ? 1 : 0;
   }
   signed_distance(cores, {split + 3.0 * h_max, 0, DistanceSide::outside}, depth);
   Mask opened(g, 0, "vessel parts");
-  for (std::size_t n = 0; n < opened.size(); ++n)
-    opened.data[n] = candidates.data[n] && 0.5 * h_min - depth.data[n] <= split + h_min;
+  std::uint8_t* open = opened.data.data();
+  const float* reach = depth.data.data();
+  for (std::size_t n = 0; n < count; ++n)
+    open[n] = (in[n] != 0) & (0.5 * h_min - reach[n] <= split + h_min);
   return opened;
 }
 
@@ -413,22 +413,32 @@ void close_lumens(const CtVolume& ct, const Mask& body, const Mask& cortex, cons
     return body.data[n] && !cortex.data[n] && hu[n] < max_pool_hu;
   };
   const int steps = std::max(1, static_cast<int>(std::lround(params.closing_mm / h_min)));
-  Mask closed = lumen;
+  Mask closed = lumen, spare;  // two buffers, each step from one into the other
   const auto off_cortex = [&](std::size_t n) { return below_cortex(n) && !near.data[n]; };
-  for (int s = 0; s < steps; ++s) closed = dilate_once(closed, off_cortex);
-  for (int s = 0; s < steps; ++s) closed = erode_once(closed);
-  for (std::size_t n = 0; n < closed.size(); ++n) closed.data[n] |= lumen.data[n];
+  for (int s = 0; s < steps; ++s) {
+    dilate_into(closed, off_cortex, spare);
+    std::swap(closed, spare);
+  }
+  for (int s = 0; s < steps; ++s) {
+    erode_into(closed, spare);
+    std::swap(closed, spare);
+  }
+  unite(lumen, closed);
   // the wall's partial volume: one voxel of contrast level beside the lumen, not by cortex (a
   // lumen's edge blurred into its wall, which bone's growing level would otherwise take)
-  lumen = dilate_once(closed, [&](std::size_t n) {
-    return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu;
-  });
+  dilate_into(
+      closed,
+      [&](std::size_t n) { return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu; },
+      lumen);
   // a voxel with the lumen on four or more of its six faces is the lumen's: a flap's bright
   // sliver or a corner of its edge, read as a ridge (cortex beside a lumen has its bone behind
   // it: at most three faces on the lumen)
-  Mask notch_room(g, 0, "lumen notch room");
-  for (std::size_t n = 0; n < notch_room.size(); ++n)
-    notch_room.data[n] = body.data[n] && hu[n] < max_pool_hu;
+  Mask& notch_room = spare;  // its memory reused
+  const std::uint8_t* in_body = body.data.data();
+  const std::int16_t* smooth = hu.data();
+  std::uint8_t* room = notch_room.data.data();
+  const std::size_t count = notch_room.size();
+  for (std::size_t n = 0; n < count; ++n) room[n] = (in_body[n] != 0) & (smooth[n] < max_pool_hu);
   segmentation::fill_notches(notch_room, kLumenNotchFaces, lumen);
 }
 
@@ -445,11 +455,19 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   // candidates: contrast-level smoothed HU inside the body, not beside cortex
   const int max_pool_hu = static_cast<int>(std::lround(bone_seed_hu + params.max_pool_margin_hu));
   const Mask cortex = ridge_cortex(ct, bone_seed_hu, soft_peak_hu, params.ridge_drop);
-  const Mask near = dilate_once(cortex, [](std::size_t) { return true; });  // and beside it
+  const Mask near = dilate_once(cortex);  // and beside it
   Mask candidates(g, 0, "vessel candidates");
-  for (std::size_t n = 0; n < ct.size(); ++n)
-    candidates.data[n] =
-        body.data[n] && !near.data[n] && ct.data[n] >= low_hu && hu[n] < max_pool_hu;
+  {  // raw pointers and no branches: the loop vectorizes
+    const std::uint8_t* in_body = body.data.data();
+    const std::uint8_t* by_cortex = near.data.data();
+    const std::int16_t* own = ct.data.data();
+    const std::int16_t* smooth = hu.data();
+    std::uint8_t* candidate = candidates.data.data();
+    const std::size_t count = ct.size();
+    for (std::size_t n = 0; n < count; ++n)
+      candidate[n] =
+          (in_body[n] != 0) & (by_cortex[n] == 0) & (own[n] >= low_hu) & (smooth[n] < max_pool_hu);
+  }
   Mask cores;
   const Mask opened = open_candidates(candidates, params, cores);
   // parts: 6-connected, with their size, level, spread, trunk core and cortex contact
@@ -475,14 +493,14 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return keep[c]; }, result.lumen);
   // cortex and the voxels within two of it
-  const Mask near_two = dilate_once(near, [](std::size_t) { return true; });
+  const Mask near_two = dilate_once(near);
   trim_by_cortex(runs, labels, stats, keep, hu, near_two, soft_peak_hu, result.lumen);
   // rejoin: the branches and thin pieces the opening cut, grown from the lumens through the
   // candidates, never within a voxel of a part judged not a lumen
   Mask other(g, 0, "not lumens");
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return !keep[c]; }, other);
-  other = dilate_once(other, [](std::size_t) { return true; });
+  other = dilate_once(other);
   // ... nor within two voxels of cortex: cancellous bone's thin pieces lie between trabeculae
   grow_within(result.lumen, [&](std::size_t n) {
     return candidates.data[n] && !other.data[n] && !near_two.data[n];
@@ -492,8 +510,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   Mask trunks(g, 0, "trunk cores");  // the kept lumens' cores
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return keep[c]; }, trunks);
-  for (std::size_t n = 0; n < trunks.size(); ++n)
-    trunks.data[n] = trunks.data[n] && cores.data[n] == kTrunkCore;
+  keep_trunk_cores(cores, trunks);
   const ContrastPhase phase =
       read_contrast_phase(trunks, hu, soft_peak_hu, result.lumen_level_hu, params);
   result.contrast_phase = phase.name;
@@ -508,8 +525,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   const Mask walled_in = enclosed_by_cortex(ct, result.lumen, cortex, cortical_hu,
                                             soft_peak_hu + params.min_contrast_hu,
                                             params.marrow_enclosure_mm, kWalledInSides);
-  for (std::size_t n = 0; n < walled_in.size(); ++n)
-    if (walled_in.data[n]) result.lumen.data[n] = 0;
+  remove(walled_in, result.lumen);
   // outline: the tissue inside a lumen's round, fat-bound outline (a false lumen, the wall)
   fill_round_outlines(ct, cortex, 0.5 * (params.fat_peak_hu + soft_peak_hu), cortical_hu, params,
                       result.lumen);

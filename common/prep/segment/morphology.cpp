@@ -1,0 +1,70 @@
+// Face-neighbour morphology of whole masks (see morphology.hpp).
+#include "prep/segment/morphology.hpp"
+
+#include <algorithm>
+
+namespace palp::segmentation {
+
+void copy_into(const Mask& in, Mask& out) {
+  if (out.data.size() != in.data.size()) {
+    out = in;
+    return;
+  }
+  out.grid = in.grid;
+  std::copy(in.data.begin(), in.data.end(), out.data.begin());
+}
+
+Mask dilate_once(const Mask& in) {
+  Mask out = in;
+  const std::int64_t nx = in.grid.dims[0];
+  std::uint8_t* to = out.data.data();
+  for_each_row_with_neighbours(
+      in, 0,
+      [&](std::int64_t j, std::int64_t k, const std::uint8_t* c, const std::uint8_t* const* side) {
+        std::uint8_t* row = to + in.grid.linear(0, j, k);
+        const std::uint8_t *a = side[0], *b = side[1], *d = side[2], *e = side[3];
+        for (std::int64_t i = 1; i + 1 < nx; ++i) {
+          const int any = c[i - 1] | c[i + 1] | a[i] | b[i] | d[i] | e[i];
+          row[i] = c[i] != 0 ? c[i] : static_cast<std::uint8_t>(any != 0);
+        }
+        for (std::int64_t i : {std::int64_t{0}, nx - 1}) {
+          if (c[i]) continue;
+          row[i] = (i > 0 && c[i - 1]) || (i + 1 < nx && c[i + 1]) || a[i] || b[i] || d[i] || e[i];
+        }
+      });
+  return out;
+}
+
+void erode_into(const Mask& in, Mask& out) {
+  copy_into(in, out);
+  const Grid& g = in.grid;
+  const std::int64_t nx = g.dims[0];
+  std::uint8_t* to = out.data.data();
+  for_each_row_with_neighbours(
+      in, 1,
+      [&](std::int64_t j, std::int64_t k, const std::uint8_t* c, const std::uint8_t* const* side) {
+        const std::size_t first = g.linear(0, j, k);
+        for (std::int64_t i = 0; i < nx; ++i) {
+          if (!c[i]) continue;
+          to[first + static_cast<std::size_t>(i)] = (i == 0 || c[i - 1]) &&
+                                                    (i + 1 == nx || c[i + 1]) && side[0][i] &&
+                                                    side[1][i] && side[2][i] && side[3][i];
+        }
+      });
+}
+
+void unite(const Mask& other, Mask& mask) {
+  const std::uint8_t* o = other.data.data();
+  std::uint8_t* m = mask.data.data();
+  const std::size_t count = mask.size();
+  for (std::size_t n = 0; n < count; ++n) m[n] = static_cast<std::uint8_t>(m[n] | o[n]);
+}
+
+void remove(const Mask& other, Mask& mask) {
+  const std::uint8_t* o = other.data.data();
+  std::uint8_t* m = mask.data.data();
+  const std::size_t count = mask.size();
+  for (std::size_t n = 0; n < count; ++n) m[n] = o[n] != 0 ? 0 : m[n];
+}
+
+}  // namespace palp::segmentation

@@ -1,0 +1,72 @@
+// Face-neighbour morphology and arithmetic of whole 3-D masks on their own grid, row by row
+// through raw pointers: a byte stored through a Mask's vector may alias the vector itself, so a
+// loop written on `mask.data[n]` reloads its pointer and size at every voxel and never
+// vectorizes. Outputs can reuse a mask's memory (no fresh pages for each step of a closing).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "base/parallel.hpp"
+#include "base/volume.hpp"
+
+namespace palp::segmentation {
+
+// Calls row(j, k, centre, neighbours) for each row of `in` on its own grid, `neighbours` the four
+// rows beside it along j and k (a row of `outside` where the grid ends), over chunks of slices.
+template <class Row>
+void for_each_row_with_neighbours(const Mask& in, std::uint8_t outside, Row row) {
+  const Grid& g = in.grid;
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const std::vector<std::uint8_t> beyond(static_cast<std::size_t>(nx), outside);
+  parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j) {
+        const std::uint8_t* c = &in.data[g.linear(0, j, k)];
+        const std::uint8_t* side[4] = {
+            j > 0 ? c - nx : beyond.data(), j + 1 < ny ? c + nx : beyond.data(),
+            k > 0 ? c - nx * ny : beyond.data(), k + 1 < nz ? c + nx * ny : beyond.data()};
+        row(j, k, c, side);
+      }
+  });
+}
+
+// `out` as a copy of `in`, its memory reused when it holds as many voxels.
+void copy_into(const Mask& in, Mask& out);
+
+// Dilation by one voxel (face neighbours) into voxels `allowed` says yes to, written to `out`.
+template <class Allowed>
+void dilate_into(const Mask& in, Allowed allowed, Mask& out) {
+  copy_into(in, out);
+  const Grid& g = in.grid;
+  const std::int64_t nx = g.dims[0];
+  std::uint8_t* to = out.data.data();
+  for_each_row_with_neighbours(
+      in, 0,
+      [&](std::int64_t j, std::int64_t k, const std::uint8_t* c, const std::uint8_t* const* side) {
+        const std::size_t first = g.linear(0, j, k);
+        for (std::int64_t i = 0; i < nx; ++i) {
+          if (c[i] || !allowed(first + static_cast<std::size_t>(i))) continue;
+          to[first + static_cast<std::size_t>(i)] = (i > 0 && c[i - 1]) ||
+                                                    (i + 1 < nx && c[i + 1]) || side[0][i] ||
+                                                    side[1][i] || side[2][i] || side[3][i];
+        }
+      });
+}
+
+// Dilation by one voxel (face neighbours) everywhere: a voxel of `in` keeps its value, a voxel
+// beside one becomes 1.
+Mask dilate_once(const Mask& in);
+
+// Erosion by one voxel (face neighbours; the scan's border keeps its voxels), written to `out`
+// (0/1).
+void erode_into(const Mask& in, Mask& out);
+
+// mask |= other
+void unite(const Mask& other, Mask& mask);
+
+// mask &= !other
+void remove(const Mask& other, Mask& mask);
+
+}  // namespace palp::segmentation
