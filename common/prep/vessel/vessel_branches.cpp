@@ -10,10 +10,16 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <numbers>
 #include <vector>
 
 #include "base/parallel.hpp"
+#include "prep/bone/bone_islands.hpp"
 #include "prep/segment/components.hpp"
+#include "prep/segment/morphology.hpp"
+#include "prep/segment/segmentation.hpp"
+#include "prep/segment/slice_planes.hpp"
+#include "prep/vessel/vessel_phase.hpp"
 
 namespace palp {
 namespace {
@@ -23,18 +29,24 @@ namespace {
 // but where a blurred cortex leaves a gap; a lumen runs on along its length (two sides open,
 // however calcified its wall) and a lumen resting on bone is walled in on one.
 constexpr int kEnclosedSides = 5;
+// A seed on the scan's end slice is marrow when cortex meets this many of its four in-plane rays:
+// the rays along the body axis say nothing there (one leaves the scan, and a phantom's or a
+// blurred spine need show no endplate within reach); a vessel lying on a rib meets it on one.
+constexpr int kSeedInPlaneSides = 3;
 
 // Cortex walls voxel n of `of` (see enclosed_by_cortex) in on `min_sides` of the six axis rays;
 // `of(m)` says whether voxel m is one of them. Stops once the rays left cannot make min_sides.
 class CortexWalls {
  public:
+  // `skip_axis` (0-2): the two rays along it are not cast (min_sides then counts of four).
   CortexWalls(const CtVolume& ct, const Mask& ridge, double cortex_hu, double through_hu,
-              double reach_mm, int min_sides)
+              double reach_mm, int min_sides, int skip_axis = -1)
       : ct_(ct),
         ridge_(ridge),
         cortex_hu_(cortex_hu),
         through_hu_(through_hu),
-        min_sides_(min_sides) {
+        min_sides_(min_sides),
+        skip_axis_(skip_axis) {
     for (int a = 0; a < 3; ++a)
       reach_[a] = static_cast<std::int64_t>(std::lround(reach_mm / ct.grid.spacing[a]));
   }
@@ -43,9 +55,11 @@ class CortexWalls {
   bool around(std::int64_t n, const std::int64_t (&at)[3], Of of) const {
     const Grid& g = ct_.grid;
     const std::int64_t stride[3] = {1, g.dims[0], g.dims[0] * g.dims[1]};
+    const int rays = skip_axis_ < 0 ? 6 : 4;
     int sides = 0, open = 0;  // rays that met cortex / did not
-    for (int r = 0; r < 6 && open <= 6 - min_sides_; ++r) {
+    for (int r = 0; r < 6 && open <= rays - min_sides_; ++r) {
       const int a = r / 2, d = r % 2 == 0 ? -1 : 1;
+      if (a == skip_axis_) continue;
       bool met = false;
       for (std::int64_t s = 1; s <= reach_[a]; ++s) {
         const std::int64_t q = at[a] + d * s;
@@ -68,7 +82,7 @@ class CortexWalls {
   const CtVolume& ct_;
   const Mask& ridge_;
   double cortex_hu_, through_hu_;
-  int min_sides_;
+  int min_sides_, skip_axis_;
   std::int64_t reach_[3];  // voxels along each axis
 };
 
@@ -87,6 +101,8 @@ class BranchBand {
         fence_(params.branch_fence_ridge_directions),
         walls_(ct, ridge, cortex_hu, soft_hu + params.min_contrast_hu, params.marrow_enclosure_mm,
                kEnclosedSides),
+        in_plane_walls_(ct, ridge, cortex_hu, soft_hu + params.min_contrast_hu,
+                        params.marrow_enclosure_mm, kSeedInPlaneSides, patient_axes(ct.grid).slice),
         state_(ct.size(), 0) {
     const Grid& g = ct.grid;
     const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
@@ -110,6 +126,14 @@ class BranchBand {
       s |= kWallsJudged | (walled ? kWalled : 0);
     }
     return (s & kWalled) == 0;
+  }
+
+  // Allowed, and not walled in by cortex across the body axis (kSeedInPlaneSides).
+  bool allowed_as_seed(std::int64_t n) {
+    if (!allowed(n)) return false;
+    const Index3 at = index_of(n);
+    return !in_plane_walls_.around(n, {at[0], at[1], at[2]},
+                                   [this](std::int64_t m) { return in_band(m); });
   }
 
  private:
@@ -163,11 +187,79 @@ class BranchBand {
   const Mask& ridge_;
   double cortex_hu_;
   int fence_;
-  CortexWalls walls_;
+  CortexWalls walls_, in_plane_walls_;
   int clearance_steps_ = 0;
   double low_ = 0.0, high_ = 0.0;
   std::vector<std::uint8_t> state_;  // per voxel: the kBandJudged ... kWalled bits
 };
+
+// Keeps the 6-connected pieces of `seeds` (on the scan's end slices) that can be a branch: no
+// wider than pi * trunk_core_mm^2 across the body axis (a wider piece would hold a trunk's core
+// and have been judged as a part already: a vertebral body, a rib's marrow cut lengthwise), and
+// on average (smoothed HU) no denser than the lumen (`lumen_hu`) whose blood fills it: partial
+// volume only darkens a thinner vessel, while marrow and blurred cortex at the scan's end are
+// denser than the contrast.
+void keep_branch_like_pieces(const std::vector<std::int16_t>& hu, double lumen_hu,
+                             const VesselParams& params, Mask& seeds) {
+  const Grid& g = seeds.grid;
+  const int slice = patient_axes(g).slice;
+  const double voxel_mm2 = g.spacing[0] * g.spacing[1] * g.spacing[2] / g.spacing[slice];
+  const double max_mm2 = std::numbers::pi * params.trunk_core_mm * params.trunk_core_mm;
+  const segmentation::RunTable runs = segmentation::extract_runs(seeds, false);
+  const segmentation::RunLabels labels = segmentation::label_runs(g, runs);
+  std::vector<double> sum(labels.voxels.size(), 0.0);
+  segmentation::for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
+    double& s = sum[static_cast<std::size_t>(labels.of_run[r])];
+    for (std::int64_t i = 0; i < runs.runs[r].end - runs.runs[r].begin; ++i)
+      s += hu[first + static_cast<std::size_t>(i)];
+  });
+  segmentation::rewrite_runs(
+      g, runs, labels,
+      [&](std::int64_t c) {
+        const auto k = static_cast<std::size_t>(c);
+        const auto voxels = static_cast<double>(labels.voxels[k]);
+        return voxels * voxel_mm2 <= max_mm2 && sum[k] / voxels <= lumen_hu;
+      },
+      seeds);
+}
+
+// Branches the scan's end cuts off from their trunk (the subclavian above a chest crop): the
+// band's voxels on the first and last slice along the body axis that are no marrow across it
+// (BranchBand::allowed_as_seed), in pieces that can be a branch (keep_branch_like_pieces), grown
+// through the band beside `lumen`; what grows from them is kept where it is as big as a lumen
+// (min_lumen_ml) and a tube (vessel_phase.hpp): marrow grown from the scan's end is a blob.
+void grow_from_the_scans_ends(const std::vector<std::int16_t>& hu, double lumen_hu,
+                              const VesselParams& params, BranchBand& band, Mask& lumen) {
+  const Grid& g = lumen.grid;
+  const PatientAxes axes = patient_axes(g);
+  Mask seeded(g, 0, "branch seeds");
+  for (std::int64_t w : {std::int64_t{0}, g.dims[axes.slice] - 1}) {
+    const segmentation::Plane p = segmentation::axial_plane(g, axes, w);
+    for (std::int64_t v = 0; v < p.nv; ++v)
+      for (std::int64_t u = 0; u < p.nu; ++u) {
+        const std::size_t n = p.at(u, v);
+        seeded.data[n] = !lumen.data[n] && band.allowed_as_seed(static_cast<std::int64_t>(n));
+      }
+  }
+  keep_branch_like_pieces(hu, lumen_hu, params, seeded);
+  segmentation::grow_within(seeded, [&](std::size_t n) {
+    return !lumen.data[n] && band.allowed(static_cast<std::int64_t>(n));
+  });
+  const segmentation::RunTable runs = segmentation::extract_runs(seeded, false);
+  const segmentation::RunLabels labels = segmentation::label_runs(g, runs);
+  const std::vector<segmentation::IslandShape> shapes =
+      segmentation::island_shapes(g, runs, labels);
+  const double ml = segmentation::voxel_ml(g);
+  segmentation::rewrite_runs(
+      g, runs, labels,
+      [&](std::int64_t c) {
+        const auto k = static_cast<std::size_t>(c);
+        return static_cast<double>(labels.voxels[k]) * ml >= params.min_lumen_ml &&
+               is_tube(shapes[k].sd, params.trunk_core_mm);
+      },
+      seeded);
+  segmentation::unite(seeded, lumen);
+}
 
 }  // namespace
 
@@ -194,6 +286,7 @@ void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::
   BranchBand band(ct, body, hu, ridge, soft_hu, lumen_hu, cortex_hu, params);
   segmentation::grow_within(
       lumen, [&](std::size_t n) { return band.allowed(static_cast<std::int64_t>(n)); });
+  grow_from_the_scans_ends(hu, lumen_hu, params, band, lumen);
 }
 
 }  // namespace palp

@@ -23,7 +23,11 @@ Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, d
 // `cortex_hu`, that hold no voxel at or above it within branch_clearance_mm (face steps of the
 // finest spacing), that are not a shell's ridge (`ridge` along branch_fence_ridge_directions of
 // the 13 or more) and that cortex does not wall in on five sides of six within
-// marrow_enclosure_mm. The band is judged only where the growth reaches.
+// marrow_enclosure_mm. The band is judged only where the growth reaches. Then the branches the
+// scan's end cuts off from their trunk: from the band's voxels on the first and last slice along
+// the body axis that cortex does not wall in across it (on three of the four in-plane rays), in
+// pieces no wider than pi trunk_core_mm^2 and on average no denser than `lumen_hu`, grown
+// through the band and kept where that growth is as big as a lumen (min_lumen_ml) and a tube.
 void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::int16_t>& hu,
                    const Mask& ridge, double soft_hu, double lumen_hu, double cortex_hu,
                    const VesselParams& params, Mask& lumen);

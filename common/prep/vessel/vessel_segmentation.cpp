@@ -13,7 +13,8 @@
 //               aorta's contrast or not -> contrast_phase (vessel_phase.hpp)
 //   branches    lumens, CT, smoothed HU, cortex -> grown through voxels at the lumens' own
 //               contrast, below cortical HU, clear of cortical voxels, not a shell's ridge, and
-//               not walled in by cortex (marrow)
+//               not walled in by cortex (marrow); then from the band on the scan's end slices,
+//               kept where that growth is a tube as big as a lumen (vessel_branches.hpp)
 //   close       lumens -> closed by closing_mm, then one voxel of the wall's partial volume
 //   marrow      lumens, cortex -> less the voxels walled in by cortex on all six axis rays
 //   outline     lumens, CT, cortex -> plus the tissue inside their round outlines (false lumens)

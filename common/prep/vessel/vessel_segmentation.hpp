@@ -44,7 +44,14 @@
 //              (walled in). A branch 4-5 voxels across (a carotid, the coeliac trunk at 1.5 mm) is
 //              darker two voxels out only along the long diagonals: a ridge along a few of the
 //              13 directions, where a shell the test resolves is one along most of the 9 or more
-//              that cross its plane (a plane holds at most 4 of them)
+//              that cross its plane (a plane holds at most 4 of them). A branch the scan's end
+//              cuts off from its trunk (the subclavian above a chest crop) is grown from that end:
+//              from the band's voxels on the first and last slice along the body axis that cortex
+//              walls in on fewer than three of the four rays across it, in pieces no wider than
+//              pi trunk_core_mm^2 (wider would hold a trunk's core) and on average no denser than L
+//              (partial volume only darkens a thinner vessel); what grows from them stays where it
+//              is a tube (vessel_phase.hpp) of min_lumen_ml or more: marrow grown from the end is
+//              a blob, a vertebral column wider than a trunk's core, a rib walled in across
 //   marrow     lumen voxels walled in by cortex on all six axis rays (within
 //              marrow_enclosure_mm, through enhanced voxels) are not a lumen: a vertebral body's
 //              marrow between its endplates that the scan's blurred cortex let through; a lumen

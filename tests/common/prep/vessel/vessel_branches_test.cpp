@@ -136,5 +136,89 @@ TEST(GrowBranches, StopsAtAShellsRidgeAndAtTheLumensBandsEnd) {
   EXPECT_EQ(count(passed.lumen), 35 * 9);
 }
 
+// The scan's ends: a 48 x 24 x 16 scene (k the body axis), soft tissue, no lumen in it; `paint`
+// sets the HU (and the ridge) of what runs out of the scan's top slice k = 15.
+struct AtTheEnd {
+  CtVolume ct;
+  Mask body, ridge, lumen;
+  explicit AtTheEnd(Index3 dims = {48, 24, 16})
+      : ct(grid(dims), static_cast<std::int16_t>(kSoftHu), "ct"),
+        body(ct.grid, 1, "body"),
+        ridge(ct.grid, 0, "ridge"),
+        lumen(ct.grid, 0, "lumen") {}
+  void box(Index3 lo, Index3 hi, double hu) {  // inclusive
+    for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
+        for (std::int64_t i = lo[0]; i <= hi[0]; ++i)
+          ct.at(i, j, k) = static_cast<std::int16_t>(hu);
+  }
+  std::int64_t grow() {
+    const std::vector<std::int16_t> hu = ct.data;
+    grow_branches(ct, body, hu, ridge, kSoftHu, kLumenHu, kCortexHu, VesselParams{}, lumen);
+    return count(lumen);
+  }
+};
+
+// A branch along i (3 x 3 voxels, i 2..45 at k 11..13) that turns up out of the scan's top
+// (i 43..45, k 14..15): 44 x 9 + 2 x 9 voxels, 0.41 ml, 44 mm long and 3 mm across.
+void paint_branch(AtTheEnd& s, double hu) {
+  s.box({2, 10, 11}, {45, 12, 13}, hu);
+  s.box({43, 10, 14}, {45, 12, 15}, hu);
+}
+
+TEST(GrowBranches, ABranchTheScansEndCutsOffIsGrownFromThere) {
+  AtTheEnd s;
+  paint_branch(s, kLumenHu);
+  EXPECT_EQ(s.grow(), 44 * 9 + 2 * 9);
+  // Inside the scan (not on its ends) the same branch joined to no lumen stays out.
+  AtTheEnd inside({48, 24, 18});
+  paint_branch(inside, kLumenHu);
+  EXPECT_EQ(inside.grow(), 0);
+}
+
+TEST(GrowBranches, WhatGrowsFromTheEndIsKeptOnlyAsATubeAsBigAsALumen) {
+  AtTheEnd blob;  // 10 x 10 x 6 mm at the top: 0.6 ml, round
+  blob.box({10, 6, 10}, {19, 15, 15}, kLumenHu);
+  EXPECT_EQ(blob.grow(), 0);
+  AtTheEnd stub;  // the branch's last 30 mm: a tube, but 0.29 ml
+  stub.box({16, 10, 11}, {45, 12, 13}, kLumenHu);
+  stub.box({43, 10, 14}, {45, 12, 15}, kLumenHu);
+  EXPECT_LT((30 * 9 + 18) * 1e-3, VesselParams{}.min_lumen_ml);
+  EXPECT_EQ(stub.grow(), 0);
+}
+
+TEST(GrowBranches, NoBranchFromTheEndDenserThanTheLumenOrWiderThanATrunksCore) {
+  AtTheEnd denser;  // 400 HU, in the band (up to 425) but above the lumen's 300
+  paint_branch(denser, 400.0);
+  EXPECT_EQ(denser.grow(), 0);
+  // A column 11 x 11 voxels along k, out of the top: 121 mm2 on the end slice, wider than
+  // pi * 6^2 = 113 mm2 (a vertebral body's marrow at 5 mm slices), 10 x 10 (100 mm2) is grown.
+  AtTheEnd wide({24, 24, 48});
+  wide.box({6, 6, 0}, {16, 16, 47}, kLumenHu);
+  EXPECT_EQ(wide.grow(), 0);
+  AtTheEnd narrower({24, 24, 48});
+  narrower.box({6, 6, 0}, {15, 15, 47}, kLumenHu);
+  EXPECT_EQ(narrower.grow(), 10 * 10 * 48);
+}
+
+TEST(GrowBranches, NoBranchFromTheEndThatCortexWallsInAcrossTheBodyAxis) {
+  // A bore along k out of the top (a rib's or a pedicle's marrow cut across) in a ridge ring
+  // around it: at soft-tissue HU (no clearance), along one direction (no fence), but cortex to
+  // the walls' rays on all four in-plane sides.
+  AtTheEnd walled({24, 24, 48});
+  walled.box({10, 10, 0}, {12, 12, 47}, kLumenHu);
+  for (std::int64_t k = 0; k < 48; ++k)
+    for (std::int64_t j = 9; j <= 13; ++j)
+      for (std::int64_t i = 9; i <= 13; ++i)
+        if (i == 9 || i == 13 || j == 9 || j == 13) walled.ridge.at(i, j, k) = 1;
+  EXPECT_EQ(walled.grow(), 0);
+  // Open on two sides (a vessel between two ribs' edges is met on two): grown.
+  AtTheEnd open({24, 24, 48});
+  open.box({10, 10, 0}, {12, 12, 47}, kLumenHu);
+  for (std::int64_t k = 0; k < 48; ++k)
+    for (std::int64_t j = 9; j <= 13; ++j) open.ridge.at(9, j, k) = open.ridge.at(13, j, k) = 1;
+  EXPECT_EQ(open.grow(), 9 * 48);
+}
+
 }  // namespace
 }  // namespace palp
