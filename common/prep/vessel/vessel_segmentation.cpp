@@ -124,6 +124,13 @@ constexpr int kWalledInSides = 6;
 // cores' value for a voxel trunk_core_mm deep in the candidates (1: split_mm deep).
 constexpr std::uint8_t kTrunkCore = 2;
 
+// Whether voxel n of `mask`'s grid is in it or beside one of its voxels by a face: the mask
+// dilated once, asked only where a growth reaches.
+bool within_a_face(const Mask& mask, std::size_t n) {
+  return mask.data[n] || segmentation::any_face_neighbour(
+                             mask.grid, n, [&](std::int64_t m) { return mask.data[m] != 0; });
+}
+
 // mask &= (cores == kTrunkCore), through raw pointers (segmentation/morphology.hpp says why)
 void keep_trunk_cores(const Mask& cores, Mask& mask) {
   const std::uint8_t* core = cores.data.data();
@@ -337,7 +344,7 @@ void count_verdict(Verdict v, VesselResult& r) {
 // cortex are the bone's, not the lumen's.
 void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
                     const std::vector<PartStats>& stats, const std::vector<std::uint8_t>& keep,
-                    const std::vector<std::int16_t>& hu, const Mask& near_two, double soft_hu,
+                    const std::vector<std::int16_t>& hu, const Mask& near, double soft_hu,
                     Mask& lumen) {
   const Grid& g = lumen.grid;
   const std::int64_t ny = g.dims[1];
@@ -349,7 +356,7 @@ void trim_by_cortex(const RunTable& runs, const RunLabels& labels,
       const double half = 0.5 * (soft_hu + stats[c].mean());
       for (std::int64_t i = runs.runs[r].begin; i < runs.runs[r].end; ++i) {
         const std::size_t n = g.linear(i, j, k);
-        if (near_two.data[n] && hu[n] < half) lumen.data[n] = 0;
+        if (hu[n] < half && within_a_face(near, n)) lumen.data[n] = 0;
       }
     }
   }
@@ -493,18 +500,16 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   }
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return keep[c]; }, result.lumen);
-  // cortex and the voxels within two of it
-  const Mask near_two = dilate_once(near);
-  trim_by_cortex(runs, labels, stats, keep, hu, near_two, soft_peak_hu, result.lumen);
+  // edges within two voxels of cortex (a face from `near`)
+  trim_by_cortex(runs, labels, stats, keep, hu, near, soft_peak_hu, result.lumen);
   // rejoin: the branches and thin pieces the opening cut, grown from the lumens through the
   // candidates, never within a voxel of a part judged not a lumen
   Mask other(g, 0, "not lumens");
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return !keep[c]; }, other);
-  other = dilate_once(other);
   // ... nor within two voxels of cortex: cancellous bone's thin pieces lie between trabeculae
   grow_within(result.lumen, [&](std::size_t n) {
-    return candidates.data[n] && !other.data[n] && !near_two.data[n];
+    return candidates.data[n] && !within_a_face(other, n) && !within_a_face(near, n);
   });
   if (brightest == stats.size()) return result;  // no lumen: phase none
   result.lumen_level_hu = stats[brightest].mean();
