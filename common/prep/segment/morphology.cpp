@@ -5,6 +5,33 @@
 
 namespace palp::segmentation {
 
+VoxelBox whole_grid(const Grid& g) {
+  return {{0, 0, 0}, g.dims};
+}
+
+VoxelBox nonzero_box(const Mask& mask, std::int64_t margin) {
+  const Grid& g = mask.grid;
+  VoxelBox box{g.dims, {0, 0, 0}};
+  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  for (std::int64_t k = 0; k < nz; ++k)
+    for (std::int64_t j = 0; j < ny; ++j) {
+      const std::uint8_t* row = &mask.data[g.linear(0, j, k)];
+      std::int64_t first = 0, last = nx - 1;
+      while (first < nx && row[first] == 0) ++first;
+      if (first == nx) continue;
+      while (row[last] == 0) --last;
+      box.lo = {std::min(box.lo[0], first), std::min(box.lo[1], j), std::min(box.lo[2], k)};
+      box.hi = {std::max(box.hi[0], last + 1), std::max(box.hi[1], j + 1),
+                std::max(box.hi[2], k + 1)};
+    }
+  if (box.hi[0] == 0) return {};
+  for (int a = 0; a < 3; ++a) {
+    box.lo[a] = std::max<std::int64_t>(0, box.lo[a] - margin);
+    box.hi[a] = std::min(g.dims[a], box.hi[a] + margin);
+  }
+  return box;
+}
+
 void copy_into(const Mask& in, Mask& out) {
   if (out.data.size() != in.data.size()) {
     out = in;
@@ -19,7 +46,7 @@ Mask dilate_once(const Mask& in) {
   const std::int64_t nx = in.grid.dims[0];
   std::uint8_t* to = out.data.data();
   for_each_row_with_neighbours(
-      in, 0,
+      in, 0, whole_grid(in.grid),
       [&](std::int64_t j, std::int64_t k, const std::uint8_t* c, const std::uint8_t* const* side) {
         std::uint8_t* row = to + in.grid.linear(0, j, k);
         const std::uint8_t *a = side[0], *b = side[1], *d = side[2], *e = side[3];
@@ -35,22 +62,26 @@ Mask dilate_once(const Mask& in) {
   return out;
 }
 
-void erode_into(const Mask& in, Mask& out) {
+void erode_into(const Mask& in, Mask& out, const VoxelBox& box) {
   copy_into(in, out);
   const Grid& g = in.grid;
   const std::int64_t nx = g.dims[0];
   std::uint8_t* to = out.data.data();
   for_each_row_with_neighbours(
-      in, 1,
+      in, 1, box,
       [&](std::int64_t j, std::int64_t k, const std::uint8_t* c, const std::uint8_t* const* side) {
         const std::size_t first = g.linear(0, j, k);
-        for (std::int64_t i = 0; i < nx; ++i) {
+        for (std::int64_t i = box.lo[0]; i < box.hi[0]; ++i) {
           if (!c[i]) continue;
           to[first + static_cast<std::size_t>(i)] = (i == 0 || c[i - 1]) &&
                                                     (i + 1 == nx || c[i + 1]) && side[0][i] &&
                                                     side[1][i] && side[2][i] && side[3][i];
         }
       });
+}
+
+void erode_into(const Mask& in, Mask& out) {
+  erode_into(in, out, whole_grid(in.grid));
 }
 
 void unite(const Mask& other, Mask& mask) {

@@ -422,13 +422,15 @@ void close_lumens(const CtVolume& ct, const Mask& body, const Mask& cortex, cons
   };
   const int steps = std::max(1, static_cast<int>(std::lround(params.closing_mm / h_min)));
   Mask closed = lumen, spare;  // two buffers, each step from one into the other
+  // every step within the lumens' box grown by all the dilations' reach (nothing changes beyond)
+  const segmentation::VoxelBox box = segmentation::nonzero_box(lumen, steps + 2);
   const auto off_cortex = [&](std::size_t n) { return below_cortex(n) && !near.data[n]; };
   for (int s = 0; s < steps; ++s) {
-    dilate_into(closed, off_cortex, spare);
+    dilate_into(closed, off_cortex, spare, box);
     std::swap(closed, spare);
   }
   for (int s = 0; s < steps; ++s) {
-    erode_into(closed, spare);
+    erode_into(closed, spare, box);
     std::swap(closed, spare);
   }
   unite(lumen, closed);
@@ -437,7 +439,7 @@ void close_lumens(const CtVolume& ct, const Mask& body, const Mask& cortex, cons
   dilate_into(
       closed,
       [&](std::size_t n) { return below_cortex(n) && !near.data[n] && ct.data[n] >= low_hu; },
-      lumen);
+      lumen, box);
   // a voxel with the lumen on four or more of its six faces is the lumen's: a flap's bright
   // sliver or a corner of its edge, read as a ridge (cortex beside a lumen has its bone behind
   // it: at most three faces on the lumen)

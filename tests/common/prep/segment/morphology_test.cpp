@@ -46,7 +46,8 @@ TEST(Morphology, DilationIntoAllowedVoxelsOnly) {
   Mask m = mask({7, 6, 5});
   m.at(3, 2, 2) = 1;
   Mask out;
-  dilate_into(m, [&](std::size_t n) { return n != m.grid.linear(4, 2, 2); }, out);
+  dilate_into(
+      m, [&](std::size_t n) { return n != m.grid.linear(4, 2, 2); }, out);
   EXPECT_EQ(count(out), 6);
   EXPECT_EQ(out.at(4, 2, 2), 0);
 }
@@ -83,6 +84,32 @@ TEST(Morphology, OutputsReuseTheirMemoryAndArithmeticIsVoxelwise) {
   remove(c, a);
   EXPECT_EQ(count(a), 1);
   EXPECT_EQ(a.at(1, 1, 1), 1);
+}
+
+TEST(Morphology, TheNonzeroBoxAndStepsWithinItEqualTheWholeGrids) {
+  Mask m = mask({12, 10, 9});
+  EXPECT_EQ(nonzero_box(m, 2).hi, (Index3{0, 0, 0}));  // empty
+  m.at(5, 4, 3) = m.at(6, 4, 3) = m.at(6, 5, 4) = 1;
+  const VoxelBox box = nonzero_box(m, 2);
+  EXPECT_EQ(box.lo, (Index3{3, 2, 1}));
+  EXPECT_EQ(box.hi, (Index3{9, 8, 7}));
+  EXPECT_EQ(nonzero_box(m, 9).lo, (Index3{0, 0, 0}));  // clamped to the grid
+  EXPECT_EQ(nonzero_box(m, 9).hi, (Index3{12, 10, 9}));
+  // Two dilations and two erosions within the mask's box grown by two: the whole grid's result.
+  const auto everywhere = [](std::size_t) { return true; };
+  Mask a, b, c, d;
+  dilate_into(m, everywhere, a, box);
+  dilate_into(a, everywhere, b, box);
+  erode_into(b, c, box);
+  erode_into(c, d, box);
+  Mask wa, wb, wc, wd;
+  dilate_into(m, everywhere, wa);
+  dilate_into(wa, everywhere, wb);
+  erode_into(wb, wc);
+  erode_into(wc, wd);
+  EXPECT_EQ(b.data, wb.data);
+  EXPECT_EQ(d.data, wd.data);
+  EXPECT_EQ(count(b), count(dilate_once(dilate_once(m))));
 }
 
 }  // namespace
