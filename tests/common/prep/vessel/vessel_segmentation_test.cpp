@@ -294,6 +294,42 @@ TEST(SegmentVessels, ATrunkBelowADenserVeinIsNoOrgan) {
   EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
 }
 
+// The scene (a trunk with a branch beside a vertebra with endplates, a vein) in 60 voxels of
+// flat soft tissue on every side across the body axis: the search runs on its box, which leaves
+// most of that out; with four voxels at contrast level in the padding's corners the box is the
+// whole scan. Both searches find the same lumens, voxel for voxel.
+TEST(SegmentVessels, TheSearchOnItsBoxFindsWhatItFindsOnTheWholeScan) {
+  const Scene s = scene(400.0, 4.0, 900.0, true, 400.0);
+  constexpr std::int64_t pad = 60;
+  Grid g = s.ct.grid;
+  g.dims[0] += 2 * pad;
+  g.dims[1] += 2 * pad;
+  CtVolume padded(g, static_cast<std::int16_t>(kSoftHu), "padded ct");
+  const Mask body(g, 1, "body");
+  for (std::int64_t k = 0; k < s.ct.grid.dims[2]; ++k)
+    for (std::int64_t j = 0; j < s.ct.grid.dims[1]; ++j)
+      for (std::int64_t i = 0; i < s.ct.grid.dims[0]; ++i)
+        padded.at(i + pad, j + pad, k) = s.ct.at(i, j, k);
+  const segmentation::VoxelBox box = vessel_search_box(padded, body, kSoftHu);
+  std::int64_t boxed = 1;
+  for (int a = 0; a < 3; ++a) boxed *= box.hi[a] - box.lo[a];
+  ASSERT_LT(boxed * 10, static_cast<std::int64_t>(padded.size()) * 9) << "the box is no test";
+  EXPECT_EQ(box.hi[2] - box.lo[2], g.dims[2]);  // the whole body axis
+  CtVolume dotted = padded;
+  for (std::int64_t j : {std::int64_t{0}, g.dims[1] - 1})
+    for (std::int64_t i : {std::int64_t{0}, g.dims[0] - 1})
+      dotted.at(i, j, 12) = static_cast<std::int16_t>(kSoftHu + 100.0);
+  const segmentation::VoxelBox whole = vessel_search_box(dotted, body, kSoftHu);
+  EXPECT_EQ(whole.lo, (Index3{0, 0, 0}));
+  EXPECT_EQ(whole.hi, g.dims);
+  const VesselResult on_box = segment_vessels(padded, body, kSoftHu, 300.0);
+  const VesselResult on_scan = segment_vessels(dotted, body, kSoftHu, 300.0);
+  ASSERT_GT(count(on_box.lumen), 1000);
+  EXPECT_EQ(on_box.lumen.data, on_scan.lumen.data);
+  EXPECT_EQ(on_box.contrast_phase, on_scan.contrast_phase);
+  EXPECT_EQ(on_box.lumen.grid, padded.grid);
+}
+
 TEST(SegmentVessels, RefusesAMaskOnAnotherGrid) {
   const Scene s = scene(350.0);
   Grid other = s.ct.grid;
