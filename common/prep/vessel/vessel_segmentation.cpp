@@ -1,4 +1,6 @@
 // Contrast-filled vessels (see vessel_segmentation.hpp). Data flow:
+//   box         CT, body -> the search's box (vessel_search_box): the stages below run on the
+//               scan cropped to it when that saves a tenth or more, the lumens pasted back
 //   smooth      CT -> 3x3x3 mean HU (int16, two buffers)
 //   cortex      CT -> bright ridges (cortex, trabeculae); near = cortex and its face neighbours
 //   candidates  CT, smoothed HU, body, near -> contrast-level voxels away from cortex
