@@ -37,6 +37,7 @@
 #include "prep/segment/morphology.hpp"
 #include "prep/segment/notches.hpp"
 #include "prep/segment/segmentation.hpp"
+#include "prep/vessel/vessel_box.hpp"
 #include "prep/vessel/vessel_branches.hpp"
 #include "prep/vessel/vessel_outline.hpp"
 #include "prep/vessel/vessel_phase.hpp"
@@ -541,24 +542,6 @@ VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_pe
   return result;
 }
 
-// `v`'s voxels in `box`, on a grid that places them where they were.
-template <class T>
-Volume<T> cropped(const Volume<T>& v, const segmentation::VoxelBox& box) {
-  Grid g = v.grid;
-  for (int a = 0; a < 3; ++a) g.dims[a] = box.hi[a] - box.lo[a];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      g.world.origin[r] += v.grid.world.direction[static_cast<std::size_t>(3 * r + c)] *
-                           v.grid.spacing[c] * static_cast<double>(box.lo[c]);
-  Volume<T> out(g, T{}, "vessel search crop");
-  for (std::int64_t k = 0; k < g.dims[2]; ++k)
-    for (std::int64_t j = 0; j < g.dims[1]; ++j) {
-      const T* from = &v.data[v.grid.linear(box.lo[0], box.lo[1] + j, box.lo[2] + k)];
-      std::copy(from, from + g.dims[0], &out.data[g.linear(0, j, k)]);
-    }
-  return out;
-}
-
 }  // namespace
 
 VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_peak_hu,
@@ -570,42 +553,11 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   if (kept == 0 || kept * 10 > static_cast<std::int64_t>(ct.size()) * 9)  // none, or no gain
     return search_vessels(ct, body, soft_peak_hu, bone_seed_hu, params);
   VesselResult result =
-      search_vessels(cropped(ct, box), cropped(body, box), soft_peak_hu, bone_seed_hu, params);
+      search_vessels(crop(ct, box), crop(body, box), soft_peak_hu, bone_seed_hu, params);
   Mask lumen(ct.grid, 0, "vessel mask");
-  const Grid& c = result.lumen.grid;
-  for (std::int64_t k = 0; k < c.dims[2]; ++k)
-    for (std::int64_t j = 0; j < c.dims[1]; ++j) {
-      const std::uint8_t* from = &result.lumen.data[c.linear(0, j, k)];
-      std::copy(from, from + c.dims[0],
-                &lumen.data[ct.grid.linear(box.lo[0], box.lo[1] + j, box.lo[2] + k)]);
-    }
+  paste(result.lumen, box, lumen);
   result.lumen = std::move(lumen);
   return result;
-}
-
-segmentation::VoxelBox vessel_search_box(const CtVolume& ct, const Mask& body, double soft_peak_hu,
-                                         const VesselParams& params) {
-  const Grid& g = ct.grid;
-  if (body.grid.dims != g.dims || body.size() != ct.size())
-    throw UsageError("vessel_search_box: the body mask is not on the CT's grid");
-  const long low_hu = std::lround(soft_peak_hu + params.min_contrast_hu);
-  Mask bright(g, 0, "contrast level or brighter");
-  const std::uint8_t* in_body = body.data.data();
-  const std::int16_t* own = ct.data.data();
-  std::uint8_t* to = bright.data.data();
-  const std::size_t count = bright.size();
-  for (std::size_t n = 0; n < count; ++n) to[n] = (in_body[n] != 0) & (own[n] >= low_hu);
-  segmentation::VoxelBox box = segmentation::nonzero_box(bright, 0);
-  if (box.hi[0] == 0) return box;
-  const double reach_mm =
-      std::max(params.marrow_enclosure_mm, params.outline_max_radius_mm + kOutlineCalciumMm);
-  const int slice = patient_axes(g).slice;
-  for (int a = 0; a < 3; ++a) {
-    const auto margin = static_cast<std::int64_t>(std::ceil(reach_mm / g.spacing[a])) + 2;
-    box.lo[a] = a == slice ? 0 : std::max<std::int64_t>(0, box.lo[a] - margin);
-    box.hi[a] = a == slice ? g.dims[a] : std::min(g.dims[a], box.hi[a] + margin);
-  }
-  return box;
 }
 
 }  // namespace palp

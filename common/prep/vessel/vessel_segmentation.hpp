@@ -90,7 +90,6 @@
 #include <string>
 
 #include "base/volume.hpp"
-#include "prep/segment/morphology.hpp"
 
 namespace palp {
 
@@ -145,17 +144,9 @@ struct VesselResult {
 
 // `soft_peak_hu`: the scan's soft-tissue peak (HuLevels); `bone_seed_hu`: the bone seed level in
 // use. Throws UsageError when `body` is not on the CT's grid or a parameter is unusable. The
-// search runs on vessel_search_box's part of the scan when that is less than nine tenths of it.
+// search runs on vessel_search_box's part of the scan (vessel_box.hpp) when that is less than nine
+// tenths of it.
 VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_peak_hu,
                              double bone_seed_hu, const VesselParams& params = {});
-
-// Where the search can change or look: the body's voxels at the candidates' level or brighter
-// (soft_peak_hu + min_contrast_hu: contrast, bone, calcium; everything else is soft tissue, fat or
-// air) grown by the farthest any step looks from them (the walls' rays, marrow_enclosure_mm; an
-// outline's rays, its largest radius and the calcium behind it) and two voxels; along the body
-// axis the whole scan (the branches grown from the scan's ends need its ends). Empty when no
-// voxel is that bright.
-segmentation::VoxelBox vessel_search_box(const CtVolume& ct, const Mask& body, double soft_peak_hu,
-                                         const VesselParams& params = {});
 
 }  // namespace palp

@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "base/errors.hpp"
+#include "prep/vessel/vessel_box.hpp"
 #include "prep/vessel/vessel_segmentation.hpp"
 
 namespace palp {
