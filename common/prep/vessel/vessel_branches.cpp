@@ -4,6 +4,9 @@
 //   branches   lumens -> grown through the branch band, which is judged voxel by voxel where
 //              the growth reaches (HU band, clearance from cortical HU, ridge fence, walls), each
 //              voxel once
+//   ends       the band on the scan's end slices, not walled in across the body axis -> pieces
+//              no wider than a trunk's core, no denser than the lumen -> grown through the band
+//              -> kept where a tube as big as a lumen -> lumens
 #include "prep/vessel/vessel_branches.hpp"
 
 #include <algorithm>
