@@ -39,7 +39,7 @@ namespace palp {
 // the veins beside the aorta (two trunk tubes side by side at its contrast: portal-venous; one:
 // arterial), the aorta's level (arterial_above_soft_hu) only where no trunk is a tube; prep.json's
 // vessel records second_trunk_level_hu
-inline constexpr int kPrepAlgorithmVersion = 36;
+inline constexpr int kPrepAlgorithmVersion = 37;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

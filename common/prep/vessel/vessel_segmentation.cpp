@@ -7,7 +7,7 @@
 //   open        candidates -> cores (split_mm deep) -> the voxels within split_mm of a core
 //   parts       opened -> 6-connected parts; per part: voxels, HU moments, trunk, boundary faces,
 //               faces on near, surface and inner HU
-//   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface)
+//   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface, marrow)
 //   organs      lumens -> less those below half the brightest one's height that are no tube
 //   rejoin      lumens -> grown through candidates the opening cut, away from rejected parts
 //               and from cortex (branches)
@@ -456,6 +456,25 @@ void close_lumens(const CtVolume& ct, const Mask& body, const Mask& cortex, cons
 }
 
 // The search on the grid it is given (segment_vessels crops the scan to its box first).
+// A part judged a lumen that has more than half its voxels walled in by cortex on all six axis
+// rays (through its own voxels; within marrow_enclosure_mm) is a vertebral body's marrow, not a
+// lumen: a vessel runs on along its length. (Its verdict becomes `shell`: enclosed by cortex.)
+void mark_marrow_parts(const CtVolume& ct, const RunTable& runs, const RunLabels& labels,
+                       const Mask& cortex, double cortical_hu, double through_hu,
+                       const VesselParams& params, std::vector<Verdict>& verdicts) {
+  const Grid& g = ct.grid;
+  Mask judged(g, 0, "parts judged lumens");
+  segmentation::rewrite_runs(
+      g, runs, labels, [&](std::int64_t c) { return verdicts[c] == Verdict::lumen; }, judged);
+  const Mask walled = enclosed_by_cortex(ct, judged, cortex, cortical_hu, through_hu,
+                                         params.marrow_enclosure_mm, kWalledInSides);
+  const std::vector<std::int64_t> walled_voxels = segmentation::count_per_component(
+      g, runs, labels, [&](std::size_t n) { return walled.data[n] != 0; });
+  for (std::size_t c = 0; c < verdicts.size(); ++c)
+    if (verdicts[c] == Verdict::lumen && 2 * walled_voxels[c] > labels.voxels[c])
+      verdicts[c] = Verdict::shell;
+}
+
 VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_peak_hu,
                             double bone_seed_hu, const VesselParams& params) {
   const Grid& g = ct.grid;
@@ -486,13 +505,18 @@ VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_pe
   const RunLabels labels = label_runs(g, runs);
   const std::vector<PartStats> stats = part_stats(ct, runs, labels, opened, near, hu, cores);
   const double ml = segmentation::voxel_ml(g);
+  std::vector<Verdict> verdicts(stats.size());
+  for (std::size_t c = 0; c < stats.size(); ++c)
+    verdicts[c] = judge(stats[c], soft_peak_hu, ml, params);
+  const double cortical_hu = bone_seed_hu + params.cortex_margin_hu;  // only cortical bone
+  mark_marrow_parts(ct, runs, labels, cortex, cortical_hu, soft_peak_hu + params.min_contrast_hu,
+                    params, verdicts);
   std::vector<std::uint8_t> keep(stats.size(), 0);
   std::size_t brightest = stats.size();  // the phase's lumen: an organ never outshines it
   for (std::size_t c = 0; c < stats.size(); ++c) {
     const PartStats& s = stats[c];
-    const Verdict v = judge(s, soft_peak_hu, ml, params);
-    count_verdict(v, result);
-    if (v != Verdict::lumen) continue;
+    count_verdict(verdicts[c], result);
+    if (verdicts[c] != Verdict::lumen) continue;
     keep[c] = 1;
     if (brightest == stats.size() || s.mean() > stats[brightest].mean()) brightest = c;
   }
@@ -525,7 +549,6 @@ VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_pe
   result.contrast_phase = phase.name;
   result.second_trunk_level_hu = phase.second_trunk_hu;
   // branches: the lumens grown through voxels at their contrast, apart from cortex
-  const double cortical_hu = bone_seed_hu + params.cortex_margin_hu;  // only cortical bone
   if (params.find_branches)
     grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu, cortical_hu, params,
                   result.lumen);

@@ -20,7 +20,10 @@
 //              clear_contrast_hu above S (cancellous bone never does; a dissection's flap and the
 //              heart's trabeculae count as contact), spread (HU standard deviation) at most
 //              max_spread_fraction of their height above S, and are not brighter at their
-//              surface than inside (bone is, cortex over marrow; a lumen's edge is darker)
+//              surface than inside (bone is, cortex over marrow; a lumen's edge is darker), and
+//              have at most half their voxels walled in by cortex on all six axis rays (through
+//              their own voxels, within marrow_enclosure_mm): a vertebral body's marrow between
+//              its endplates is, a vessel runs on along its length
 //   organs     a lumen whose mean smoothed HU lies below half way (organ_below_share) from S to
 //              the brightest lumen's level L and which holds no tube (neither it nor a piece of
 //              its trunk core is tube-shaped, the contrast phase's measure: so the heart joined

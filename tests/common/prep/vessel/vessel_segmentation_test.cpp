@@ -113,6 +113,20 @@ TEST(SegmentVessels, APoolAsBrightAsCortexIsALumenNotCortex) {
   EXPECT_EQ(count(segment_vessels(s.ct, s.body, kSoftHu, 300.0, dense).lumen), 0);
 }
 
+TEST(SegmentVessels, AVertebralBodyWalledInOnEverySideIsNoLumenAndSetsNoPhase) {
+  // No contrast (the tube at soft-tissue HU), the cortex-contact rule off: the marrow between the
+  // endplates would be the scan's one lumen and read `arterial`. Most of its voxels are walled in
+  // on all six axis rays, so the part is marrow: no lumen, phase none.
+  const Scene s = scene(kSoftHu, 0.0, 900.0, true);
+  VesselParams no_shell_rule;
+  no_shell_rule.max_cortex_contact = 1.0;
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, no_shell_rule);
+  EXPECT_EQ(r.lumens, 0);
+  EXPECT_EQ(r.contrast_phase, "none");
+  EXPECT_EQ(count(r.lumen), 0);
+  EXPECT_GE(r.rejected_shell, 1);
+}
+
 TEST(SegmentVessels, MarrowInACortexIsKeptOutByTheCortexContact) {
   // The marrow's level and uniformity are a lumen's: only its cortical shell tells it apart.
   const Scene s = scene(350.0);
