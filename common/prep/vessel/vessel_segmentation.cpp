@@ -207,19 +207,34 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
   const Grid& g = ct.grid;
   Mask cortex(g, 0, "cortex");
   const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  std::int64_t step[13];  // one voxel along each direction, as a linear offset
+  for (int d = 0; d < 13; ++d)
+    step[d] = kDirections[d][0] + nx * (kDirections[d][1] + ny * kDirections[d][2]);
   parallel_for_chunks(nz, 2, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < ny; ++j)
+      for (std::int64_t j = 0; j < ny; ++j) {
+        const std::int16_t* row = &ct.data[g.linear(0, j, k)];
+        // two voxels from every face of the scan: both neighbours along every direction in it
+        const bool inner_row = j >= 2 && j + 2 < ny && k >= 2 && k + 2 < nz;
         for (std::int64_t i = 0; i < nx; ++i) {
-          const double v = ct.at(i, j, k);
+          const double v = row[i];
           if (v < level_hu) continue;
           const double below = v - drop * (v - soft_hu);
-          const auto side = [&](int di, int dj, int dk) {  // mean of 1 and 2 voxels away
+          const bool inner = inner_row && i >= 2 && i + 2 < nx;
+          const std::int16_t* at = row + i;
+          const auto side = [&](int d, int sign) {  // mean of 1 and 2 voxels away
+            if (inner) {
+              const std::int64_t o = sign * step[d];
+              return 0.5 * (0.0 + at[o] + at[2 * o]);
+            }
             double sum = 0.0;
             for (int s = 1; s <= 2; ++s) {
-              const std::int64_t a = std::clamp<std::int64_t>(i + s * di, 0, nx - 1);
-              const std::int64_t b = std::clamp<std::int64_t>(j + s * dj, 0, ny - 1);
-              const std::int64_t c = std::clamp<std::int64_t>(k + s * dk, 0, nz - 1);
+              const std::int64_t a =
+                  std::clamp<std::int64_t>(i + s * sign * kDirections[d][0], 0, nx - 1);
+              const std::int64_t b =
+                  std::clamp<std::int64_t>(j + s * sign * kDirections[d][1], 0, ny - 1);
+              const std::int64_t c =
+                  std::clamp<std::int64_t>(k + s * sign * kDirections[d][2], 0, nz - 1);
               sum += ct.at(a, b, c);
             }
             return 0.5 * sum;
@@ -227,8 +242,7 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
           int ridge = 0;        // directions along which it is a ridge
           int bright_rays = 0;  // of the 26: rays along which it stays bright two voxels deep
           for (int d = 0; d < 13; ++d) {
-            const int di = kDirections[d][0], dj = kDirections[d][1], dk = kDirections[d][2];
-            const double ahead = side(di, dj, dk), behind = side(-di, -dj, -dk);
+            const double ahead = side(d, 1), behind = side(d, -1);
             ridge += ahead < below && behind < below;
             bright_rays += (ahead >= below) + (behind >= below);
           }
@@ -236,6 +250,7 @@ Mask ridge_cortex(const CtVolume& ct, double level_hu, double soft_hu, double dr
           // bright along half the rays or more, into it; a shell only along its own plane.
           cortex.at(i, j, k) = bright_rays < kThickBodyRays ? static_cast<std::uint8_t>(ridge) : 0;
         }
+      }
   });
   return cortex;
 }
