@@ -27,6 +27,7 @@
 #include "base/errors.hpp"
 #include "base/parallel.hpp"
 #include "prep/maps/lower_envelope.hpp"
+#include "prep/segment/morphology.hpp"
 
 namespace palp {
 namespace {
@@ -61,51 +62,7 @@ struct PackedView {
   Ref operator[](std::size_t i) const { return Ref{storage + i}; }
 };
 
-struct Box {
-  Index3 lo{0, 0, 0};  // inclusive
-  Index3 hi{0, 0, 0};  // exclusive
-  std::int64_t size(int axis) const { return hi[axis] - lo[axis]; }
-};
-
-// Bounding box of the nonzero voxels; empty (lo == hi) when there are none.
-Box inside_bounds(const Mask& mask, unsigned threads) {
-  const Index3 n = mask.grid.dims;
-  std::vector<std::int64_t> slice_lo_i(static_cast<std::size_t>(n[2]), n[0]);
-  std::vector<std::int64_t> slice_hi_i(static_cast<std::size_t>(n[2]), -1);
-  std::vector<std::int64_t> slice_lo_j(static_cast<std::size_t>(n[2]), n[1]);
-  std::vector<std::int64_t> slice_hi_j(static_cast<std::size_t>(n[2]), -1);
-  parallel_for_chunks(
-      n[2], 4,
-      [&](std::int64_t k0, std::int64_t k1) {
-        for (std::int64_t k = k0; k < k1; ++k) {
-          const auto kk = static_cast<std::size_t>(k);
-          for (std::int64_t j = 0; j < n[1]; ++j) {
-            const std::uint8_t* row = &mask.data[mask.grid.linear(0, j, k)];
-            const std::uint8_t* first =
-                std::find_if(row, row + n[0], [](std::uint8_t v) { return v != 0; });
-            if (first == row + n[0]) continue;
-            const std::uint8_t* last = row + n[0] - 1;
-            while (*last == 0) --last;
-            slice_lo_i[kk] = std::min<std::int64_t>(slice_lo_i[kk], first - row);
-            slice_hi_i[kk] = std::max<std::int64_t>(slice_hi_i[kk], last - row);
-            slice_lo_j[kk] = std::min(slice_lo_j[kk], j);
-            slice_hi_j[kk] = std::max(slice_hi_j[kk], j);
-          }
-        }
-      },
-      threads);
-  Box box{{n[0], n[1], n[2]}, {-1, -1, -1}};
-  for (std::int64_t k = 0; k < n[2]; ++k) {
-    const auto kk = static_cast<std::size_t>(k);
-    if (slice_hi_i[kk] < 0) continue;
-    box.lo = {std::min(box.lo[0], slice_lo_i[kk]), std::min(box.lo[1], slice_lo_j[kk]),
-              std::min(box.lo[2], k)};
-    box.hi = {std::max(box.hi[0], slice_hi_i[kk] + 1), std::max(box.hi[1], slice_hi_j[kk] + 1),
-              std::max(box.hi[2], k + 1)};
-  }
-  if (box.hi[0] < 0) return Box{};
-  return box;
-}
+using segmentation::VoxelBox;
 
 // Pass i over one row: offset along i to the nearest voxel of the opposite class, for the
 // classes in `wanted` (bit 0 outside, bit 1 inside); the others get 0, the bits of 0.0f, which
@@ -331,9 +288,9 @@ void fill_outside(const Grid& grid, float band, unsigned threads, DistanceMap& o
 // Crop: voxels farther than the band (+ h/2 offset, + one voxel) from the inside box are
 // outside and clamped, so the transform only runs inside this box. The nearest site of every
 // voxel in the box lies in the box (clamping a site onto the box never lengthens the path).
-Box crop_box(const Box& inside, const Grid& grid, double band_mm) {
+VoxelBox crop_box(const VoxelBox& inside, const Grid& grid, double band_mm) {
   const double h = grid.min_spacing();
-  Box box;
+  VoxelBox box;
   for (int a = 0; a < 3; ++a) {
     const auto margin = static_cast<std::int64_t>(std::ceil((band_mm + h) / grid.spacing[a])) + 1;
     box.lo[a] = std::max<std::int64_t>(0, inside.lo[a] - margin);
@@ -368,9 +325,9 @@ void signed_distance(const Mask& mask, const DistanceParams& params, DistanceMap
   const double h = grid.min_spacing();
 
   fill_outside(grid, band, threads, out);
-  const Box inside = inside_bounds(mask, threads);
+  const VoxelBox inside = segmentation::nonzero_box(mask, 0, threads);
   if (inside.size(0) <= 0) return;  // no inside voxel: everything is outside, beyond the band
-  const Box box = crop_box(inside, grid, params.band_mm);
+  const VoxelBox box = crop_box(inside, grid, params.band_mm);
   const std::int64_t bx = box.size(0), by = box.size(1), bz = box.size(2);
   // The output array doubles as the packed-offset store until pass k turns it into floats.
   PackedView packed{out.data.data()};

@@ -2,6 +2,7 @@
 #include "prep/segment/morphology.hpp"
 
 #include <algorithm>
+#include <vector>
 
 namespace palp::segmentation {
 
@@ -9,25 +10,43 @@ VoxelBox whole_grid(const Grid& g) {
   return {{0, 0, 0}, g.dims};
 }
 
-VoxelBox nonzero_box(const Mask& mask, std::int64_t margin) {
-  const Grid& g = mask.grid;
-  VoxelBox box{g.dims, {0, 0, 0}};
-  const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  for (std::int64_t k = 0; k < nz; ++k)
-    for (std::int64_t j = 0; j < ny; ++j) {
-      const std::uint8_t* row = &mask.data[g.linear(0, j, k)];
-      std::int64_t first = 0, last = nx - 1;
-      while (first < nx && row[first] == 0) ++first;
-      if (first == nx) continue;
-      while (row[last] == 0) --last;
-      box.lo = {std::min(box.lo[0], first), std::min(box.lo[1], j), std::min(box.lo[2], k)};
-      box.hi = {std::max(box.hi[0], last + 1), std::max(box.hi[1], j + 1),
-                std::max(box.hi[2], k + 1)};
-    }
-  if (box.hi[0] == 0) return {};
+VoxelBox nonzero_box(const Mask& mask, std::int64_t margin, unsigned threads) {
+  const Index3 n = mask.grid.dims;
+  const auto slices = static_cast<std::size_t>(n[2]);
+  std::vector<std::int64_t> lo_i(slices, n[0]), hi_i(slices, -1), lo_j(slices, n[1]),
+      hi_j(slices, -1);
+  parallel_for_chunks(
+      n[2], 4,
+      [&](std::int64_t k0, std::int64_t k1) {
+        for (std::int64_t k = k0; k < k1; ++k) {
+          const auto kk = static_cast<std::size_t>(k);
+          for (std::int64_t j = 0; j < n[1]; ++j) {
+            const std::uint8_t* row = &mask.data[mask.grid.linear(0, j, k)];
+            const std::uint8_t* first =
+                std::find_if(row, row + n[0], [](std::uint8_t v) { return v != 0; });
+            if (first == row + n[0]) continue;
+            const std::uint8_t* last = row + n[0] - 1;
+            while (*last == 0) --last;
+            lo_i[kk] = std::min<std::int64_t>(lo_i[kk], first - row);
+            hi_i[kk] = std::max<std::int64_t>(hi_i[kk], last - row);
+            lo_j[kk] = std::min(lo_j[kk], j);
+            hi_j[kk] = std::max(hi_j[kk], j);
+          }
+        }
+      },
+      threads);
+  VoxelBox box{n, {-1, -1, -1}};
+  for (std::int64_t k = 0; k < n[2]; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    if (hi_i[kk] < 0) continue;
+    box.lo = {std::min(box.lo[0], lo_i[kk]), std::min(box.lo[1], lo_j[kk]), std::min(box.lo[2], k)};
+    box.hi = {std::max(box.hi[0], hi_i[kk] + 1), std::max(box.hi[1], hi_j[kk] + 1),
+              std::max(box.hi[2], k + 1)};
+  }
+  if (box.hi[0] < 0) return {};
   for (int a = 0; a < 3; ++a) {
     box.lo[a] = std::max<std::int64_t>(0, box.lo[a] - margin);
-    box.hi[a] = std::min(g.dims[a], box.hi[a] + margin);
+    box.hi[a] = std::min(n[a], box.hi[a] + margin);
   }
   return box;
 }

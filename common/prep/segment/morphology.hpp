@@ -16,14 +16,15 @@ namespace palp::segmentation {
 // A box of voxels: lo <= (i, j, k) < hi.
 struct VoxelBox {
   Index3 lo{0, 0, 0}, hi{0, 0, 0};
+  std::int64_t size(int axis) const { return hi[axis] - lo[axis]; }
 };
 
 // The whole grid.
 VoxelBox whole_grid(const Grid& g);
 
 // The box of `mask`'s nonzero voxels grown by `margin` voxels on every side, within the grid
-// (empty, lo == hi, when the mask is).
-VoxelBox nonzero_box(const Mask& mask, std::int64_t margin);
+// (empty, lo == hi, when the mask is); slices scanned on `threads` (0: the default).
+VoxelBox nonzero_box(const Mask& mask, std::int64_t margin, unsigned threads = 0);
 
 // Calls row(j, k, centre, neighbours) for each row of `in` within `box` (j and k), `centre` the
 // row's first voxel (i = 0) and `neighbours` the four rows beside it along j and k (a row of
