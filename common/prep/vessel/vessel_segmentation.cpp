@@ -1,7 +1,7 @@
 // Contrast-filled vessels (see vessel_segmentation.hpp). Data flow:
 //   box         CT, body -> the search's box (vessel_search_box): the stages below run on the
 //               scan cropped to it when that saves a tenth or more, the lumens pasted back
-//   smooth      CT -> 3x3x3 mean HU (int16, two buffers)
+//   smooth      CT -> 3x3x3 mean HU (int16, one volume)
 //   cortex      CT -> bright ridges (cortex, trabeculae); near = cortex and its face neighbours
 //   candidates  CT, smoothed HU, body, near -> contrast-level voxels away from cortex
 //   open        candidates -> cores (split_mm deep) -> the voxels within split_mm of a core
@@ -470,7 +470,6 @@ void close_lumens(const CtVolume& ct, const Mask& body, const Mask& cortex, cons
   segmentation::fill_notches(notch_room, kLumenNotchFaces, lumen);
 }
 
-// The search on the grid it is given (segment_vessels crops the scan to its box first).
 // A part judged a lumen that has more than half its voxels walled in by cortex on all six axis
 // rays (through its own voxels; within marrow_enclosure_mm) is a vertebral body's marrow, not a
 // lumen: a vessel runs on along its length. (Its verdict becomes `shell`: enclosed by cortex.)
@@ -490,6 +489,7 @@ void mark_marrow_parts(const CtVolume& ct, const RunTable& runs, const RunLabels
       verdicts[c] = Verdict::shell;
 }
 
+// The search on the grid it is given (segment_vessels crops the scan to its box first).
 VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_peak_hu,
                             double bone_seed_hu, const VesselParams& params) {
   const Grid& g = ct.grid;
