@@ -94,17 +94,20 @@ bool parse_switch(const std::string& text, const std::string& key) {
 }
 
 void check_options(const std::string& name, const PhantomOptions& o) {
-  if (name == "trunk" && (o.arms != 1 || o.metal || o.dissection))
-    throw UsageError("phantom trunk has no arms, metal or dissection (torso only)");
+  if (name == "trunk" && (o.arms != 1 || o.metal || o.dissection || o.level_mm != 0.0))
+    throw UsageError("phantom trunk has no arms, level, metal or dissection (torso only)");
   if (name != "torso" && name != "trunk" &&
-      (o.contrast || o.aorta_hu || o.arms != 1 || o.metal || o.structures || o.dissection))
+      (o.contrast || o.aorta_hu || o.arms != 1 || o.metal || o.structures || o.dissection ||
+       o.level_mm != 0.0))
     throw UsageError("phantom " + name +
-                     " has no contrast, aorta-hu, arms, metal, structures or dissection (torso "
-                     "and trunk)");
+                     " has no contrast, aorta-hu, arms, level, metal, structures or dissection "
+                     "(torso and trunk)");
   if (o.arms < 0 || o.arms > 2)
     throw UsageError("phantom option arms needs 0, 1 or 2, got " + std::to_string(o.arms));
   if (o.aorta_hu && !(*o.aorta_hu >= -1000.0 && *o.aorta_hu <= 3000.0))
     throw UsageError("phantom option aorta-hu needs a value in [-1000, 3000] HU");
+  if (!(o.level_mm >= -200.0 && o.level_mm <= 200.0))
+    throw UsageError("phantom option level needs a value in [-200, 200] mm");
 }
 
 // What only the whole set of options can say (set_phantom_option checks each as it comes, so
@@ -155,13 +158,15 @@ void set_phantom_option(PhantomOptions& options, const std::string& key, const s
     options.structures = parse_switch(value, key);
   } else if (key == "dissection") {
     options.dissection = parse_switch(value, key);
+  } else if (key == "level") {
+    options.level_mm = parse_value<double>(value, key);
   } else if (key == "orient") {
     axis_reorder(Grid{{1, 1, 1}, {1.0, 1.0, 1.0}, {}}, value);  // UsageError for a bad code
     options.orient = value;
   } else {
     throw UsageError("unknown phantom option '" + key +
-                     "' (known: dims, spacing, contrast, aorta-hu, arms, metal, structures, "
-                     "dissection, orient)");
+                     "' (known: dims, spacing, contrast, aorta-hu, arms, level, metal, "
+                     "structures, dissection, orient)");
   }
   check_options("torso", options);
 }

@@ -57,6 +57,13 @@
 //   aorta_hu      the arteries' HU (the aorta and its branches), the rest from `contrast`
 //                 (arterial when not given): aorta 400 alone draws what contrast=arterial does.
 //   arms          0, 1 (default: the right arm) or 2 (the left one too, mirrored about the body).
+//                 With the vessel tree each arm has its brachial artery at the arteries' HU, 3 mm
+//                 in radius, anteromedial to the humerus with 1 mm of tissue between them (closer
+//                 than it mostly lies, as the subclavian rests on the first rib): a branch that
+//                 both of the scan's ends cut off from its trunk, resting on bone.
+//   level         the anatomy's z (mm) at the field of view's centre (default 0): where along
+//                 the body the scan lies, e.g. a slab at level=-9 whose top slice cuts the SMA
+//                 off from the aorta.
 //   metal         a pair of pedicle screws (3 mm radius, 3500 HU) in the vertebra at z = 8 mm,
 //                 with deterministic metal streaks in the slices through them: bright and dark
 //                 rays of 300-800 HU from each screw, decaying with distance (about halving every
@@ -96,8 +103,8 @@
 //                 Everything else (and every slice above z = 20 mm) is the torso without it.
 // On the command line: palp phantom torso --contrast arterial --aorta-hu 400 --arms 2 --metal
 // --structures. In a CT input or scene (parse_phantom_spec): phantom:NAME[,KEY=VALUE...] with the
-// keys dims, spacing, contrast, aorta-hu, arms, metal, structures, dissection, orient (metal,
-// structures or dissection alone means =1), e.g. phantom:torso,contrast=arterial,arms=2,
+// keys dims, spacing, contrast, aorta-hu, arms, level, metal, structures, dissection, orient
+// (metal, structures or dissection alone means =1), e.g. phantom:torso,contrast=arterial,arms=2,
 // phantom:trunk,orient=RAS or phantom:torso,dims=384x256x20,spacing=1.25x1.25x1.5 or
 // phantom:torso,structures.
 #pragma once
@@ -125,6 +132,7 @@ struct PhantomOptions {
   bool metal = false;
   bool structures = false;
   bool dissection = false;  // torso: the aorta dissected (above)
+  double level_mm = 0.0;    // torso: the anatomy's z at the field of view's centre, [-200, 200]
   // Any phantom: store it in this axis order (an orientation code, base/axis_order.hpp: "RAS",
   // "PIL", ...), the same patient in the same LPS world place; absent: the phantom's own order.
   std::optional<std::string> orient;

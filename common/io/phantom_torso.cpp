@@ -174,15 +174,24 @@ void add_spine(std::vector<Layer>& layers, double z_lo, double z_hi) {
   layers.push_back({EllipticCylinder{kBodyCx, kCanalCy, 8.0, 8.0}, 20.0, Tissue::kPatient});
 }
 
+// The brachial artery with the vessel tree: anteromedial to the humerus, with 1 mm of tissue
+// between its wall and the humerus's cortex (closer than it mostly lies; as the subclavian rests
+// on the first rib): a branch that both of the scan's ends cut off from its trunk, on bone.
+constexpr double kBrachialR = 3.0, kBrachialFromHumerus = 11.0 + 1.0 + kBrachialR;
+
 // side -1: the patient's right arm (the default one), +1: the left, its mirror image about the
 // body's centre.
-void add_arm(std::vector<Layer>& layers, double side) {
+void add_arm(std::vector<Layer>& layers, double side, const TorsoLevels& levels) {
   const double cx = side < 0.0 ? -158.0 : 2.0 * kBodyCx + 158.0, cy = kPadTop - 40.0;
   layers.push_back({EllipticCylinder{cx, cy, 38.0, 40.0}, 30.0, Tissue::kPatient});
   layers.push_back({EllipticCylinder{cx, cy, 36.0, 38.0}, -100.0, Tissue::kPatient});
   layers.push_back({EllipticCylinder{cx, cy, 30.0, 32.0}, 50.0, Tissue::kPatient});
   layers.push_back({EllipticCylinder{cx, cy - 3.0, 11.0, 11.0}, 900.0, Tissue::kBone});
   layers.push_back({EllipticCylinder{cx, cy - 3.0, 8.0, 8.0}, 120.0, Tissue::kBone});
+  if (!levels.tree) return;
+  const double medial = side < 0.0 ? 1.0 : -1.0, d = kBrachialFromHumerus / std::sqrt(2.0);
+  layers.push_back({EllipticCylinder{cx + medial * d, cy - 3.0 - d, kBrachialR, kBrachialR},
+                    levels.artery, vessel_tissue(true, levels.artery)});
 }
 
 // A pair of pedicle screws in the vertebra at kScrewZ: from behind the transverse processes,
@@ -209,12 +218,13 @@ std::vector<Layer> torso_layers(const PhantomOptions& options, double z_lo, doub
   add_table(layers);
   add_body_wall(layers);
   add_ribs(layers);
-  add_organs(layers, torso_levels(options), options.structures, options.dissection);
+  const TorsoLevels levels = torso_levels(options);
+  add_organs(layers, levels, options.structures, options.dissection);
   add_spine(layers, z_lo, z_hi);
   if (options.metal)
     for (double side : {-1.0, 1.0}) layers.push_back({screw(side), kScrewHu, Tissue::kMetal});
-  if (options.arms >= 1) add_arm(layers, -1.0);
-  if (options.arms >= 2) add_arm(layers, 1.0);
+  if (options.arms >= 1) add_arm(layers, -1.0, levels);
+  if (options.arms >= 2) add_arm(layers, 1.0, levels);
   return layers;
 }
 
@@ -271,10 +281,12 @@ bool takes_streaks(Tissue t) {
   return t != Tissue::kOutside && t != Tissue::kEquipment && t != Tissue::kMetal;
 }
 
-// Puts the torso in the middle of the grid, with the pad's top face snapped halfway between two
-// voxel rows so that neither the back nor the pad shares a voxel with the other.
-AnatomyFrame torso_frame(const Grid& grid) {
+// Puts the torso in the middle of the grid (its z = `level` at the grid's centre), with the pad's
+// top face snapped halfway between two voxel rows so that neither the back nor the pad shares a
+// voxel with the other.
+AnatomyFrame torso_frame(const Grid& grid, double level) {
   AnatomyFrame f{grid_centre(grid), fit_scale(grid, kTorsoReferenceFov, 2), grid.spacing};
+  f.centre[2] -= level * f.scale;
   const double pad_top = f.centre[1] + kPadTop * f.scale;
   const double snapped = (std::round(pad_top / grid.spacing[1] - 0.5) + 0.5) * grid.spacing[1];
   f.centre[1] += snapped - pad_top;
@@ -293,7 +305,7 @@ void add_streaks(const Streaks& streaks, const RowContext& row, const AnatomyFra
 }  // namespace
 
 CtVolume draw_torso(const Grid& grid, const PhantomOptions& options, PhantomTruth* truth) {
-  const AnatomyFrame frame = torso_frame(grid);
+  const AnatomyFrame frame = torso_frame(grid, options.level_mm);
   const double z_lo = frame.coord(2, 0), z_hi = frame.coord(2, grid.dims[2] - 1);
   const std::vector<Layer> layers = torso_layers(options, z_lo, z_hi);
   const std::optional<Streaks> streaks = torso_streaks(options);

@@ -34,7 +34,10 @@ phantom:trunk,orient=RAS; phantom:torso,contrast=arterial,arms=2,metal,structure
                         portal veins) at that phase's HU instead of the lone 250 HU aorta
   --aorta-hu N          the aorta's and its branches' HU (with the arterial phase's veins
                         unless --contrast says otherwise)
-  --arms N              0, 1 (default) or 2 arms beside the torso
+  --arms N              0, 1 (default) or 2 arms beside the torso (with the vessel tree each
+                        has its brachial artery, 1 mm from the humerus: cut off by both ends)
+  --level MM            the anatomy's z at the field of view's centre (default 0; -200..200):
+                        where along the body the scan lies (torso only)
   --metal               a pair of pedicle screws (3500 HU) in a vertebra, with streaks
   --dissection          the aorta dissected: a 14 mm true lumen at its HU, the false lumen at
                         soft-tissue HU filling the rest of it, in periaortic fat (torso only)
@@ -52,8 +55,9 @@ phantom:trunk,orient=RAS; phantom:torso,contrast=arterial,arms=2,metal,structure
 }  // namespace
 
 int cmd_phantom(const Arguments& argv) {
-  const Args args(argv, {"help", "metal", "structures", "dissection"},
-                  {"out", "dims", "spacing", "orientation", "contrast", "aorta-hu", "arms"});
+  const Args args(
+      argv, {"help", "metal", "structures", "dissection"},
+      {"out", "dims", "spacing", "orientation", "contrast", "aorta-hu", "arms", "level"});
   if (args.has("help")) {
     std::cout << kPhantomUsage;
     return 0;
@@ -66,7 +70,7 @@ int cmd_phantom(const Arguments& argv) {
   if (const auto dims = args.get("dims")) options.dims = parse_triple<std::int64_t>(*dims, "dims");
   if (const auto spacing = args.get("spacing"))
     options.spacing = parse_triple<double>(*spacing, "spacing");
-  for (const char* key : {"contrast", "aorta-hu", "arms"})
+  for (const char* key : {"contrast", "aorta-hu", "arms", "level"})
     if (const auto value = args.get(key)) set_phantom_option(options, key, *value);
   if (args.has("metal")) options.metal = true;
   if (args.has("structures")) options.structures = true;

@@ -223,7 +223,9 @@ TEST_F(TorsoStructures, FemoralArteriesAreJoinedToTheAortaAndTheAortaEndsAtItsBi
 
 TEST_F(TorsoStructures, FemoralVeinsLieBesideTheArteriesTowardTheMidline) {
   // In the portal-venous phase the veins are contrast truth: the vessel truth less the arteries.
-  const Drawn pv = torso("torso,structures,contrast=portal-venous");
+  // arms=0: the arm's brachial artery lies within reach of its own anterior skin, and is no
+  // groin vessel.
+  const Drawn pv = torso("torso,structures,contrast=portal-venous,arms=0");
   const Grid& g = pv.ct.grid;
   Mask veins(g, 0);
   for (std::size_t n = 0; n < veins.size(); ++n)
@@ -244,7 +246,7 @@ TEST_F(TorsoStructures, FemoralVeinsLieBesideTheArteriesTowardTheMidline) {
   }
   // The arteries are the same in every phase; only their HU differ.
   EXPECT_TRUE(pv.truth.artery.data ==
-              torso("torso,structures,contrast=arterial").truth.artery.data);
+              torso("torso,structures,contrast=arterial,arms=0").truth.artery.data);
 }
 
 // HU of the voxels of `m` in slice k, sorted.
@@ -370,7 +372,10 @@ std::uint64_t fnv1a(const Volume<T>& v) {
 
 TEST(PhantomStructures, WithoutTheOptionEveryTorsoIsAsBefore) {
   // spec, then the CT's and the body, bone, equipment, vessel, artery and metal truths' hashes,
-  // taken before the option existed
+  // taken before the option existed; those of the CT, vessel and artery of the two specs with
+  // the vessel tree re-taken when the arms gained their brachial arteries (their voxels, every one
+  // of the CT's changed voxels within 3.51 mm of the arteries' axes, checked against the build
+  // before: the arteries alone moved)
   struct Recorded {
     const char* spec;
     std::uint64_t hashes[7];
@@ -380,11 +385,11 @@ TEST(PhantomStructures, WithoutTheOptionEveryTorsoIsAsBefore) {
        {0x8efb89f7be5aa73e, 0xe263e41aca2dcba5, 0xfeacea0351f2e599, 0x43267f2fbb1938a5,
         0x8307f99fc8c22325, 0x8307f99fc8c22325, 0xdfc1881767622325}},
       {"torso,contrast=none",
-       {0xb7954462a424e121, 0xe263e41aca2dcba5, 0xfeacea0351f2e599, 0x43267f2fbb1938a5,
-        0xdfc1881767622325, 0x70625c832e7d331b, 0xdfc1881767622325}},
+       {0x03df5aeb413b5e47, 0xe263e41aca2dcba5, 0xfeacea0351f2e599, 0x43267f2fbb1938a5,
+        0xdfc1881767622325, 0xbb052e649fad523b, 0xdfc1881767622325}},
       {"torso,contrast=portal-venous,metal,arms=2",
-       {0xeffd538c98f4449f, 0x893a910b3c19a925, 0x445b14e711432669, 0x43267f2fbb1938a5,
-        0xd4d69bc336a2edfd, 0x70625c832e7d331b, 0x71beec34700535b5}},
+       {0x3f2f594e73e2d413, 0x893a910b3c19a925, 0x445b14e711432669, 0x43267f2fbb1938a5,
+        0xff35c4458c3c853d, 0xd7abea3a5ff4ab5b, 0x71beec34700535b5}},
       {"torso,dims=96x64x48,spacing=5x5x4",
        {0xb159adf2ba511e81, 0xa61ea1949553f865, 0xf2e6bd3bbdec9855, 0x9bae44285bfc1f85,
         0x3d4b1ea48e0b3e25, 0x3d4b1ea48e0b3e25, 0xa971c9681b3c2325}},
