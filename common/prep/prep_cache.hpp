@@ -38,8 +38,9 @@ namespace palp {
 // `structures` gives its own artery and liver truth as structures; 29: the contrast phase from
 // the veins beside the aorta (two trunk tubes side by side at its contrast: portal-venous; one:
 // arterial), the aorta's level (arterial_above_soft_hu) only where no trunk is a tube; prep.json's
-// vessel records second_trunk_level_hu
-inline constexpr int kPrepAlgorithmVersion = 37;
+// vessel records second_trunk_level_hu; 38: where a lumen holds a tube, a part holding none and
+// dimmer than it is an organ at any level (docs/prep.md lists the rest)
+inline constexpr int kPrepAlgorithmVersion = 38;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

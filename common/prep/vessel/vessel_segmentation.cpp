@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -280,10 +281,9 @@ int drop_organs(const Grid& g, const RunTable& runs, const RunLabels& labels,
       segmentation::island_shapes(g, runs, labels);
   for (std::size_t c = 0; c < stats.size(); ++c)
     tube[c] = part_shapes[c].sd[0] >= kTubeElongation * part_shapes[c].sd[1];
-  Mask trunk(g, 0, "trunk cores of dim parts");
+  Mask trunk(g, 0, "trunk cores of parts not tubes");
   segmentation::rewrite_runs(
-      g, runs, labels,
-      [&](std::int64_t c) { return keep[c] && !tube[c] && stats[c].mean() < below; }, trunk);
+      g, runs, labels, [&](std::int64_t c) { return keep[c] && !tube[c]; }, trunk);
   keep_trunk_cores(cores, trunk);
   const RunTable t = extract_runs(trunk, false);
   const RunLabels l = label_runs(g, t);
@@ -296,9 +296,13 @@ int drop_organs(const Grid& g, const RunTable& runs, const RunLabels& labels,
       const std::size_t c = part_at(g, runs, labels, t.runs[r].begin, row % ny, row / ny);
       if (c < tube.size()) tube[c] = 1;
     }
+  // where the scan shows a lumen as a tube, a part dimmer than that tube holding none is an organ
+  double tube_hu = -std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < stats.size(); ++c)
+    if (keep[c] && tube[c]) tube_hu = std::max(tube_hu, stats[c].mean());
   int dropped = 0;
   for (std::size_t c = 0; c < stats.size(); ++c) {
-    if (!keep[c] || tube[c] || stats[c].mean() >= below) continue;
+    if (!keep[c] || tube[c] || (stats[c].mean() >= below && stats[c].mean() >= tube_hu)) continue;
     keep[c] = 0;
     ++dropped;
   }

@@ -30,7 +30,10 @@
 //              to the aorta stays whatever vein of denser contrast is brighter) is an enhancing
 //              organ, not a vessel: a kidney's cortex or the spleen in the arterial phase enhance
 //              to 150-250 HU, as uniform as a lumen and as thick as a trunk, but far below the
-//              arteries; a vein that has filled only partly is a tube and stays
+//              arteries; a vein that has filled only partly is a tube and stays. Where the scan
+//              shows a lumen as a tube, a part holding none and dimmer than that tube is an organ
+//              too, at any level: beside an aorta of 250 HU a kidney's cortex at 150 lies above
+//              half way. A scan too short for any tube (a thin slab) has the half-way rule alone
 //   rejoin     the lumens grown through the candidates the opening cut (branches), never
 //              within a voxel of a rejected part nor within two of cortex
 //   branches   the lumens grown through voxels at the brightest lumen's contrast L (smoothed HU

@@ -240,10 +240,13 @@ TEST(SegmentVessels, BranchesStopAtTheCortexAroundMarrowAtTheLumensLevel) {
 TEST(SegmentVessels, MarrowWalledInOnEverySideIsNotALumen) {
   // With the cortex-contact rule off, a vertebral body's marrow at a lumen's level is taken as one
   // (MarrowInACortexIsKeptOutByTheCortexContact); walled in by its cortex and endplates on all six
-  // axis rays, it is given back, and the tube beside it, open along its length, stays.
+  // axis rays, it is given back, and the tube beside it, open along its length, stays. The organ
+  // rule is off too: the marrow holds no tube and is dimmer than the tube, so it would go as an
+  // organ before the enclosure is asked (AnOrganDimmerThanATubeIsNoLumenEvenAboveHalfWay).
   const Scene s = scene(350.0, 0.0, 900.0, true);
   VesselParams no_shell_rule;
   no_shell_rule.max_cortex_contact = 1.0;
+  no_shell_rule.organ_below_share = 0.0;
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, no_shell_rule);
   EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
   EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
@@ -283,6 +286,67 @@ TEST(SegmentVessels, AnEnhancingOrganFarBelowTheArteriesIsNoLumen) {
   off.organ_below_share = 0.0;
   const VesselResult without = segment_vessels(s.ct, s.body, kSoftHu, 300.0, off);
   EXPECT_GT(count_both(without.lumen, organ) * 2, count(organ)) << "the organ is no test";
+}
+
+// A ball 20 mm across (a kidney's enhancing tissue) at 160 HU beside the trunk at `trunk_hu`.
+Mask add_organ(Scene& s) {
+  Mask organ(s.ct.grid, 0, "organ");
+  for (std::int64_t k = 0; k < s.ct.grid.dims[2]; ++k)
+    for (std::int64_t j = 0; j < s.ct.grid.dims[1]; ++j)
+      for (std::int64_t i = 0; i < s.ct.grid.dims[0]; ++i) {
+        const double x = (static_cast<double>(i) + 0.5) * kSpacing;
+        const double y = (static_cast<double>(j) + 0.5) * kSpacing;
+        const double z = (static_cast<double>(k) + 0.5) * kSpacing;
+        const double r = std::hypot(x - 72.0, y - 68.0, z - 18.0);
+        if (r > 10.0) continue;
+        s.ct.at(i, j, k) = static_cast<std::int16_t>(160 + (i * 7 + j * 13 + k * 5) % 21 - 10);
+        organ.at(i, j, k) = r <= 10.0 - kSpacing;
+      }
+  return organ;
+}
+
+// The slices [first, first + n) of `s` (a shorter scan of the same scene).
+Scene slices(const Scene& s, std::int64_t first, std::int64_t n) {
+  Grid g = s.ct.grid;
+  g.dims[2] = n;
+  Scene out{CtVolume(g, 0, "ct"), Mask(g, 1, "body"),   Mask(g, 0, "tube"),
+            Mask(g, 0, "marrow"), Mask(g, 0, "branch"), Mask(g, 0, "tube clear")};
+  const std::size_t plane = static_cast<std::size_t>(g.dims[0] * g.dims[1]);
+  for (std::size_t m = 0; m < out.ct.size(); ++m) {
+    const std::size_t from = static_cast<std::size_t>(first) * plane + m;
+    out.ct.data[m] = s.ct.data[from];
+    out.tube.data[m] = s.tube.data[from];
+  }
+  return out;
+}
+
+TEST(SegmentVessels, AnOrganDimmerThanATubeIsNoLumenEvenAboveHalfWay) {
+  // The trunk at 250 HU (a tube by its core, 36 mm long) and the organ at 160 HU: above half way
+  // from the soft tissue (40) to the trunk, as a kidney's cortex is beside a moderately enhanced
+  // aorta. Where the scan shows a tube, a part holding none and dimmer than it is an organ.
+  Scene s = scene(250.0);
+  const Mask organ = add_organ(s);
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_EQ(count_both(r.lumen, organ), 0);
+  EXPECT_EQ(r.rejected_organ, 1);
+  EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
+  VesselParams off;
+  off.organ_below_share = 0.0;
+  EXPECT_GT(count_both(segment_vessels(s.ct, s.body, kSoftHu, 300.0, off).lumen, organ) * 2,
+            count(organ))
+      << "the organ is no test";
+}
+
+TEST(SegmentVessels, WithoutATubeInTheScanAnOrganAboveHalfWayStays) {
+  // The same scene in 12 slices (18 mm): the trunk's core is too short for a tube, so nothing
+  // shows which part is the vessel and which an organ; the half-way rule alone judges, and the
+  // organ above half way stays a lumen beside the trunk.
+  Scene full = scene(250.0);
+  add_organ(full);
+  const Scene s = slices(full, 6, 12);
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_EQ(r.rejected_organ, 0);
+  EXPECT_GT(count_both(r.lumen, s.tube) * 10, count(s.tube) * 9) << "the trunk is found";
 }
 
 TEST(SegmentVessels, ATrunkBelowADenserVeinIsNoOrgan) {
