@@ -39,8 +39,10 @@ namespace palp {
 // the veins beside the aorta (two trunk tubes side by side at its contrast: portal-venous; one:
 // arterial), the aorta's level (arterial_above_soft_hu) only where no trunk is a tube; prep.json's
 // vessel records second_trunk_level_hu; 38: where a lumen holds a tube, a part holding none and
-// dimmer than it is an organ at any level (docs/prep.md lists the rest)
-inline constexpr int kPrepAlgorithmVersion = 38;
+// dimmer than it is an organ at any level; 39: a branch piece on the scan's end judged by the
+// blood's level (the brightest lumen's mean or its tube core's, the larger; prep.json's vessel
+// records tube_level_hu) (docs/prep.md lists the rest)
+inline constexpr int kPrepAlgorithmVersion = 39;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

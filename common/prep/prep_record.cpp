@@ -55,6 +55,7 @@ nlohmann::json vessel_json(const VesselResult& v) {
           {"lumens", v.lumens},
           {"lumen_level_hu", v.lumen_level_hu},
           {"second_trunk_level_hu", v.second_trunk_level_hu},
+          {"tube_level_hu", v.tube_level_hu},
           {"rejected_enclosed_by_cortex", v.rejected_shell},
           {"rejected_not_uniform", v.rejected_spread},
           {"rejected_brighter_at_surface", v.rejected_surface},

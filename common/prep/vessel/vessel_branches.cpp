@@ -199,10 +199,10 @@ class BranchBand {
 // Keeps the 6-connected pieces of `seeds` (on the scan's end slices) that can be a branch: no
 // wider than pi * trunk_core_mm^2 across the body axis (a wider piece would hold a trunk's core
 // and have been judged as a part already: a vertebral body, a rib's marrow cut lengthwise), and
-// on average (smoothed HU) no denser than the lumen (`lumen_hu`) whose blood fills it: partial
+// on average (smoothed HU) no denser than the blood that fills the lumens (`blood_hu`): partial
 // volume only darkens a thinner vessel, while marrow and blurred cortex at the scan's end are
 // denser than the contrast.
-void keep_branch_like_pieces(const std::vector<std::int16_t>& hu, double lumen_hu,
+void keep_branch_like_pieces(const std::vector<std::int16_t>& hu, double blood_hu,
                              const VesselParams& params, Mask& seeds) {
   const Grid& g = seeds.grid;
   const int slice = patient_axes(g).slice;
@@ -221,7 +221,7 @@ void keep_branch_like_pieces(const std::vector<std::int16_t>& hu, double lumen_h
       [&](std::int64_t c) {
         const auto k = static_cast<std::size_t>(c);
         const auto voxels = static_cast<double>(labels.voxels[k]);
-        return voxels * voxel_mm2 <= max_mm2 && sum[k] / voxels <= lumen_hu;
+        return voxels * voxel_mm2 <= max_mm2 && sum[k] / voxels <= blood_hu;
       },
       seeds);
 }
@@ -231,7 +231,7 @@ void keep_branch_like_pieces(const std::vector<std::int16_t>& hu, double lumen_h
 // (BranchBand::allowed_as_seed), in pieces that can be a branch (keep_branch_like_pieces), grown
 // through the band beside `lumen`; what grows from them is kept where it is as big as a lumen
 // (min_lumen_ml) and a tube (vessel_phase.hpp): marrow grown from the scan's end is a blob.
-void grow_from_the_scans_ends(const std::vector<std::int16_t>& hu, double lumen_hu,
+void grow_from_the_scans_ends(const std::vector<std::int16_t>& hu, double blood_hu,
                               const VesselParams& params, BranchBand& band, Mask& lumen) {
   const Grid& g = lumen.grid;
   const PatientAxes axes = patient_axes(g);
@@ -244,7 +244,7 @@ void grow_from_the_scans_ends(const std::vector<std::int16_t>& hu, double lumen_
         seeded.data[n] = !lumen.data[n] && band.allowed_as_seed(static_cast<std::int64_t>(n));
       }
   }
-  keep_branch_like_pieces(hu, lumen_hu, params, seeded);
+  keep_branch_like_pieces(hu, blood_hu, params, seeded);
   segmentation::grow_within(seeded, [&](std::size_t n) {
     return !lumen.data[n] && band.allowed(static_cast<std::int64_t>(n));
   });
@@ -284,12 +284,12 @@ Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, d
 }
 
 void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::int16_t>& hu,
-                   const Mask& ridge, double soft_hu, double lumen_hu, double cortex_hu,
-                   const VesselParams& params, Mask& lumen) {
+                   const Mask& ridge, double soft_hu, double lumen_hu, double blood_hu,
+                   double cortex_hu, const VesselParams& params, Mask& lumen) {
   BranchBand band(ct, body, hu, ridge, soft_hu, lumen_hu, cortex_hu, params);
   segmentation::grow_within(
       lumen, [&](std::size_t n) { return band.allowed(static_cast<std::int64_t>(n)); });
-  grow_from_the_scans_ends(hu, lumen_hu, params, band, lumen);
+  grow_from_the_scans_ends(hu, blood_hu, params, band, lumen);
 }
 
 }  // namespace palp

@@ -26,10 +26,13 @@ Mask enclosed_by_cortex(const CtVolume& ct, const Mask& of, const Mask& ridge, d
 // marrow_enclosure_mm. The band is judged only where the growth reaches. Then the branches the
 // scan's end cuts off from their trunk: from the band's voxels on the first and last slice along
 // the body axis that cortex does not wall in across it (on three of the four in-plane rays), in
-// pieces no wider than pi trunk_core_mm^2 and on average no denser than `lumen_hu`, grown
+// pieces no wider than pi trunk_core_mm^2 and on average no denser than `blood_hu`, grown
 // through the band and kept where that growth is as big as a lumen (min_lumen_ml) and a tube.
+// `blood_hu`, the contrast blood's level: the larger of the brightest lumen's mean and its
+// brightest tube core's, each only ever diluted (the first by organs a branch joins to the
+// lumen, the second by a dissection's unfilled false lumen in the core).
 void grow_branches(const CtVolume& ct, const Mask& body, const std::vector<std::int16_t>& hu,
-                   const Mask& ridge, double soft_hu, double lumen_hu, double cortex_hu,
-                   const VesselParams& params, Mask& lumen);
+                   const Mask& ridge, double soft_hu, double lumen_hu, double blood_hu,
+                   double cortex_hu, const VesselParams& params, Mask& lumen);
 
 }  // namespace palp

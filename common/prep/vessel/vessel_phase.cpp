@@ -81,9 +81,11 @@ ContrastPhase read_contrast_phase(const Mask& trunk_cores, const std::vector<std
       vein_hu = std::max(vein_hu, std::min(level[p], level[q]));
     }
   if (tubes.empty())
-    return {lumen_hu - soft_hu >= params.arterial_above_soft_hu ? "arterial" : "portal-venous",
+    return {lumen_hu - soft_hu >= params.arterial_above_soft_hu ? "arterial" : "portal-venous", 0.0,
             0.0};
-  return {vein_hu > 0.0 ? "portal-venous" : "arterial", vein_hu};
+  double tube_hu = 0.0;
+  for (std::size_t c : tubes) tube_hu = std::max(tube_hu, level[c]);
+  return {vein_hu > 0.0 ? "portal-venous" : "arterial", vein_hu, tube_hu};
 }
 
 }  // namespace palp

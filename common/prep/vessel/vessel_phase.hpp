@@ -15,6 +15,7 @@ struct VesselParams;
 struct ContrastPhase {
   std::string name;              // arterial | portal-venous
   double second_trunk_hu = 0.0;  // portal-venous: the darker tube of the brightest pair (0: none)
+  double tube_hu = 0.0;          // the brightest tube's level (0: none)
 };
 
 // `trunk_cores`: the kept lumens' voxels trunk_core_mm deep (0/1, the CT's grid); `hu`: the

@@ -568,8 +568,10 @@ VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_pe
   result.contrast_phase = phase.name;
   result.second_trunk_level_hu = phase.second_trunk_hu;
   // branches: the lumens grown through voxels at their contrast, apart from cortex
+  result.tube_level_hu = phase.tube_hu;
   if (params.find_branches)
-    grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu, cortical_hu, params,
+    grow_branches(ct, body, hu, cortex, soft_peak_hu, result.lumen_level_hu,
+                  std::max(result.lumen_level_hu, result.tube_level_hu), cortical_hu, params,
                   result.lumen);
   close_lumens(ct, body, cortex, near, hu, low_hu, max_pool_hu, params, result.lumen);
   // marrow: lumen voxels walled in by cortex on all six axis rays are the bone's

@@ -139,12 +139,13 @@ struct VesselResult {
   std::string contrast_phase = "none";  // none | arterial | portal-venous | unknown
   double lumen_level_hu = 0.0;          // mean smoothed HU of the brightest lumen (0: none)
   double second_trunk_level_hu = 0.0;   // portal-venous: the darker of the two tubes (0: none)
-  int lumens = 0;                       // parts kept
-  int rejected_shell = 0;               // parts dropped as enclosed by cortex
-  int rejected_spread = 0;              // parts dropped as not uniform
-  int rejected_surface = 0;             // parts dropped as brighter at their surface (bone)
-  int rejected_thin = 0;                // parts dropped as joined to no trunk
-  int rejected_organ = 0;               // parts dropped as an enhancing organ (below, not a tube)
+  double tube_level_hu = 0.0;  // mean smoothed HU of the brightest tube's trunk core (0: none)
+  int lumens = 0;              // parts kept
+  int rejected_shell = 0;      // parts dropped as enclosed by cortex
+  int rejected_spread = 0;     // parts dropped as not uniform
+  int rejected_surface = 0;    // parts dropped as brighter at their surface (bone)
+  int rejected_thin = 0;       // parts dropped as joined to no trunk
+  int rejected_organ = 0;      // parts dropped as an enhancing organ (below, not a tube)
   std::uint64_t voxels = 0;
 };
 

@@ -97,7 +97,7 @@ struct Branch {
   }
   void grow(const VesselParams& params) {
     hu = ct.data;  // a uniform bore: its smoothed HU is its HU
-    grow_branches(ct, body, hu, ridge, kSoftHu, kLumenHu, kCortexHu, params, lumen);
+    grow_branches(ct, body, hu, ridge, kSoftHu, kLumenHu, kLumenHu, kCortexHu, params, lumen);
   }
 };
 
@@ -152,9 +152,10 @@ struct AtTheEnd {
         for (std::int64_t i = lo[0]; i <= hi[0]; ++i)
           ct.at(i, j, k) = static_cast<std::int16_t>(hu);
   }
-  std::int64_t grow() {
+  std::int64_t grow(double blood_hu = kLumenHu) {
     const std::vector<std::int16_t> hu = ct.data;
-    grow_branches(ct, body, hu, ridge, kSoftHu, kLumenHu, kCortexHu, VesselParams{}, lumen);
+    grow_branches(ct, body, hu, ridge, kSoftHu, kLumenHu, blood_hu, kCortexHu, VesselParams{},
+                  lumen);
     return count(lumen);
   }
 };
@@ -199,6 +200,21 @@ TEST(GrowBranches, NoBranchFromTheEndDenserThanTheLumenOrWiderThanATrunksCore) {
   AtTheEnd narrower({24, 24, 48});
   narrower.box({6, 6, 0}, {15, 15, 47}, kLumenHu);
   EXPECT_EQ(narrower.grow(), 10 * 10 * 48);
+}
+
+TEST(GrowBranches, ABranchFromTheEndIsJudgedByTheBloodsLevelNotTheLumensDilutedMean) {
+  // The brightest lumen's mean is 300 HU (kLumenHu; an organ joined to it dilutes it), the blood
+  // in its tube core 390: a branch at 380 HU is as dense as that blood, and grown; at 400 HU it
+  // is denser than any blood here, and not.
+  AtTheEnd branch;
+  paint_branch(branch, 380.0);
+  EXPECT_EQ(branch.grow(390.0), 44 * 9 + 2 * 9);
+  AtTheEnd by_the_mean;
+  paint_branch(by_the_mean, 380.0);
+  EXPECT_EQ(by_the_mean.grow(kLumenHu), 0);
+  AtTheEnd denser;
+  paint_branch(denser, 400.0);
+  EXPECT_EQ(denser.grow(390.0), 0);
 }
 
 TEST(GrowBranches, NoBranchFromTheEndThatCortexWallsInAcrossTheBodyAxis) {

@@ -47,6 +47,7 @@ TEST(ContrastPhase, OneTubeAtTheAortasLevelIsArterial) {
   const ContrastPhase p = read_contrast_phase(c.mask, c.hu, kSoftHu, 400.0, {});
   EXPECT_EQ(p.name, "arterial");
   EXPECT_EQ(p.second_trunk_hu, 0.0);
+  EXPECT_EQ(p.tube_hu, 400.0);
 }
 
 TEST(ContrastPhase, TwoTubesSideBySideAtItsLevelArePortalVenous) {
@@ -57,6 +58,7 @@ TEST(ContrastPhase, TwoTubesSideBySideAtItsLevelArePortalVenous) {
   const ContrastPhase p = read_contrast_phase(c.mask, c.hu, kSoftHu, 400.0, {});
   EXPECT_EQ(p.name, "portal-venous");
   EXPECT_EQ(p.second_trunk_hu, 380.0);
+  EXPECT_EQ(p.tube_hu, 400.0) << "the brighter tube's";
 }
 
 TEST(ContrastPhase, ATubeBelowHalfTheAortasHeightIsAnUnfilledVein) {
@@ -86,7 +88,9 @@ TEST(ContrastPhase, WithoutATubeTheLumensLevelDecides) {
         if (std::hypot(static_cast<double>(i) - 30.0, static_cast<double>(j) - 30.0,
                        static_cast<double>(k) - 20.0) <= 5.0)
           c.mask.at(i, j, k) = 1;
-  EXPECT_EQ(read_contrast_phase(c.mask, c.hu, kSoftHu, kSoftHu + 170.0, {}).name, "arterial");
+  const ContrastPhase p = read_contrast_phase(c.mask, c.hu, kSoftHu, kSoftHu + 170.0, {});
+  EXPECT_EQ(p.name, "arterial");
+  EXPECT_EQ(p.tube_hu, 0.0) << "no tube";
   EXPECT_EQ(read_contrast_phase(c.mask, c.hu, kSoftHu, kSoftHu + 169.0, {}).name, "portal-venous");
 }
 
