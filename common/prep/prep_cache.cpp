@@ -145,6 +145,7 @@ nlohmann::json vessel_params_json(const PrepParams& params) {
           {"ridge_drop", v.ridge_drop},
           {"clear_contrast_hu", v.clear_contrast_hu},
           {"max_cortex_contact", v.max_cortex_contact},
+          {"max_clear_contrast_contact", v.max_clear_contrast_contact},
           {"max_spread_fraction", v.max_spread_fraction},
           {"min_lumen_ml", v.min_lumen_ml},
           {"closing_mm", v.closing_mm},

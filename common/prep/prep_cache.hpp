@@ -41,8 +41,9 @@ namespace palp {
 // vessel records second_trunk_level_hu; 38: where a lumen holds a tube, a part holding none and
 // dimmer than it is an organ at any level; 39: a branch piece on the scan's end judged by the
 // blood's level (the brightest lumen's mean or its tube core's, the larger; prep.json's vessel
-// records tube_level_hu) (docs/prep.md lists the rest)
-inline constexpr int kPrepAlgorithmVersion = 39;
+// records tube_level_hu); 40: a part beside cortex along more than two thirds of its faces is
+// marrow unless it averages cortical HU (docs/prep.md lists the rest)
+inline constexpr int kPrepAlgorithmVersion = 40;
 
 // Every parameter that changes the outputs: recorded in prep.json and part of the cache key.
 nlohmann::json params_json(const PrepParams& params);

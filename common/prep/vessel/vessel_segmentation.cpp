@@ -312,7 +312,8 @@ int drop_organs(const Grid& g, const RunTable& runs, const RunLabels& labels,
 enum class Verdict { lumen, small, thin, dim, shell, spread, surface };
 
 // Whether a part is a lumen (see the header): size, trunk, cortex contact, uniformity, surface.
-Verdict judge(const PartStats& s, double soft_peak_hu, double ml, const VesselParams& params) {
+Verdict judge(const PartStats& s, double soft_peak_hu, double cortical_hu, double ml,
+              const VesselParams& params) {
   if (static_cast<double>(s.voxels) * ml < params.min_lumen_ml) return Verdict::small;
   // Joined to a trunk: the aorta, a vena cava, the heart, whose core is as thick as no branch
   // apart from them, nor costal cartilage or a tendon of the same HU, is.
@@ -327,6 +328,10 @@ Verdict judge(const PartStats& s, double soft_peak_hu, double ml, const VesselPa
   // count as cortex contact).
   const bool clearly_contrast = s.mean() - soft_peak_hu >= params.clear_contrast_hu;
   if (contact > params.max_cortex_contact && !clearly_contrast) return Verdict::shell;
+  // ... but a part beside cortex along most of its surface is walled in by it, unless it
+  // averages cortical HU (no bone's marrow does; undiluted contrast, whose round edge reads as a
+  // ridge along its tangents, may)
+  if (contact > params.max_clear_contrast_contact && s.mean() < cortical_hu) return Verdict::shell;
   if (s.spread() > params.max_spread_fraction * (s.mean() - soft_peak_hu)) return Verdict::spread;
   // Bone is brightest at its surface (cortex over marrow); a lumen is uniform and its surface
   // darker (partial volume with its wall). Parts too thin for an inside are judged without.
@@ -388,8 +393,8 @@ void check(const CtVolume& ct, const Mask& body, double soft_peak_hu, const Vess
   if (body.grid.dims != ct.grid.dims || body.size() != ct.size())
     throw UsageError("segment_vessels: the body mask is not on the CT's grid");
   if (!(p.min_contrast_hu > 0.0) || !(p.ridge_drop > 0.0 && p.ridge_drop < 1.0) ||
-      !(p.max_cortex_contact >= 0.0) || !(p.max_spread_fraction > 0.0) ||
-      !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
+      !(p.max_cortex_contact >= 0.0) || !(p.max_clear_contrast_contact >= 0.0) ||
+      !(p.max_spread_fraction > 0.0) || !(p.min_lumen_ml >= 0.0) || !(p.closing_mm >= 0.0) ||
       !(p.trunk_core_mm >= 0.0 && p.trunk_core_mm <= 100.0) ||
       !(p.branch_clearance_mm >= 0.0 && p.branch_clearance_mm <= 20.0) ||
       !(p.organ_below_share >= 0.0 && p.organ_below_share < 1.0) ||
@@ -525,9 +530,9 @@ VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_pe
   const std::vector<PartStats> stats = part_stats(ct, runs, labels, opened, near, hu, cores);
   const double ml = segmentation::voxel_ml(g);
   std::vector<Verdict> verdicts(stats.size());
-  for (std::size_t c = 0; c < stats.size(); ++c)
-    verdicts[c] = judge(stats[c], soft_peak_hu, ml, params);
   const double cortical_hu = bone_seed_hu + params.cortex_margin_hu;  // only cortical bone
+  for (std::size_t c = 0; c < stats.size(); ++c)
+    verdicts[c] = judge(stats[c], soft_peak_hu, cortical_hu, ml, params);
   mark_marrow_parts(ct, runs, labels, cortex, cortical_hu, soft_peak_hu + params.min_contrast_hu,
                     params, verdicts);
   std::vector<std::uint8_t> keep(stats.size(), 0);

@@ -18,7 +18,13 @@
 //              cortex along at most max_cortex_contact of their boundary faces (marrow lies in
 //              its cortex; a lumen rests on bone along a strip) unless they average
 //              clear_contrast_hu above S (cancellous bone never does; a dissection's flap and the
-//              heart's trabeculae count as contact), spread (HU standard deviation) at most
+//              heart's trabeculae count as contact) and touch it along at most
+//              max_clear_contrast_contact unless they average cortical HU (a lumen, flap and
+//              all, is open to its wall and fat along most of its surface; a part walled in
+//              along more is marrow its cortex encloses, lifted above clear_contrast_hu by an
+//              endplate a thick slice blurs into it, while no marrow averages cortical HU and
+//              undiluted contrast, its round edge a ridge along its tangents, may), spread (HU
+//              standard deviation) at most
 //              max_spread_fraction of their height above S, and are not brighter at their
 //              surface than inside (bone is, cortex over marrow; a lumen's edge is darker), and
 //              have at most half their voxels walled in by cortex on all six axis rays (through
@@ -100,16 +106,17 @@
 namespace palp {
 
 struct VesselParams {
-  double min_contrast_hu = 60.0;          // a lumen voxel's HU above the soft-tissue peak
-  double min_lumen_contrast_hu = 90.0;    // a lumen's mean smoothed HU above the peak
-  double trunk_core_mm = 6.0;             // a lumen holds a voxel this deep: joined to a trunk
-  double split_mm = 2.0;                  // bridges thinner than twice this part a lumen from bone
-  double ridge_drop = 0.35;               // cortex: a ridge, this share of its height above S lower
-                                          // on both sides (bone_seed level and up)
-  double max_pool_margin_hu = 1000.0;     // lumens below bone seed + this (dense cortex is above)
-  double max_cortex_contact = 0.3;        // share of a lumen's boundary faces beside cortex
-  double max_spread_fraction = 0.5;       // HU standard deviation / (level - soft-tissue peak)
-  double clear_contrast_hu = 250.0;       // a part this far above S on average is contrast
+  double min_contrast_hu = 60.0;        // a lumen voxel's HU above the soft-tissue peak
+  double min_lumen_contrast_hu = 90.0;  // a lumen's mean smoothed HU above the peak
+  double trunk_core_mm = 6.0;           // a lumen holds a voxel this deep: joined to a trunk
+  double split_mm = 2.0;                // bridges thinner than twice this part a lumen from bone
+  double ridge_drop = 0.35;             // cortex: a ridge, this share of its height above S lower
+                                        // on both sides (bone_seed level and up)
+  double max_pool_margin_hu = 1000.0;   // lumens below bone seed + this (dense cortex is above)
+  double max_cortex_contact = 0.3;      // share of a lumen's boundary faces beside cortex
+  double max_spread_fraction = 0.5;     // HU standard deviation / (level - soft-tissue peak)
+  double clear_contrast_hu = 250.0;     // a part this far above S on average is contrast
+  double max_clear_contrast_contact = 2.0 / 3.0;  // ... unless more of its faces are beside cortex
   double min_lumen_ml = 0.3;              // smaller parts are noise, calcifications, partial volume
   double closing_mm = 2.0;                // flap and plaque shadows filled inside a lumen
   double arterial_above_soft_hu = 170.0;  // the phase's level where no trunk is a tube (a slab)

@@ -34,7 +34,8 @@ struct Scene {
 // the grid's i axis points to the patient's right, so the tube is an aorta on the front of the
 // vertebra and the vein a vena cava 40 mm to its right.
 Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 900.0,
-            bool endplates = false, std::optional<double> vein_hu = std::nullopt) {
+            bool endplates = false, std::optional<double> vein_hu = std::nullopt,
+            double marrow_hu = 220.0) {
   Grid g;
   g.dims = {60, 70, 24};  // 90 x 105 x 36 mm
   g.spacing = {kSpacing, kSpacing, kSpacing};
@@ -68,7 +69,7 @@ Scene scene(double tube_hu, double branch_radius_mm = 0.0, double cortex_hu = 90
         const double in_body = endplates ? (z > 4.0 && z < 32.0) : 1.0;
         const double in_marrow = endplates ? (z > 6.0 && z < 30.0) : 1.0;
         hu += in_body * inside(12.0, r_bone) * (cortex_hu - hu);
-        hu += in_marrow * inside(10.0, r_bone) * (220.0 - hu);
+        hu += in_marrow * inside(10.0, r_bone) * (marrow_hu - hu);
         if (r_tube < 9.0) {
           s.tube.at(i, j, k) = 1;
           s.tube_clear.at(i, j, k) = r_bone >= 12.0 + 2.0 * kSpacing;
@@ -131,9 +132,24 @@ TEST(SegmentVessels, MarrowInACortexIsKeptOutByTheCortexContact) {
   // The marrow's level and uniformity are a lumen's: only its cortical shell tells it apart.
   const Scene s = scene(350.0);
   VesselParams no_shell_rule;
-  no_shell_rule.max_cortex_contact = 1.0;
+  no_shell_rule.max_cortex_contact = no_shell_rule.max_clear_contrast_contact = 1.0;
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, no_shell_rule);
   EXPECT_GT(count_both(r.lumen, s.marrow), count(s.marrow) / 2) << "the marrow is no test";
+}
+
+TEST(SegmentVessels, MarrowBrightAsContrastIsKeptOutWhereItsCortexWallsMostOfIt) {
+  // Marrow at 320 HU (280 above the soft tissue: clearly contrast by its level alone, as a thick
+  // slice's blurred endplate lifts a vertebral body's marrow) in its cortex ring, a column through
+  // the scan: beside cortex along nearly all its faces, more than any lumen. The tube stays.
+  const Scene s = scene(400.0, 0.0, 900.0, false, std::nullopt, 320.0);
+  const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
+  EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
+  EXPECT_EQ(count_both(r.lumen, s.tube_clear), count(s.tube_clear));
+  VesselParams off;
+  off.max_clear_contrast_contact = 1.0;
+  EXPECT_GT(count_both(segment_vessels(s.ct, s.body, kSoftHu, 300.0, off).lumen, s.marrow),
+            count(s.marrow) / 2)
+      << "the marrow is no test";
 }
 
 TEST(SegmentVessels, NoContrastNoVessel) {
@@ -245,7 +261,7 @@ TEST(SegmentVessels, MarrowWalledInOnEverySideIsNotALumen) {
   // organ before the enclosure is asked (AnOrganDimmerThanATubeIsNoLumenEvenAboveHalfWay).
   const Scene s = scene(350.0, 0.0, 900.0, true);
   VesselParams no_shell_rule;
-  no_shell_rule.max_cortex_contact = 1.0;
+  no_shell_rule.max_cortex_contact = no_shell_rule.max_clear_contrast_contact = 1.0;
   no_shell_rule.organ_below_share = 0.0;
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0, no_shell_rule);
   EXPECT_EQ(count_both(r.lumen, s.marrow), 0);
