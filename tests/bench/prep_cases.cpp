@@ -3,7 +3,8 @@
 // slabs and where they lie, 5 mm slices, both arms with their brachial arteries on the humerus,
 // a metal implant, a dissected aorta; common/io/phantom.hpp) and, when ../shared/data has them,
 // the real CTs with their labels. One Markdown table on stdout: case, structure, Dice, ASSD mm,
-// then the case's further figure with its goal and whether it is met; progress on stderr. It measures; it is not a test (tests/bench/prep_cases.sh builds and runs it).
+// then the case's further figure with its goal and whether it is met; progress on stderr. It
+// measures; it is not a test (tests/bench/prep_cases.sh builds and runs it).
 //
 // Figures and goals (issue 38; the phantoms' vessel goals are the real aorta case's):
 //   bone              Dice and ASSD against the truth bone (phantom) or the expert labels (value 2)
@@ -269,7 +270,9 @@ std::vector<PhantomCase> phantom_cases() {
        "torso,contrast=arterial,dissection,dims=384x256x40,spacing=1.25x1.25x5", "arterial"},
       {"aortic dissection, slab 20 x 1.5 mm", slab + ",contrast=arterial,dissection", "arterial"},
       {"slab 20 x 1.5 mm at z -9 mm (SMA cut off)", slab + ",contrast=arterial,level=-9",
-       "arterial"}};
+       "arterial"},
+      {"slab 20 x 1.5 mm, aorta 150 HU, both arms (as the unseen series)",
+       slab + ",aorta-hu=150,arms=2", "arterial"}};
 }
 
 // With `keep` (--keep), the truth masks are written beside the prep's (truth_bone.nii.gz,
