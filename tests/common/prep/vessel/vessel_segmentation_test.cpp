@@ -273,6 +273,30 @@ TEST(SegmentVessels, MarrowWalledInOnEverySideIsNotALumen) {
       << "the marrow is no test";
 }
 
+// Calls f(i, j, k, x, y, z) for every voxel of `g`, with its centre in mm.
+template <class F>
+void for_each_centre(const Grid& g, F f) {
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i)
+        f(i, j, k, (static_cast<double>(i) + 0.5) * kSpacing,
+          (static_cast<double>(j) + 0.5) * kSpacing, (static_cast<double>(k) + 0.5) * kSpacing);
+}
+
+// A ball 20 mm across (a kidney's enhancing tissue) at 160 HU beside the trunk, centred at
+// (72, 68, 18) mm.
+Mask add_organ(Scene& s) {
+  Mask organ(s.ct.grid, 0, "organ");
+  for_each_centre(
+      s.ct.grid, [&](std::int64_t i, std::int64_t j, std::int64_t k, double x, double y, double z) {
+        const double r = std::hypot(x - 72.0, y - 68.0, z - 18.0);
+        if (r > 10.0) return;
+        s.ct.at(i, j, k) = static_cast<std::int16_t>(160 + (i * 7 + j * 13 + k * 5) % 21 - 10);
+        organ.at(i, j, k) = r <= 10.0 - kSpacing;
+      });
+  return organ;
+}
+
 TEST(SegmentVessels, AnEnhancingOrganFarBelowTheArteriesIsNoLumen) {
   // Beside the 400 HU trunk, an organ (a ball 20 mm across, a kidney's or the spleen's enhancing
   // tissue) and a vein (a tube 13 mm across running 80 mm across the scene), both at 160 HU:
@@ -280,20 +304,15 @@ TEST(SegmentVessels, AnEnhancingOrganFarBelowTheArteriesIsNoLumen) {
   // for a trunk's core. The organ is no tube and goes; the vein stays. With the rule off the
   // organ is a lumen.
   Scene s = scene(400.0);
-  Mask organ(s.ct.grid, 0, "organ"), vein(s.ct.grid, 0, "vein");
-  for (std::int64_t k = 0; k < s.ct.grid.dims[2]; ++k)
-    for (std::int64_t j = 0; j < s.ct.grid.dims[1]; ++j)
-      for (std::int64_t i = 0; i < s.ct.grid.dims[0]; ++i) {
-        const double x = (static_cast<double>(i) + 0.5) * kSpacing;
-        const double y = (static_cast<double>(j) + 0.5) * kSpacing;
-        const double z = (static_cast<double>(k) + 0.5) * kSpacing;
-        const double r_organ = std::hypot(x - 72.0, y - 68.0, z - 18.0);
+  const Mask organ = add_organ(s);
+  Mask vein(s.ct.grid, 0, "vein");
+  for_each_centre(
+      s.ct.grid, [&](std::int64_t i, std::int64_t j, std::int64_t k, double x, double y, double z) {
         const double r_vein = x > 5.0 && x < 85.0 ? std::hypot(y - 92.0, z - 18.0) : 1e9;
-        if (r_organ > 10.0 && r_vein > 6.5) continue;
+        if (r_vein > 6.5) return;
         s.ct.at(i, j, k) = static_cast<std::int16_t>(160 + (i * 7 + j * 13 + k * 5) % 21 - 10);
-        organ.at(i, j, k) = r_organ <= 10.0 - kSpacing;
         vein.at(i, j, k) = r_vein <= 6.5 - kSpacing;
-      }
+      });
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
   EXPECT_EQ(count_both(r.lumen, organ), 0);
   EXPECT_EQ(r.rejected_organ, 1);
@@ -302,23 +321,6 @@ TEST(SegmentVessels, AnEnhancingOrganFarBelowTheArteriesIsNoLumen) {
   off.organ_below_share = 0.0;
   const VesselResult without = segment_vessels(s.ct, s.body, kSoftHu, 300.0, off);
   EXPECT_GT(count_both(without.lumen, organ) * 2, count(organ)) << "the organ is no test";
-}
-
-// A ball 20 mm across (a kidney's enhancing tissue) at 160 HU beside the trunk at `trunk_hu`.
-Mask add_organ(Scene& s) {
-  Mask organ(s.ct.grid, 0, "organ");
-  for (std::int64_t k = 0; k < s.ct.grid.dims[2]; ++k)
-    for (std::int64_t j = 0; j < s.ct.grid.dims[1]; ++j)
-      for (std::int64_t i = 0; i < s.ct.grid.dims[0]; ++i) {
-        const double x = (static_cast<double>(i) + 0.5) * kSpacing;
-        const double y = (static_cast<double>(j) + 0.5) * kSpacing;
-        const double z = (static_cast<double>(k) + 0.5) * kSpacing;
-        const double r = std::hypot(x - 72.0, y - 68.0, z - 18.0);
-        if (r > 10.0) continue;
-        s.ct.at(i, j, k) = static_cast<std::int16_t>(160 + (i * 7 + j * 13 + k * 5) % 21 - 10);
-        organ.at(i, j, k) = r <= 10.0 - kSpacing;
-      }
-  return organ;
 }
 
 // The slices [first, first + n) of `s` (a shorter scan of the same scene).
@@ -370,19 +372,15 @@ TEST(SegmentVessels, ATrunkBelowADenserVeinIsNoOrgan) {
   // brightest lumen; the 400 HU trunk lies below half way to it (470 HU) and its part is not
   // elongated enough to be a tube (36 mm long, 18 mm across), but its trunk core is: it stays.
   Scene s = scene(400.0);
-  for (std::int64_t k = 0; k < s.ct.grid.dims[2]; ++k)
-    for (std::int64_t j = 0; j < s.ct.grid.dims[1]; ++j)
-      for (std::int64_t i = 0; i < s.ct.grid.dims[0]; ++i) {
-        const double x = (static_cast<double>(i) + 0.5) * kSpacing;
-        const double y = (static_cast<double>(j) + 0.5) * kSpacing;
-        const double z = (static_cast<double>(k) + 0.5) * kSpacing;
+  for_each_centre(
+      s.ct.grid, [&](std::int64_t i, std::int64_t j, std::int64_t k, double x, double y, double z) {
         // partial volume at its edge, as scene() draws
         const double share = std::clamp(
             0.5 + (12.0 - std::hypot(x - 72.0, y - 85.0, z - 18.0)) / kSpacing, 0.0, 1.0);
         if (share > 0.0)
           s.ct.at(i, j, k) =
               static_cast<std::int16_t>(s.ct.at(i, j, k) + share * (900.0 - s.ct.at(i, j, k)));
-      }
+      });
   const VesselResult r = segment_vessels(s.ct, s.body, kSoftHu, 300.0);
   EXPECT_GT(r.lumen_level_hu, 800.0) << "the dense vein is the brightest lumen";
   EXPECT_EQ(r.rejected_organ, 0);
