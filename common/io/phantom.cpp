@@ -101,7 +101,7 @@ void check_options(const std::string& name, const PhantomOptions& o) {
        o.level_mm != 0.0))
     throw UsageError("phantom " + name +
                      " has no contrast, aorta-hu, arms, level, metal, structures or dissection "
-                     "(torso and trunk)");
+                     "(the torso's options; the trunk takes contrast, aorta-hu and structures)");
   if (o.arms < 0 || o.arms > 2)
     throw UsageError("phantom option arms needs 0, 1 or 2, got " + std::to_string(o.arms));
   if (o.aorta_hu && !(*o.aorta_hu >= -1000.0 && *o.aorta_hu <= 3000.0))
