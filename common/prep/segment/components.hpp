@@ -158,18 +158,27 @@ std::vector<std::uint8_t> components_with(const Grid& g, const RunTable& t, cons
   return result;
 }
 
-// Per component: how many of its voxels satisfy `counted` (runs counted in parallel, summed).
-template <class Counted>
-std::vector<std::int64_t> count_per_component(const Grid& g, const RunTable& t, const RunLabels& l,
-                                              Counted counted) {
+// Per component: the sum of value(linear index), an integer, over its voxels (each run summed in
+// parallel over slices, then the runs summed per component in one thread: a component spans
+// slices, so it never takes sums from two threads).
+template <class Value>
+std::vector<std::int64_t> sum_per_component(const Grid& g, const RunTable& t, const RunLabels& l,
+                                            Value value) {
   std::vector<std::int64_t> per_run(t.runs.size(), 0);
   for_each_run(g, t, [&](std::int64_t r, std::int64_t, std::size_t first) {
     for (std::int64_t i = 0; i < t.runs[r].end - t.runs[r].begin; ++i)
-      if (counted(first + static_cast<std::size_t>(i))) ++per_run[r];
+      per_run[r] += value(first + static_cast<std::size_t>(i));
   });
   std::vector<std::int64_t> result(l.voxels.size(), 0);
   for (std::size_t r = 0; r < per_run.size(); ++r) result[l.of_run[r]] += per_run[r];
   return result;
+}
+
+// Per component: how many of its voxels satisfy `counted`.
+template <class Counted>
+std::vector<std::int64_t> count_per_component(const Grid& g, const RunTable& t, const RunLabels& l,
+                                              Counted counted) {
+  return sum_per_component(g, t, l, [&](std::size_t n) -> std::int64_t { return counted(n); });
 }
 
 // Whether any face neighbour of voxel n (linear index on g) satisfies pred(linear index).

@@ -210,18 +210,14 @@ void keep_branch_like_pieces(const std::vector<std::int16_t>& hu, double blood_h
   const double max_mm2 = std::numbers::pi * params.trunk_core_mm * params.trunk_core_mm;
   const segmentation::RunTable runs = segmentation::extract_runs(seeds, false);
   const segmentation::RunLabels labels = segmentation::label_runs(g, runs);
-  std::vector<double> sum(labels.voxels.size(), 0.0);
-  segmentation::for_each_run(g, runs, [&](std::int64_t r, std::int64_t, std::size_t first) {
-    double& s = sum[static_cast<std::size_t>(labels.of_run[r])];
-    for (std::int64_t i = 0; i < runs.runs[r].end - runs.runs[r].begin; ++i)
-      s += hu[first + static_cast<std::size_t>(i)];
-  });
+  const std::vector<std::int64_t> sum = segmentation::sum_per_component(
+      g, runs, labels, [&](std::size_t n) -> std::int64_t { return hu[n]; });
   segmentation::rewrite_runs(
       g, runs, labels,
       [&](std::int64_t c) {
         const auto k = static_cast<std::size_t>(c);
         const auto voxels = static_cast<double>(labels.voxels[k]);
-        return voxels * voxel_mm2 <= max_mm2 && sum[k] / voxels <= blood_hu;
+        return voxels * voxel_mm2 <= max_mm2 && static_cast<double>(sum[k]) / voxels <= blood_hu;
       },
       seeds);
 }

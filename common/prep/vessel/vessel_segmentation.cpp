@@ -483,7 +483,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
   check(ct, body, soft_peak_hu, params);
   const segmentation::VoxelBox box = vessel_search_box(ct, body, soft_peak_hu, params);
   std::int64_t kept = 1;
-  for (int a = 0; a < 3; ++a) kept *= box.hi[a] - box.lo[a];
+  for (int a = 0; a < 3; ++a) kept *= box.size(a);
   if (kept == 0 || kept * 10 > static_cast<std::int64_t>(ct.size()) * 9)  // none, or no gain
     return search_vessels(ct, body, soft_peak_hu, bone_seed_hu, params);
   VesselResult result =
