@@ -1,6 +1,6 @@
 // Volumes for tests that move a whole patient: the torso phantom on a coarse grid, and a volume
 // turned 180 degrees about the body axis with its direction matrix kept (the table, behind a
-// supine patient, then lies in front, as under a prone one).
+// supine patient, then lies in front, as under a prone one); and the torso drawn with its truth.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +16,18 @@ inline CtVolume coarse_torso() {
   o.dims = Index3{160, 107, 48};
   o.spacing = Vec3{3.0, 3.0, 4.0};
   return make_phantom("torso", o);
+}
+
+// The torso phantom with these options, and its truth masks.
+struct DrawnTorso {
+  CtVolume ct;
+  PhantomTruth truth;
+};
+
+inline DrawnTorso torso_with(const PhantomOptions& o) {
+  DrawnTorso d;
+  d.ct = make_phantom("torso", o, &d.truth);
+  return d;
 }
 
 // i and j reversed, the grid (and its direction matrix) kept.

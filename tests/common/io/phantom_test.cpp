@@ -15,6 +15,7 @@
 
 #include "base/errors.hpp"
 #include "io/ct_io.hpp"
+#include "support/torso_scenes.hpp"
 
 namespace palp {
 namespace {
@@ -316,16 +317,8 @@ TEST(Phantom, TorsoGridOverridesKeepTheWholeScene) {
 // ---------------------------------------------------------------------------------------------
 // Torso options (issue 38): contrast phases, aorta HU, arms, metal, thin slabs, scene strings.
 
-struct Drawn {
-  CtVolume ct;
-  PhantomTruth truth;
-};
-
-Drawn torso_with(const PhantomOptions& o) {
-  Drawn d;
-  d.ct = make_phantom("torso", o, &d.truth);
-  return d;
-}
+using Drawn = testing::DrawnTorso;
+using testing::torso_with;
 
 PhantomOptions with_contrast(PhantomContrast c) {
   PhantomOptions o;

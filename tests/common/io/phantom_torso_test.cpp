@@ -14,20 +14,14 @@
 
 #include "base/errors.hpp"
 #include "io/phantom.hpp"
+#include "support/mask_metrics.hpp"
+#include "support/torso_scenes.hpp"
 
 namespace palp {
 namespace {
 
-struct Drawn {
-  CtVolume ct;
-  PhantomTruth truth;
-};
-
-Drawn torso_with(const PhantomOptions& o) {
-  Drawn d;
-  d.ct = make_phantom("torso", o, &d.truth);
-  return d;
-}
+using Drawn = testing::DrawnTorso;
+using testing::torso_with;
 
 // Voxels of `a` that `b` lacks.
 Mask minus(const Mask& a, const Mask& b) {
@@ -107,8 +101,7 @@ TEST(PhantomTorsoArms, WithTheVesselTreeEachArmHasItsBrachialArteryBesideTheHume
     with_arms.arms = arms;
     without.arms = 0;
     const Drawn a = torso_with(with_arms), none = torso_with(without);
-    EXPECT_EQ(minus(none.truth.vessel, a.truth.vessel).data,
-              std::vector<std::uint8_t>(a.truth.vessel.size(), 0))
+    EXPECT_EQ(testing::count_and_not(none.truth.vessel, a.truth.vessel), 0)
         << "an arm covers none of the torso's vessels";
     const Mask brachial = minus(a.truth.vessel, none.truth.vessel);
     const Mask humerus = minus(a.truth.bone, none.truth.bone);
