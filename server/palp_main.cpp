@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "base/batch_memory.hpp"
 #include "base/errors.hpp"
 #include "cli/commands.hpp"
 #include "prep/output_guard.hpp"
@@ -82,6 +83,7 @@ int main(int argc, char** argv) {
   // Ctrl-C or SIGTERM during a prep (palp prep, or a scene prepped into the cache by run, traj
   // or bench) leaves no temporary file and no directory it created; otherwise they act as ever.
   palp::install_prep_interrupt_cleanup();
+  palp::keep_freed_memory_for_reuse();  // a batch command: freed masks serve the next stage
   try {
     return palp::dispatch(argc, argv);
   } catch (const palp::UsageError& e) {
