@@ -5,7 +5,8 @@
 //   cortex      CT -> bright ridges (cortex, trabeculae; vessel_filters.hpp); near = cortex and
 //               its face neighbours
 //   candidates  CT, smoothed HU, body, near -> contrast-level voxels away from cortex
-//   open        candidates -> cores (split_mm deep) -> the voxels within split_mm of a core
+//   open        candidates -> cores (split_mm deep) -> the voxels within split_mm of a core (on
+//               the candidates' box)
 //   parts       opened -> 6-connected parts; per part: voxels, HU moments, trunk, boundary faces,
 //               faces on near, surface and inner HU
 //   keep        parts -> lumens (size, trunk, contrast, shell, uniformity, surface, marrow)
@@ -295,8 +296,8 @@ void check(const CtVolume& ct, const Mask& body, double soft_peak_hu, const Vess
 // Opens the candidates: those within split_mm of a voxel split_mm deep, so that a bridge of
 // partial volume thinner than twice that (a lumen resting on a vertebra, a rib) parts them.
 // `cores` receives 1 split_mm deep in the candidates, kTrunkCore trunk_core_mm deep (one float
-// map, its buffer reused for the reach from the cores).
-Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& cores) {
+// map, its buffer reused for the reach from the cores). On the grid it is given.
+Mask open_on_grid(const Mask& candidates, const VesselParams& params, Mask& cores) {
   const Grid& g = candidates.grid;
   const double h_min = std::min({g.spacing[0], g.spacing[1], g.spacing[2]});
   const double h_max = std::max({g.spacing[0], g.spacing[1], g.spacing[2]});
@@ -319,6 +320,29 @@ Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& c
   const float* reach = depth.data.data();
   for (std::size_t n = 0; n < count; ++n)
     open[n] = (in[n] != 0) & (0.5 * h_min - reach[n] <= split + h_min);
+  return opened;
+}
+
+// The same on the candidates' box grown by one voxel, pasted back: the distance maps, the
+// opening's largest buffers, cover only that box. Exact: the nearest non-candidate of a
+// candidate is never farther than the box's outer layer (all non-candidates), and every core lies
+// in the box.
+Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& cores) {
+  const segmentation::VoxelBox box = segmentation::nonzero_box(candidates, 1);
+  const std::int64_t box_voxels = box.size(0) * box.size(1) * box.size(2);
+  // a box of nine tenths or more of the grid gains nothing
+  if (box_voxels * 10 > static_cast<std::int64_t>(candidates.size()) * 9)
+    return open_on_grid(candidates, params, cores);
+  if (box_voxels == 0) {  // no candidate
+    cores = Mask(candidates.grid, 0, "vessel cores");
+    return Mask(candidates.grid, 0, "vessel parts");
+  }
+  Mask box_cores;
+  const Mask box_opened = open_on_grid(crop(candidates, box), params, box_cores);
+  Mask opened(candidates.grid, 0, "vessel parts");
+  cores = Mask(candidates.grid, 0, "vessel cores");
+  paste(box_opened, box, opened);
+  paste(box_cores, box, cores);
   return opened;
 }
 
@@ -408,11 +432,12 @@ VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_pe
           (in_body[n] != 0) & (by_cortex[n] == 0) & (own[n] >= low_hu) & (smooth[n] < max_pool_hu);
   }
   Mask cores;
-  const Mask opened = open_candidates(candidates, params, cores);
+  Mask opened = open_candidates(candidates, params, cores);
   // parts: 6-connected, with their size, level, spread, trunk core and cortex contact
   const RunTable runs = extract_runs(opened, false);
   const RunLabels labels = label_runs(g, runs);
   const std::vector<PartStats> stats = part_stats(ct, runs, labels, opened, near, hu, cores);
+  opened = Mask{};  // its parts are in the runs; each mask is released once used
   const double ml = segmentation::voxel_ml(g);
   std::vector<Verdict> verdicts(stats.size());
   const double cortical_hu = bone_seed_hu + params.cortex_margin_hu;  // only cortical bone
@@ -447,12 +472,15 @@ VesselResult search_vessels(const CtVolume& ct, const Mask& body, double soft_pe
   grow_within(result.lumen, [&](std::size_t n) {
     return candidates.data[n] && !within_a_face(other, n) && !within_a_face(near, n);
   });
+  candidates = Mask{};
+  other = Mask{};
   if (brightest == stats.size()) return result;  // no lumen: phase none
   result.lumen_level_hu = stats[brightest].mean();
   Mask trunks(g, 0, "trunk cores");  // the kept lumens' cores
   segmentation::rewrite_runs(
       g, runs, labels, [&](std::int64_t c) { return keep[c]; }, trunks);
   keep_trunk_cores(cores, trunks);
+  cores = Mask{};
   const ContrastPhase phase =
       read_contrast_phase(trunks, hu, soft_peak_hu, result.lumen_level_hu, params);
   result.contrast_phase = phase.name;
