@@ -201,6 +201,29 @@ bool FalconDevice::answers_frames(libusb_device_handle* handle, int tries) {
   return false;
 }
 
+namespace {
+
+// The bootloader's echo of kBootEnter. An answer to an earlier probe may come first: the probe
+// loop waits 100 ms for each and probes again, so on a loaded host the device's answer to the
+// first can arrive after the loop gave up on it, and the second answer then waits in the FIFO
+// (libnifalcon waits a second for each and never probes twice this fast). Its bytes, and the
+// leading 0x00 some hosts see, are passed over, at most two answers' worth; any other byte is
+// the failure, in `echo`.
+bool read_boot_echo(Port& port, std::uint8_t& echo) {
+  constexpr int kMostSkipped = 2 * static_cast<int>(fp::kBootProbeReply.size() + 1);
+  for (int skipped = 0; skipped <= kMostSkipped; ++skipped) {
+    if (port.read(&echo, 1, 200) != 1) return false;
+    if (echo == fp::kBootEnter) return true;
+    const bool probe_answer =
+        echo == 0x00 || std::find(fp::kBootProbeReply.begin(), fp::kBootProbeReply.end(), echo) !=
+                            fp::kBootProbeReply.end();
+    if (!probe_answer) return false;
+  }
+  return false;
+}
+
+}  // namespace
+
 std::string FalconDevice::upload(libusb_device_handle* handle) {
   Port port{handle, {}};
   // Bootloader: 16 ms latency, 9600 baud 8N1, no flow control, RTS low, DTR low -> high (reset)
@@ -230,9 +253,9 @@ std::string FalconDevice::upload(libusb_device_handle* handle) {
       !port.control(fp::kSioSetBaudRate, fp::kBaudUpload, "baud rate"))
     return port.error;
   const std::uint8_t enter = fp::kBootEnter;
-  std::uint8_t echo = 0;
   if (!port.write(&enter, 1)) return port.error;
-  if (port.read(&echo, 1, 200) != 1 || echo != fp::kBootEnter)
+  std::uint8_t echo = 0;
+  if (!read_boot_echo(port, echo))
     return "bootloader handshake failed: 'A' not echoed (got " +
            (port.error.empty() ? hex(echo) : port.error) + ")";
   const std::vector<std::uint8_t>& image = options_.firmware;

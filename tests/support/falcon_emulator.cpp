@@ -170,6 +170,10 @@ void EmulatedFalcon::corrupt_echo_attempts(int n) {
   const std::lock_guard lock(mutex_);
   echo_faults_ = n;
 }
+void EmulatedFalcon::delay_first_probe_reply() {
+  const std::lock_guard lock(mutex_);
+  delay_probe_reply_ = true;
+}
 void EmulatedFalcon::set_running() {
   const std::lock_guard lock(mutex_);
   mode_ = Mode::Running;
@@ -190,6 +194,10 @@ EmulatedFalcon::Snapshot EmulatedFalcon::snapshot() {
 
 ControlReply EmulatedFalcon::control(const ControlRequest& r) {
   const std::lock_guard lock(mutex_);
+  if (probe_reply_pending_) {  // a probe's answer that comes after the one before it was read
+    tx_.insert(tx_.end(), nif::kBootReply.begin(), nif::kBootReply.end());
+    probe_reply_pending_ = false;
+  }
   if (r.request_type != nif::kVendorOut) return ControlReply::stalled();
   switch (r.request) {
     case nif::kSioReset:
@@ -239,7 +247,10 @@ void EmulatedFalcon::boot_out(const std::vector<std::uint8_t>& packet) {
       if (!dtr_reset_ || baud_ != nif::kBaud9600) return;
       boot_rx_.insert(boot_rx_.end(), packet.begin(), packet.end());
       if (ends_with_probe(boot_rx_)) {
-        tx_.insert(tx_.end(), nif::kBootReply.begin(), nif::kBootReply.end());
+        probe_reply_held_ = delay_probe_reply_;
+        delay_probe_reply_ = false;
+        if (!probe_reply_held_)
+          tx_.insert(tx_.end(), nif::kBootReply.begin(), nif::kBootReply.end());
         boot_rx_.clear();
         mode_ = Mode::Probed;
         ++counters_.probes;
@@ -249,7 +260,11 @@ void EmulatedFalcon::boot_out(const std::vector<std::uint8_t>& packet) {
       if (baud_ == nif::kBaud9600) {  // the probe again: answered again
         boot_rx_.insert(boot_rx_.end(), packet.begin(), packet.end());
         if (ends_with_probe(boot_rx_)) {
+          // the held answer now; this probe's own once the host has taken it (at its next
+          // control request)
           tx_.insert(tx_.end(), nif::kBootReply.begin(), nif::kBootReply.end());
+          probe_reply_pending_ = probe_reply_held_;
+          probe_reply_held_ = false;
           boot_rx_.clear();
         }
         return;

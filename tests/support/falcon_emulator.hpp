@@ -89,6 +89,10 @@ class EmulatedFalcon {
   void drop_replies(int n);
   void inject(std::vector<std::uint8_t> bytes);
   void corrupt_echo_attempts(int n);
+  // The bootloader's answer to the first probe comes only when the host probes again (later
+  // than it waited: a loaded machine), and the answer to that second probe after the host has
+  // read the first: one answer too many waits when the host goes on to the 'A'.
+  void delay_first_probe_reply();
   // The firmware is already running (e.g. palpd restarted without a power cycle).
   void set_running();
 
@@ -139,6 +143,7 @@ class EmulatedFalcon {
   std::vector<std::uint8_t> image_;    // firmware received
   int echo_faults_ = 0;
   bool echo_fault_this_load_ = false;
+  bool delay_probe_reply_ = false, probe_reply_held_ = false, probe_reply_pending_ = false;
   std::vector<std::uint8_t> host_rx_;
   std::int64_t last_tick_ns_ = -1, last_in_ns_ = 0;
   // mechanism

@@ -20,8 +20,8 @@
 
 #include "base/errors.hpp"
 #include "base/patient_frame.hpp"
-#include "loop/haptic_loop.hpp"
 #include "devices/falcon_kinematics.hpp"
+#include "loop/haptic_loop.hpp"
 #include "model/registration.hpp"
 #include "net/server.hpp"
 #include "safety/engagement.hpp"
@@ -229,6 +229,23 @@ TEST_F(FalconTest, EchoMismatchIsRetriedThenRefusedWithTheByte) {
   EXPECT_EQ(device->counters().upload_failures, 3u);
   DeviceSample sample;
   EXPECT_EQ(device->read(0, sample), DeviceStatus::Absent);
+  device->deactivate();
+}
+
+TEST_F(FalconTest, AProbeAnsweredLateDoesNotSpoilTheHandshake) {
+  // The first probe's answer comes after the host stopped waiting for it (when it probes again),
+  // the second probe's answer after the host read the first: it must not be read as the 'A'
+  // echo (the fresh clone's loaded ctest run once failed all three loads so: "'A' not echoed
+  // (got 0x0a)", the first byte of a probe's answer).
+  EmulatedFalcon emu(*testbed_, fake_firmware());
+  emu.delay_first_probe_reply();
+  emu.power_on();
+  auto device = falcon();
+  ASSERT_EQ(device->activate(), DeviceStatus::Ok);
+  ASSERT_TRUE(wait_until([&] { return device->link_state() == usb::LinkState::Present; }, kWait))
+      << device->status_message();
+  EXPECT_EQ(device->counters().upload_failures, 0u) << device->status_message();
+  EXPECT_EQ(emu.snapshot().loads, 1u);
   device->deactivate();
 }
 
