@@ -4,16 +4,17 @@
 // distance map), and prep makes and frees dozens of them. glibc hands each such block out as
 // fresh anonymous memory, and touching it costs one page fault per 4 KiB: on the 2-core VM about
 // a third of `palp prep`'s wall time went to faults and their zeroing (docs/benchmarks.md, "Huge
-// pages"). This replaces the global `operator new(std::size_t)` (the C++ standard's replaceable
-// allocation function, which std::vector and every container use) with one that takes the
-// memory from malloc as before and, for blocks of kHugeMin or more, asks the kernel to back it
-// with 2 MiB pages (madvise MADV_HUGEPAGE) before anything touches it. Where the kernel's THP
-// setting is "never", or on another system, the hint is ignored; nothing else changes, no
-// result depends on it.
+// pages and reused masks"). This replaces the global `operator new(std::size_t)` (the C++
+// standard's replaceable allocation function, which std::vector and every container use) with
+// one that takes the memory from malloc as before and, for blocks of kHugeMin or more, asks the
+// kernel to back it with 2 MiB pages (madvise MADV_HUGEPAGE) before anything touches it. Where
+// the kernel's THP setting is "never", or on another system, the hint is ignored; nothing else
+// changes, no result depends on it.
 //
-// Linked into every program through palp::base. It is its own object file and defines nothing
-// else, so a test that replaces operator new itself (tests/support/heap_allocation_counter.hpp)
-// keeps its own: the linker never pulls this file in for it.
+// Linked into every program through palp::base. It is its own object file (never merged into a
+// unity batch: common/base/CMakeLists.txt) and defines nothing else, so a test that replaces
+// operator new itself (tests/support/heap_allocation_counter.hpp) keeps its own: the linker never
+// pulls this file in for it.
 #include <cstdint>
 #include <cstdlib>
 #include <new>
@@ -25,7 +26,7 @@
 namespace {
 
 constexpr std::size_t kHugePage = std::size_t{2} << 20;
-// Below this a block holds at most one whole huge page: not worth a system call.
+// Below this a block spans at most three whole huge pages: not worth a system call.
 constexpr std::size_t kHugeMin = 4 * kHugePage;
 
 void advise_huge_pages(void* data, std::size_t bytes) {
