@@ -46,7 +46,9 @@ if [ -z "$scipy_s" ] && [ -f "$here/docs/bench/prep_vs_scipy.json" ]; then
 fi
 mkdir -p "$work"
 
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(uname -sr)"
+# the kernel's transparent huge pages decide much of prep's time (docs/benchmarks.md)
+thp=$(sed -n 's/.*\[\(.*\)\].*/\1/p' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null || true)
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(uname -sr), transparent huge pages: ${thp:-unknown}"
 echo "palp: $palp${before:+ (alternating with --before $before)}, surface: $surface, runs per case: $runs, scipy two maps (case A): ${scipy_s:-unknown} s"
 echo
 echo "| case | build | run | load (1 min) before | wall s | CPU s | peak RSS MiB | read CT s | bone mask s | d_surf + d_bone s | waited s (writes, d_surf thread) | outputs MB | vs scipy |"

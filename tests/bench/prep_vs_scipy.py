@@ -86,7 +86,16 @@ def machine():
             model = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
     except (OSError, StopIteration):
         pass
-    return f"{platform.system()} {platform.release()}, {os.cpu_count()} cores, {model}"
+    # the kernel's transparent huge pages decide much of prep's time (docs/benchmarks.md)
+    thp = "unknown"
+    try:
+        with open("/sys/kernel/mm/transparent_hugepage/enabled") as f:
+            text = f.read()
+        thp = text[text.index("[") + 1 : text.index("]")]
+    except (OSError, ValueError):
+        pass
+    return (f"{platform.system()} {platform.release()}, {os.cpu_count()} cores, {model}, "
+            f"transparent huge pages: {thp}")
 
 
 def main():

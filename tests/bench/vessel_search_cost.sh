@@ -44,7 +44,9 @@ if [ ${#inputs[@]} -eq 0 ]; then
   inputs+=("$work/torso.nii.gz" "$work/torso_384.nii.gz")
 fi
 
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(uname -sr)"
+# the kernel's transparent huge pages decide much of prep's time (docs/benchmarks.md)
+thp=$(sed -n 's/.*\[\(.*\)\].*/\1/p' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null || true)
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(uname -sr), transparent huge pages: ${thp:-unknown}"
 echo "palp: $palp${before:+, before: $before}, runs per build and input: $runs, load (1 min) at start: $(cut -d' ' -f1 /proc/loadavg)"
 echo
 echo "| input | build | wall s, median [range] | user CPU s, median | peak RSS MiB, median [range] |"
