@@ -1,7 +1,5 @@
 #include "base/batch_memory.hpp"
 
-#include <cstddef>
-
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif

@@ -56,6 +56,11 @@ segmentation::VoxelBox vessel_search_box(const CtVolume& ct, const Mask& body, d
   return box;
 }
 
+bool box_saves_a_tenth(const segmentation::VoxelBox& box, std::size_t voxels) {
+  const std::int64_t kept = box.size(0) * box.size(1) * box.size(2);
+  return kept > 0 && kept * 10 <= static_cast<std::int64_t>(voxels) * 9;
+}
+
 CtVolume crop(const CtVolume& v, const segmentation::VoxelBox& box) {
   return crop_volume(v, box);
 }

@@ -17,6 +17,10 @@ namespace palp {
 segmentation::VoxelBox vessel_search_box(const CtVolume& ct, const Mask& body, double soft_peak_hu,
                                          const VesselParams& params = {});
 
+// Whether working on `box` instead of the whole grid of `voxels` saves a tenth of it or more
+// (false for an empty box): below that, a crop and a paste cost more than they save.
+bool box_saves_a_tenth(const segmentation::VoxelBox& box, std::size_t voxels);
+
 // `v`'s voxels in `box` (within v's grid), on a grid that places them where they were.
 CtVolume crop(const CtVolume& v, const segmentation::VoxelBox& box);
 Mask crop(const Mask& v, const segmentation::VoxelBox& box);

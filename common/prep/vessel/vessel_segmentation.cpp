@@ -329,14 +329,11 @@ Mask open_on_grid(const Mask& candidates, const VesselParams& params, Mask& core
 // in the box.
 Mask open_candidates(const Mask& candidates, const VesselParams& params, Mask& cores) {
   const segmentation::VoxelBox box = segmentation::nonzero_box(candidates, 1);
-  const std::int64_t box_voxels = box.size(0) * box.size(1) * box.size(2);
-  // a box of nine tenths or more of the grid gains nothing
-  if (box_voxels * 10 > static_cast<std::int64_t>(candidates.size()) * 9)
-    return open_on_grid(candidates, params, cores);
-  if (box_voxels == 0) {  // no candidate
+  if (box.size(0) == 0) {  // no candidate: no distance map needed
     cores = Mask(candidates.grid, 0, "vessel cores");
     return Mask(candidates.grid, 0, "vessel parts");
   }
+  if (!box_saves_a_tenth(box, candidates.size())) return open_on_grid(candidates, params, cores);
   Mask box_cores;
   const Mask box_opened = open_on_grid(crop(candidates, box), params, box_cores);
   Mask opened(candidates.grid, 0, "vessel parts");
@@ -510,9 +507,7 @@ VesselResult segment_vessels(const CtVolume& ct, const Mask& body, double soft_p
                              double bone_seed_hu, const VesselParams& params) {
   check(ct, body, soft_peak_hu, params);
   const segmentation::VoxelBox box = vessel_search_box(ct, body, soft_peak_hu, params);
-  std::int64_t kept = 1;
-  for (int a = 0; a < 3; ++a) kept *= box.size(a);
-  if (kept == 0 || kept * 10 > static_cast<std::int64_t>(ct.size()) * 9)  // none, or no gain
+  if (!box_saves_a_tenth(box, ct.size()))  // none, or no gain
     return search_vessels(ct, body, soft_peak_hu, bone_seed_hu, params);
   VesselResult result =
       search_vessels(crop(ct, box), crop(body, box), soft_peak_hu, bone_seed_hu, params);

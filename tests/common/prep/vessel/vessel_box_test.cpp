@@ -62,5 +62,17 @@ TEST(VesselBox, ACropSitsWhereItWasAndPastesBack) {
   EXPECT_EQ(whole.data, m.data);
 }
 
+TEST(VesselBox, ACropPaysWhereItSavesATenthOfTheGrid) {
+  // 1000 voxels: a box of 900 saves exactly a tenth, one of 910 less; an empty box is no crop
+  segmentation::VoxelBox box{{0, 0, 0}, {9, 10, 10}};
+  EXPECT_TRUE(box_saves_a_tenth(box, 1000));
+  box.hi = {10, 10, 10};
+  EXPECT_FALSE(box_saves_a_tenth(box, 1000));
+  box.hi = {7, 13, 10};  // 910
+  EXPECT_FALSE(box_saves_a_tenth(box, 1000));
+  box.hi = {0, 0, 0};
+  EXPECT_FALSE(box_saves_a_tenth(box, 1000));
+}
+
 }  // namespace
 }  // namespace palp
